@@ -1,0 +1,383 @@
+//! Command-line definitions (clap derive). Every numeric flag states its unit and default;
+//! numbers are parsed as finite values here, and physics checks happen in the commands.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// lamdyn: the viscoelastic core of a laminated plate, measured on the finished part.
+///
+/// Units are SI unless a flag's name says otherwise (frequencies on the command line are in Hz;
+/// laws use the angular frequency omega = 2 pi f in rad/s).
+#[derive(Debug, Parser)]
+#[command(name = "lamdyn", version, about, long_about = None, propagate_version = true)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands, one per pipeline stage.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Homogenize a layer stack: B_eq, K_eq, phi and the effective modulus E_eff against frequency.
+    Laminate(LaminateArgs),
+    /// Recover the core's shear modulus G'(f) and loss factor from the laminate's E*(f).
+    Core(CoreArgs),
+    /// ASTM E756-05 beam method: resonances of a beam test -> modulus and loss factor per mode.
+    E756(E756Args),
+}
+
+/// Output format flags shared by the commands.
+#[derive(Debug, Args, Clone, Copy)]
+pub struct OutputArgs {
+    /// Write JSON (SI units) instead of a text table.
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Write CSV (SI units, column names carry the unit) instead of a text table.
+    #[arg(long)]
+    pub csv: bool,
+}
+
+impl OutputArgs {
+    /// The chosen format.
+    pub fn format(&self) -> crate::table::Format {
+        match (self.json, self.csv) {
+            (true, _) => crate::table::Format::Json,
+            (_, true) => crate::table::Format::Csv,
+            _ => crate::table::Format::Text,
+        }
+    }
+}
+
+/// A frequency grid in Hz: a list, or min/max/step.
+#[derive(Debug, Args, Clone)]
+pub struct GridArgs {
+    /// Frequencies in Hz, comma-separated and increasing (overrides --f-min-hz/--f-max-hz/--f-step-hz).
+    #[arg(long, value_delimiter = ',', value_parser = finite, allow_hyphen_values = true, value_name = "HZ,..")]
+    pub freq_hz: Option<Vec<f64>>,
+    /// Lowest frequency of the grid, Hz [default: 5].
+    #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 5.0, value_name = "HZ")]
+    pub f_min_hz: f64,
+    /// Highest frequency of the grid, Hz [default: 80, the paper's band].
+    #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 80.0, value_name = "HZ")]
+    pub f_max_hz: f64,
+    /// Grid step, Hz [default: 5].
+    #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 5.0, value_name = "HZ")]
+    pub f_step_hz: f64,
+}
+
+/// Bending kinematics of the homogenization.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum KinematicsArg {
+    /// A beam of unit width: the paper's equations as written.
+    Beam,
+    /// A plate in cylindrical bending: layers bend with E/(1-nu^2); E_eff is for a plate model
+    /// with the first layer's Poisson ratio.
+    Plate,
+}
+
+/// `lamdyn laminate`.
+#[derive(Debug, Args)]
+pub struct LaminateArgs {
+    /// Stack description (TOML, SI units; see examples/roof-stack.toml).
+    pub stack: PathBuf,
+    /// Frequency grid.
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Bending kinematics.
+    #[arg(long, value_enum, default_value_t = KinematicsArg::Beam)]
+    pub kinematics: KinematicsArg,
+    /// Output format.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// The paper's eq. 7 parameters, E0 (Pa), mu (s), t0 (s), c (Pa s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Eq7Params(pub [f64; 4]);
+
+/// Core shear formula of the paper's inverse.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CoreFormulaArg {
+    /// Eq. 41, the paper's general formula (core bending neglected).
+    Eq41,
+    /// Eq. 43, the thin-core limit of eq. 41.
+    Eq43,
+    /// Eq. 26 in full, with the core's bending; solved iteratively.
+    Eq26,
+}
+
+/// Treatment of the faces' shear compliance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum GlassShearArg {
+    /// Eq. 40: faces rigid in shear (the paper's choice).
+    Neglect,
+    /// Eq. 39: subtract the faces' compliance (eqs. 25, 27).
+    Include,
+}
+
+/// Bending stiffness B_eq of the paper's inverse.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BendingArg {
+    /// Eq. 35: faces only (the paper's choice).
+    Faces,
+    /// Eq. 14: the full stack, core included (iterative).
+    Full,
+}
+
+/// `lamdyn core`.
+#[derive(Debug, Args)]
+pub struct CoreArgs {
+    /// Built-in case: `paper-roof` = Table 1 stack and Table 2 eq. 7 law.
+    #[arg(long, value_enum, conflicts_with_all = ["stack", "eq7", "table"])]
+    pub example: Option<ExampleArg>,
+    /// Stack description (TOML, SI; three layers: face, core, face; the core's modulus is the
+    /// unknown and may be omitted).
+    #[arg(long, value_name = "FILE", requires = "source")]
+    pub stack: Option<PathBuf>,
+    /// The laminate's E*(omega) as eq. 7 parameters E0_PA,MU_S,T0_S,C_PA_S (Pa, s, s, Pa s);
+    /// omega in rad/s.
+    #[arg(long, value_name = "E0,MU,T0,C", value_parser = parse_eq7, group = "source", allow_hyphen_values = true)]
+    pub eq7: Option<Eq7Params>,
+    /// The laminate's E*(f) as a CSV table with columns f_hz, e_storage_pa and either
+    /// loss_factor or e_loss_pa.
+    #[arg(long, value_name = "FILE", group = "source")]
+    pub table: Option<PathBuf>,
+    /// Frequency grid for --eq7 and --example (a --table brings its own).
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Core shear formula of the paper's inverse.
+    #[arg(long, value_enum, default_value_t = CoreFormulaArg::Eq41)]
+    pub core_formula: CoreFormulaArg,
+    /// Faces' shear compliance in the paper's inverse.
+    #[arg(long, value_enum, default_value_t = GlassShearArg::Neglect)]
+    pub glass_shear: GlassShearArg,
+    /// Bending stiffness in the paper's inverse.
+    #[arg(long, value_enum, default_value_t = BendingArg::Faces)]
+    pub bending: BendingArg,
+    /// Bending kinematics of both inverses.
+    #[arg(long, value_enum, default_value_t = KinematicsArg::Beam)]
+    pub kinematics: KinematicsArg,
+    /// Relative margin of the Kramers-Kronig check (dimensionless) [default: 0.05].
+    #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 0.05, value_name = "FRACTION")]
+    pub kk_tolerance: f64,
+    /// Output format.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Built-in examples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ExampleArg {
+    /// The paper's laminated glass roof: Table 1 stack, Table 2 eq. 7 effective modulus.
+    PaperRoof,
+}
+
+/// `lamdyn e756`.
+#[derive(Debug, Args)]
+pub struct E756Args {
+    /// Test configuration.
+    #[arg(value_enum)]
+    pub configuration: E756Config,
+    /// Beam description (TOML, SI): length_m, thickness_m, density_kg_m3, young_pa and, for
+    /// oberst/sandwich, a `[layer]` table with thickness_m and density_kg_m3.
+    #[arg(long, value_name = "FILE")]
+    pub beam: PathBuf,
+    /// Measured resonances (CSV). uniform: mode,f_hz,loss_factor; oberst:
+    /// mode,f_base_hz,f_composite_hz,loss_factor; sandwich: mode,f_base_hz,f_sandwich_hz,loss_factor.
+    /// A half_power_bandwidth_hz column may replace loss_factor.
+    #[arg(long, value_name = "FILE", required_unless_present = "forward")]
+    pub data: Option<PathBuf>,
+    /// Oberst only: solve the standard's quadratic with the complex frequency ratio (exact)
+    /// instead of its first-order loss formula.
+    #[arg(long)]
+    pub exact: bool,
+    /// Run the forward model instead: write the resonances (in the --data CSV layout) that a
+    /// material of --modulus-pa and --loss-factor gives on this beam.
+    #[arg(long, conflicts_with = "data", requires_all = ["modulus_pa", "loss_factor"])]
+    pub forward: bool,
+    /// Forward model: the material's storage modulus, Pa (E for uniform/oberst, G for sandwich).
+    #[arg(long, value_parser = finite, allow_negative_numbers = true, value_name = "PA")]
+    pub modulus_pa: Option<f64>,
+    /// Forward model: the material's loss factor.
+    #[arg(long, value_parser = finite, allow_negative_numbers = true)]
+    pub loss_factor: Option<f64>,
+    /// Forward model: number of modes [default: 5].
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=50))]
+    pub modes: u32,
+    /// Output format.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// ASTM E756-05 configurations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum E756Config {
+    /// Bare uniform beam: Young's modulus and loss factor of the beam material.
+    Uniform,
+    /// Oberst beam: damping layer on one side; its Young's modulus and loss factor.
+    Oberst,
+    /// Sandwich beam: core between two identical base beams; its shear modulus and loss factor.
+    Sandwich,
+}
+
+/// Parses a finite number (no NaN, no infinity).
+pub fn finite(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' is not a finite number"))
+    }
+}
+
+/// Parses `E0,MU,T0,C`.
+fn parse_eq7(s: &str) -> Result<Eq7Params, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 4 {
+        return Err(format!(
+            "expected four numbers E0_PA,MU_S,T0_S,C_PA_S, got {}",
+            parts.len()
+        ));
+    }
+    let mut p = [0.0; 4];
+    for (slot, part) in p.iter_mut().zip(parts) {
+        *slot = finite(part)?;
+    }
+    Ok(Eq7Params(p))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(std::iter::once("lamdyn").chain(args.iter().copied()))
+    }
+
+    #[test]
+    fn finite_refuses_nan_inf_and_words() {
+        assert_eq!(finite("1e3"), Ok(1e3));
+        assert_eq!(finite("NaN"), Err("'NaN' is not a finite number".into()));
+        assert_eq!(finite("inf"), Err("'inf' is not a finite number".into()));
+        assert_eq!(finite("ten"), Err("'ten' is not a number".into()));
+    }
+
+    #[test]
+    fn eq7_takes_four_numbers() {
+        assert_eq!(parse_eq7("1,2,3,4"), Ok(Eq7Params([1.0, 2.0, 3.0, 4.0])));
+        assert!(
+            parse_eq7("1,2,3")
+                .unwrap_err()
+                .contains("expected four numbers")
+        );
+        assert!(
+            parse_eq7("1,2,x,4")
+                .unwrap_err()
+                .contains("'x' is not a number")
+        );
+    }
+
+    #[test]
+    fn grid_flags_default_to_the_paper_band() {
+        let Command::Core(a) = parse(&["core", "--example", "paper-roof"]).unwrap().command else {
+            panic!("core expected")
+        };
+        assert_eq!(
+            (a.grid.f_min_hz, a.grid.f_max_hz, a.grid.f_step_hz),
+            (5.0, 80.0, 5.0)
+        );
+        assert_eq!(a.kk_tolerance, 0.05);
+        assert_eq!(a.core_formula, CoreFormulaArg::Eq41);
+        assert_eq!(a.glass_shear, GlassShearArg::Neglect);
+        assert_eq!(a.bending, BendingArg::Faces);
+        assert_eq!(a.kinematics, KinematicsArg::Beam);
+    }
+
+    #[test]
+    fn freq_list_is_parsed() {
+        let Command::Core(a) = parse(&["core", "--example", "paper-roof", "--freq-hz", "10,20.5"])
+            .unwrap()
+            .command
+        else {
+            panic!("core expected")
+        };
+        assert_eq!(a.grid.freq_hz, Some(vec![10.0, 20.5]));
+        assert!(parse(&["core", "--example", "paper-roof", "--freq-hz", "10,nan"]).is_err());
+    }
+
+    #[test]
+    fn conflicting_sources_are_refused() {
+        assert!(parse(&["core", "--example", "paper-roof", "--eq7", "1,2,3,4"]).is_err());
+        assert!(
+            parse(&["core", "--stack", "s.toml"]).is_err(),
+            "a stack needs --eq7 or --table"
+        );
+        assert!(
+            parse(&[
+                "core", "--stack", "s.toml", "--eq7", "1,2,3,4", "--table", "t.csv"
+            ])
+            .is_err()
+        );
+        assert!(parse(&["core", "--json", "--csv", "--example", "paper-roof"]).is_err());
+    }
+
+    #[test]
+    fn e756_flags() {
+        let Command::E756(a) = parse(&["e756", "sandwich", "--beam", "b.toml", "--data", "d.csv"])
+            .unwrap()
+            .command
+        else {
+            panic!("e756 expected")
+        };
+        assert_eq!(a.configuration, E756Config::Sandwich);
+        assert_eq!(a.modes, 5);
+        assert!(
+            parse(&["e756", "sandwich", "--beam", "b.toml"]).is_err(),
+            "needs --data or --forward"
+        );
+        assert!(
+            parse(&[
+                "e756",
+                "sandwich",
+                "--beam",
+                "b.toml",
+                "--forward",
+                "--modulus-pa",
+                "1e6"
+            ])
+            .is_err()
+        );
+        assert!(
+            parse(&[
+                "e756",
+                "sandwich",
+                "--beam",
+                "b.toml",
+                "--forward",
+                "--modulus-pa",
+                "1e6",
+                "--loss-factor",
+                "0.3",
+                "--modes",
+                "0"
+            ])
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn laminate_flags() {
+        let Command::Laminate(a) = parse(&["laminate", "s.toml", "--kinematics", "plate", "--csv"])
+            .unwrap()
+            .command
+        else {
+            panic!("laminate expected")
+        };
+        assert_eq!(a.kinematics, KinematicsArg::Plate);
+        assert!(a.output.csv);
+    }
+}

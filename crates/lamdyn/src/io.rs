@@ -1,0 +1,172 @@
+//! Reading input files: TOML into typed specs, and small numeric CSV tables with a header.
+
+use anyhow::{Context, Result, anyhow, bail};
+use serde::de::DeserializeOwned;
+use std::path::Path;
+
+/// Reads and parses a TOML file; errors name the file and, from the parser, the line, column and
+/// key.
+pub fn read_toml<T: DeserializeOwned>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read '{}'", path.display()))?;
+    toml::from_str(&text).map_err(|e| anyhow!("error in '{}': {e}", path.display()))
+}
+
+/// A CSV table of numbers with a header row. Blank lines and lines starting with `#` are
+/// skipped; fields are separated by commas.
+#[derive(Debug, Clone)]
+pub struct CsvTable {
+    path: String,
+    headers: Vec<String>,
+    rows: Vec<(usize, Vec<f64>)>,
+}
+
+impl CsvTable {
+    /// Reads `path`.
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read '{}'", path.display()))?;
+        Self::parse(&path.display().to_string(), &text)
+    }
+
+    /// Parses `text`, naming `path` in errors.
+    pub fn parse(path: &str, text: &str) -> Result<Self> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim()))
+            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+        let Some((_, header)) = lines.next() else {
+            bail!("'{path}' is empty: expected a header line of column names");
+        };
+        let headers: Vec<String> = header.split(',').map(|h| h.trim().to_string()).collect();
+        let mut rows = Vec::new();
+        for (line_no, line) in lines {
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            if fields.len() != headers.len() {
+                bail!(
+                    "'{path}' line {line_no}: {} fields, but the header has {} ({})",
+                    fields.len(),
+                    headers.len(),
+                    headers.join(",")
+                );
+            }
+            let values = fields
+                .iter()
+                .zip(&headers)
+                .map(|(f, h)| match f.parse::<f64>() {
+                    Ok(v) if v.is_finite() => Ok(v),
+                    _ => Err(anyhow!(
+                        "'{path}' line {line_no}: column '{h}': '{f}' is not a finite number"
+                    )),
+                })
+                .collect::<Result<Vec<f64>>>()?;
+            rows.push((line_no, values));
+        }
+        if rows.is_empty() {
+            bail!("'{path}' has a header but no data lines");
+        }
+        Ok(Self {
+            path: path.to_string(),
+            headers,
+            rows,
+        })
+    }
+
+    /// The file's name as given.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// Index of column `name`, if present.
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.headers.iter().position(|h| h == name)
+    }
+
+    /// Index of the first of `names` present, or an error listing what was expected.
+    pub fn require_any(&self, names: &[&str]) -> Result<usize> {
+        names.iter().find_map(|n| self.find(n)).ok_or_else(|| {
+            anyhow!(
+                "'{}': no column {}; the header has: {}",
+                self.path,
+                names
+                    .iter()
+                    .map(|n| format!("'{n}'"))
+                    .collect::<Vec<_>>()
+                    .join(" or "),
+                self.headers.join(",")
+            )
+        })
+    }
+
+    /// Data rows as (line number, values).
+    pub fn rows(&self) -> &[(usize, Vec<f64>)] {
+        &self.rows
+    }
+
+    /// Checks that column `col` strictly increases and is positive.
+    pub fn require_increasing_positive(&self, col: usize) -> Result<()> {
+        let mut prev: Option<f64> = None;
+        for (line, v) in &self.rows {
+            let x = v[col];
+            if x <= 0.0 {
+                bail!(
+                    "'{}' line {line}: column '{}' = {x} must be positive",
+                    self.path,
+                    self.headers[col]
+                );
+            }
+            if prev.is_some_and(|p| x <= p) {
+                bail!(
+                    "'{}' line {line}: column '{}' must increase ({x} after {})",
+                    self.path,
+                    self.headers[col],
+                    prev.unwrap_or_default()
+                );
+            }
+            prev = Some(x);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_with_comments_and_blank_lines() {
+        let t = CsvTable::parse("x.csv", "# comment\nf_hz, e\n\n1, 2\n3,4e9\n").unwrap();
+        assert_eq!(t.rows(), &[(4, vec![1.0, 2.0]), (5, vec![3.0, 4e9])]);
+        assert_eq!(t.find("e"), Some(1));
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let e = CsvTable::parse("x.csv", "f_hz,e\n1,2\n3,abc\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "'x.csv' line 3: column 'e': 'abc' is not a finite number"
+        );
+        let e = CsvTable::parse("x.csv", "f_hz,e\n1,2,3\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "'x.csv' line 2: 3 fields, but the header has 2 (f_hz,e)");
+        let e = CsvTable::parse("x.csv", "f_hz,e\n1,NaN\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "'x.csv' line 2: column 'e': 'NaN' is not a finite number"
+        );
+        let e = CsvTable::parse("x.csv", "").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "'x.csv' is empty: expected a header line of column names"
+        );
+        let e = CsvTable::parse("x.csv", "a,b\n").unwrap_err().to_string();
+        assert_eq!(e, "'x.csv' has a header but no data lines");
+    }
+}

@@ -1,0 +1,317 @@
+//! Tables of results, rendered as aligned text (people), CSV or JSON (machines).
+//!
+//! Text shows each column in a readable unit (GPa, MPa) named in its header; CSV and JSON carry
+//! SI values under keys that name the unit (`g_storage_pa`). Rendering is deterministic: the same
+//! inputs give the same bytes.
+
+use serde_json::{Map, Value, json};
+use std::io::Write;
+
+/// How a number is printed in the text table.
+#[derive(Debug, Clone, Copy)]
+pub enum Fmt {
+    /// Fixed point with this many decimals.
+    Fixed(usize),
+    /// Scientific with this many decimals in the mantissa.
+    Sci(usize),
+}
+
+/// One column: machine key (SI), text header, text unit and the divisor from SI to that unit.
+#[derive(Debug, Clone)]
+pub struct Column {
+    /// CSV/JSON key, with the SI unit in its name.
+    pub key: &'static str,
+    /// Header in the text table.
+    pub header: &'static str,
+    /// Unit in the text table ("" for none).
+    pub unit: &'static str,
+    /// SI value / `scale` is shown in the text table.
+    pub scale: f64,
+    /// Text format.
+    pub fmt: Fmt,
+}
+
+impl Column {
+    /// A column shown in SI with format `fmt`.
+    pub fn new(key: &'static str, header: &'static str, unit: &'static str, fmt: Fmt) -> Self {
+        Self {
+            key,
+            header,
+            unit,
+            scale: 1.0,
+            fmt,
+        }
+    }
+
+    /// Shows the column divided by `scale` (e.g. 1e9 for GPa).
+    pub fn scaled(mut self, scale: f64) -> Self {
+        self.scale = scale;
+        self
+    }
+}
+
+/// A table cell.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cell {
+    /// A number in SI units.
+    Num(f64),
+    /// Text.
+    Text(String),
+    /// Nothing (a line where the quantity could not be computed).
+    Empty,
+}
+
+impl From<f64> for Cell {
+    fn from(v: f64) -> Self {
+        if v.is_finite() {
+            Cell::Num(v)
+        } else {
+            Cell::Empty
+        }
+    }
+}
+
+impl From<&str> for Cell {
+    fn from(v: &str) -> Self {
+        Cell::Text(v.to_string())
+    }
+}
+
+impl From<String> for Cell {
+    fn from(v: String) -> Self {
+        Cell::Text(v)
+    }
+}
+
+impl From<Option<f64>> for Cell {
+    fn from(v: Option<f64>) -> Self {
+        v.map_or(Cell::Empty, Cell::from)
+    }
+}
+
+/// Output format chosen on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Aligned text for people.
+    Text,
+    /// CSV, SI units.
+    Csv,
+    /// JSON, SI units.
+    Json,
+}
+
+/// A command's result: a table plus what it needs to be read.
+#[derive(Debug, Clone)]
+pub struct Report {
+    /// The command (`core`).
+    pub command: &'static str,
+    /// Inputs and settings as (key, value) lines, shown above the table.
+    pub inputs: Vec<(String, String)>,
+    /// Columns.
+    pub columns: Vec<Column>,
+    /// Rows of cells, one per column.
+    pub rows: Vec<Vec<Cell>>,
+    /// Notes printed under the text table (conventions, legends).
+    pub notes: Vec<String>,
+    /// Warnings, printed to stderr in every format and included in JSON.
+    pub warnings: Vec<String>,
+    /// Extra machine-readable data for JSON (detailed per-line results).
+    pub extra: Option<Value>,
+}
+
+impl Report {
+    /// An empty report for `command`.
+    pub fn new(command: &'static str, columns: Vec<Column>) -> Self {
+        Self {
+            command,
+            inputs: vec![],
+            columns,
+            rows: vec![],
+            notes: vec![],
+            warnings: vec![],
+            extra: None,
+        }
+    }
+
+    /// Adds an input line.
+    pub fn input(&mut self, key: &str, value: impl Into<String>) {
+        self.inputs.push((key.to_string(), value.into()));
+    }
+
+    /// Adds a row.
+    ///
+    /// # Panics
+    /// If the row's length differs from the number of columns (a programming error).
+    pub fn row(&mut self, cells: Vec<Cell>) {
+        assert_eq!(
+            cells.len(),
+            self.columns.len(),
+            "expected one cell per column"
+        );
+        self.rows.push(cells);
+    }
+
+    /// Writes the report in `format` to `out` and its warnings to `err`.
+    pub fn write(
+        &self,
+        format: Format,
+        out: &mut dyn Write,
+        err: &mut dyn Write,
+    ) -> std::io::Result<()> {
+        for w in &self.warnings {
+            writeln!(err, "lamdyn: warning: {w}")?;
+        }
+        match format {
+            Format::Text => self.write_text(out),
+            Format::Csv => self.write_csv(out),
+            Format::Json => {
+                serde_json::to_writer_pretty(&mut *out, &self.to_json())?;
+                writeln!(out)
+            }
+        }
+    }
+
+    fn write_text(&self, out: &mut dyn Write) -> std::io::Result<()> {
+        let key_width = self.inputs.iter().map(|(k, _)| k.len()).max().unwrap_or(0);
+        for (k, v) in &self.inputs {
+            writeln!(out, "{k:<key_width$}  {v}")?;
+        }
+        if !self.inputs.is_empty() {
+            writeln!(out)?;
+        }
+        let headers: Vec<String> = self.columns.iter().map(|c| c.header.to_string()).collect();
+        let units: Vec<String> = self
+            .columns
+            .iter()
+            .map(|c| {
+                if c.unit.is_empty() {
+                    String::new()
+                } else {
+                    format!("[{}]", c.unit)
+                }
+            })
+            .collect();
+        let body: Vec<Vec<String>> = self
+            .rows
+            .iter()
+            .map(|r| {
+                r.iter()
+                    .zip(&self.columns)
+                    .map(|(cell, col)| text_cell(cell, col))
+                    .collect()
+            })
+            .collect();
+        let widths: Vec<usize> = (0..self.columns.len())
+            .map(|j| {
+                body.iter()
+                    .map(|r| r[j].len())
+                    .chain([headers[j].len(), units[j].len()])
+                    .max()
+                    .unwrap_or(0)
+            })
+            .collect();
+        let line = |cells: &[String]| {
+            cells
+                .iter()
+                .zip(&widths)
+                .map(|(c, w)| format!("{c:>w$}"))
+                .collect::<Vec<_>>()
+                .join("  ")
+        };
+        writeln!(out, "{}", line(&headers))?;
+        if units.iter().any(|u| !u.is_empty()) {
+            writeln!(out, "{}", line(&units))?;
+        }
+        for r in &body {
+            writeln!(out, "{}", line(r))?;
+        }
+        if !self.notes.is_empty() {
+            writeln!(out)?;
+            for n in &self.notes {
+                writeln!(out, "{n}")?;
+            }
+        }
+        Ok(())
+    }
+
+    fn write_csv(&self, out: &mut dyn Write) -> std::io::Result<()> {
+        let header: Vec<&str> = self.columns.iter().map(|c| c.key).collect();
+        writeln!(out, "{}", header.join(","))?;
+        for r in &self.rows {
+            let cells: Vec<String> = r
+                .iter()
+                .map(|c| match c {
+                    Cell::Num(v) => csv_number(*v),
+                    Cell::Text(t) if t.contains([',', '"']) => {
+                        format!("\"{}\"", t.replace('"', "\"\""))
+                    }
+                    Cell::Text(t) => t.clone(),
+                    Cell::Empty => String::new(),
+                })
+                .collect();
+            writeln!(out, "{}", cells.join(","))?;
+        }
+        Ok(())
+    }
+
+    /// The JSON form: inputs, column units, rows as objects keyed by column, warnings, extra.
+    pub fn to_json(&self) -> Value {
+        let rows: Vec<Value> = self
+            .rows
+            .iter()
+            .map(|r| {
+                let mut m = Map::new();
+                for (cell, col) in r.iter().zip(&self.columns) {
+                    let v = match cell {
+                        Cell::Num(v) => json!(v),
+                        Cell::Text(t) => json!(t),
+                        Cell::Empty => Value::Null,
+                    };
+                    m.insert(col.key.to_string(), v);
+                }
+                Value::Object(m)
+            })
+            .collect();
+        let inputs: Map<String, Value> = self
+            .inputs
+            .iter()
+            .map(|(k, v)| (k.clone(), json!(v)))
+            .collect();
+        let mut doc = json!({
+            "command": self.command,
+            "version": env!("CARGO_PKG_VERSION"),
+            "inputs": inputs,
+            "rows": rows,
+            "warnings": self.warnings,
+        });
+        if let Some(extra) = &self.extra {
+            doc["details"] = extra.clone();
+        }
+        doc
+    }
+}
+
+/// A number in CSV: Rust's shortest round-trip form, plain between 1e-4 and 1e15, else with an
+/// exponent. Reading it back gives the same f64.
+fn csv_number(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || (1e-4..1e15).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+fn text_cell(cell: &Cell, col: &Column) -> String {
+    match cell {
+        Cell::Num(v) => {
+            let x = v / col.scale;
+            match col.fmt {
+                Fmt::Fixed(d) => format!("{x:.d$}"),
+                Fmt::Sci(d) => format!("{x:.d$e}"),
+            }
+        }
+        Cell::Text(t) => t.clone(),
+        Cell::Empty => "-".to_string(),
+    }
+}

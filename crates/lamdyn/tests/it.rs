@@ -1,0 +1,10 @@
+//! Integration tests of the `lamdyn` CLI, run in-process through `lamdyn::run` (and through the
+//! real binary where process behaviour matters).
+
+mod it {
+    mod common;
+    mod core;
+    mod e756;
+    mod laminate;
+    mod robustness;
+}

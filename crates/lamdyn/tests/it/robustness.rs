@@ -1,0 +1,128 @@
+use super::common::*;
+use proptest::prelude::*;
+
+/// Every command's --help states its units.
+#[test]
+fn help_states_units() {
+    for (cmd, needles) in [
+        ("core", vec!["Hz", "Pa", "rad/s", "E0_PA,MU_S,T0_S,C_PA_S"]),
+        ("laminate", vec!["Hz", "SI"]),
+        ("e756", vec!["Pa", "length_m", "half_power_bandwidth_hz"]),
+    ] {
+        let (code, out, _) = lamdyn(&[cmd, "--help"]);
+        assert_eq!(code, 0);
+        for n in needles {
+            assert!(out.contains(n), "{cmd} --help lacks {n:?}");
+        }
+    }
+}
+
+fn vocabulary() -> Vec<String> {
+    let mut v: Vec<String> = [
+        "core",
+        "laminate",
+        "e756",
+        "uniform",
+        "oberst",
+        "sandwich",
+        "--example",
+        "paper-roof",
+        "--stack",
+        "--eq7",
+        "--table",
+        "--freq-hz",
+        "--f-min-hz",
+        "--f-max-hz",
+        "--f-step-hz",
+        "--core-formula",
+        "eq26",
+        "eq43",
+        "--glass-shear",
+        "include",
+        "--bending",
+        "full",
+        "--kinematics",
+        "plate",
+        "--kk-tolerance",
+        "--json",
+        "--csv",
+        "--beam",
+        "--data",
+        "--forward",
+        "--modulus-pa",
+        "--loss-factor",
+        "--modes",
+        "--exact",
+        "0",
+        "-1",
+        "1e308",
+        "NaN",
+        "inf",
+        "1e-300",
+        "5",
+        "80",
+        "1,2,3,4",
+        "67.45e9,0.686e-3,4.295e-3,1.617e6",
+        "0,0,0,0",
+        "1e9,0,1e-300,1e9",
+        "10,5",
+        "",
+        ",",
+        "-",
+        "--",
+        "x",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for f in [
+        "roof-stack.toml",
+        "roof-stack-wlf.toml",
+        "e756/sandwich-beam.toml",
+        "e756/sandwich-data.csv",
+        "e756/oberst-data.csv",
+        "e756/uniform-beam.toml",
+    ] {
+        v.push(example(f));
+    }
+    v
+}
+
+proptest! {
+    #![proptest_config(lamdyn_testkit::proptest_config(400))]
+
+    /// No command line panics: every outcome is an exit code 0, 1 or 2.
+    #[test]
+    fn no_command_line_panics(picks in prop::collection::vec(0usize..1000, 0..9)) {
+        let vocab = vocabulary();
+        let args: Vec<&str> = picks.iter().map(|i| vocab[i % vocab.len()].as_str()).collect();
+        let result = std::panic::catch_unwind(|| lamdyn(&args));
+        prop_assert!(result.is_ok(), "panic on {:?}", args);
+        let (code, _, _) = result.unwrap();
+        prop_assert!(code <= 2);
+    }
+}
+
+/// The real binary: exit codes and the error prefix.
+#[test]
+fn binary_exit_codes() {
+    let bin = env!("CARGO_BIN_EXE_lamdyn");
+    let ok = std::process::Command::new(bin)
+        .args(["core", "--example", "paper-roof", "--freq-hz", "20"])
+        .output()
+        .unwrap();
+    assert_eq!(ok.status.code(), Some(0));
+    let bad = std::process::Command::new(bin)
+        .args(["core", "--stack", "/nonexistent.toml", "--eq7", "1,2,3,4"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&bad.stderr).starts_with("lamdyn: cannot read '/nonexistent.toml'")
+    );
+    let usage = std::process::Command::new(bin)
+        .args(["nonsense"])
+        .output()
+        .unwrap();
+    assert_eq!(usage.status.code(), Some(2));
+}
