@@ -25,6 +25,63 @@ pub enum Command {
     Core(CoreArgs),
     /// ASTM E756-05 beam method: resonances of a beam test -> modulus and loss factor per mode.
     E756(E756Args),
+    /// Free (or supported) vibration modes of a shell model: MITC4 FE, shift-invert Lanczos.
+    Modes(ModesArgs),
+}
+
+/// Built-in FE models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ModelExample {
+    /// The paper's plate taken flat (0.923 x 0.8632 x 0.00385 m, E0 = 67.45 GPa), 40 x 40.
+    PaperPlate,
+    /// The same footprint as a shallow dome (radii 3 m and 5 m), a stand-in for the curved roof.
+    PaperRoofCurved,
+    /// NAFEMS FV12: free square steel plate 10 x 10 x 0.05 m, 40 x 40.
+    NafemsFv12,
+}
+
+/// `lamdyn modes`.
+#[derive(Debug, Args)]
+pub struct ModesArgs {
+    /// Model description (TOML, SI units; see examples/plate-modes.toml).
+    #[arg(conflicts_with = "example", required_unless_present = "example")]
+    pub model: Option<PathBuf>,
+    /// A built-in model instead of a file.
+    #[arg(long, value_enum)]
+    pub example: Option<ModelExample>,
+    /// Number of lowest modes, rigid-body modes included [default: the model's, 20].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=2000))]
+    pub modes: Option<u32>,
+    /// Elements along x and y for a rectangle model, as NXxNY (e.g. 80x80).
+    #[arg(long, value_name = "NXxNY", value_parser = parse_elements)]
+    pub elements: Option<(usize, usize)>,
+    /// Write the mode shapes with the mesh as a VTK unstructured grid for ParaView.
+    #[arg(long, value_name = "FILE.vtu")]
+    pub vtu: Option<PathBuf>,
+    /// Write the mode shapes as JSON (nodes, frequencies in Hz, mass-normalised shapes).
+    #[arg(long, value_name = "FILE.json")]
+    pub shapes_json: Option<PathBuf>,
+    /// Compare with the shapes of another run (a --shapes-json file on the same nodes): MAC.
+    #[arg(long, value_name = "FILE.json")]
+    pub compare: Option<PathBuf>,
+    /// Output format.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Parses `NXxNY`.
+fn parse_elements(s: &str) -> Result<(usize, usize), String> {
+    let (a, b) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected NXxNY such as 40x40, got '{s}'"))?;
+    let n = |t: &str| {
+        t.trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|n| (1..=2000).contains(n))
+            .ok_or_else(|| format!("'{t}' is not a count in 1..=2000"))
+    };
+    Ok((n(a)?, n(b)?))
 }
 
 /// Output format flags shared by the commands.

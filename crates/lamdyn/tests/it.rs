@@ -6,5 +6,6 @@ mod it {
     mod core;
     mod e756;
     mod laminate;
+    mod modes;
     mod robustness;
 }

@@ -5,6 +5,7 @@
 pub mod core;
 pub mod e756;
 pub mod laminate;
+pub mod modes;
 
 use crate::Outcome;
 use crate::cli::{Cli, Command, KinematicsArg};
@@ -17,6 +18,7 @@ pub fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::R
         Command::Laminate(args) => laminate::run(&args, out, err),
         Command::Core(args) => core::run(&args, out, err),
         Command::E756(args) => e756::run(&args, out, err),
+        Command::Modes(args) => modes::run(&args, out, err),
     }
 }
 

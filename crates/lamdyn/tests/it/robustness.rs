@@ -8,6 +8,7 @@ fn help_states_units() {
         ("core", vec!["Hz", "Pa", "rad/s", "E0_PA,MU_S,T0_S,C_PA_S"]),
         ("laminate", vec!["Hz", "SI"]),
         ("e756", vec!["Pa", "length_m", "half_power_bandwidth_hz"]),
+        ("modes", vec!["SI", "NXxNY", "ParaView", "MAC"]),
     ] {
         let (code, out, _) = lamdyn(&[cmd, "--help"]);
         assert_eq!(code, 0);

@@ -1,0 +1,207 @@
+//! The description of an FE model as written in TOML (`lamdyn modes`, job files): mesh,
+//! material, supports, solver settings, SI units.
+//!
+//! ```toml
+//! [mesh]
+//! kind = "rectangle"          # or: kind = "gmsh", file = "roof.msh", unit = "mm"
+//! length_x_m = 0.923
+//! length_y_m = 0.8632
+//! elements_x = 40
+//! elements_y = 40
+//! radius_x_m = 4.0            # optional: a shallow dome; inf or absent is flat
+//! radius_y_m = 6.0
+//!
+//! [material]
+//! young_pa = 67.45e9
+//! poisson = 0.22
+//! density_kg_m3 = 2702.0
+//! thickness_m = 0.00385
+//!
+//! [[supports]]                # optional elastic supports, at the node nearest the point
+//! point_m = [0.3, 0.3, 0.0]
+//! translational_n_per_m = [0.0, 0.0, 5.0e3]
+//!
+//! [solver]
+//! modes = 20                  # lowest modes, rigid-body modes included
+//! ```
+
+use crate::assembly::NodeSpring;
+use crate::element::ShellMaterial;
+use crate::error::FemError;
+use crate::mesh::structured::RectangleSpec;
+use crate::mesh::{Locator, Mesh, gmsh};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSpec {
+    /// The mesh.
+    pub mesh: MeshSpec,
+    /// The shell material.
+    pub material: ShellMaterial,
+    /// Elastic supports.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub supports: Vec<SupportSpec>,
+    /// Solver settings.
+    #[serde(default)]
+    pub solver: SolverSpec,
+}
+
+/// Where the mesh comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MeshSpec {
+    /// A structured rectangle, flat or a shallow dome.
+    Rectangle {
+        /// Length along x, m.
+        length_x_m: f64,
+        /// Length along y, m.
+        length_y_m: f64,
+        /// Elements along x.
+        elements_x: usize,
+        /// Elements along y.
+        elements_y: usize,
+        /// Radius in the x-z plane, m (absent: flat).
+        #[serde(default = "infinite")]
+        radius_x_m: f64,
+        /// Radius in the y-z plane, m (absent: flat).
+        #[serde(default = "infinite")]
+        radius_y_m: f64,
+        /// Edge grading in [0, 1).
+        #[serde(default)]
+        grading: f64,
+    },
+    /// A Gmsh MSH file (2.2 or 4.1 ASCII), relative to the model file.
+    Gmsh {
+        /// Path of the file.
+        file: String,
+        /// Unit of the file's coordinates: "m" (default) or "mm".
+        #[serde(default = "metres")]
+        unit: String,
+    },
+}
+
+fn infinite() -> f64 {
+    f64::INFINITY
+}
+fn metres() -> String {
+    "m".into()
+}
+
+/// An elastic support at the node nearest to a point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupportSpec {
+    /// The point, m.
+    pub point_m: [f64; 3],
+    /// Largest distance from the point to its node, m (default 1 mm).
+    #[serde(default = "default_tolerance")]
+    pub tolerance_m: f64,
+    /// Translational stiffnesses, N/m.
+    pub translational_n_per_m: [f64; 3],
+    /// Rotational stiffnesses, N·m/rad.
+    #[serde(default)]
+    pub rotational_nm_per_rad: [f64; 3],
+}
+
+fn default_tolerance() -> f64 {
+    1e-3
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// Lowest modes wanted, rigid-body modes included.
+    #[serde(default = "default_modes")]
+    pub modes: usize,
+    /// Fixed shift as a frequency, Hz (σ = −(2πf)²); absent: automatic.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shift_hz: Option<f64>,
+}
+
+fn default_modes() -> usize {
+    20
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        Self {
+            modes: default_modes(),
+            shift_hz: None,
+        }
+    }
+}
+
+impl ModelSpec {
+    /// Builds the mesh and the supports; a Gmsh path is taken relative to `base_dir`.
+    ///
+    /// # Errors
+    /// [`FemError`] naming the field, file, node or support.
+    pub fn build(&self, base_dir: &Path) -> Result<(Mesh, Vec<NodeSpring>), FemError> {
+        let mesh = match &self.mesh {
+            MeshSpec::Rectangle {
+                length_x_m,
+                length_y_m,
+                elements_x,
+                elements_y,
+                radius_x_m,
+                radius_y_m,
+                grading,
+            } => RectangleSpec {
+                length_x_m: *length_x_m,
+                length_y_m: *length_y_m,
+                elements_x: *elements_x,
+                elements_y: *elements_y,
+                radius_x_m: *radius_x_m,
+                radius_y_m: *radius_y_m,
+                grading: *grading,
+            }
+            .build()?,
+            MeshSpec::Gmsh { file, unit } => {
+                let scale = match unit.as_str() {
+                    "m" => 1.0,
+                    "mm" => 1e-3,
+                    other => {
+                        return Err(FemError::InvalidParameter {
+                            context: "mesh".into(),
+                            field: "unit".into(),
+                            value: other.into(),
+                            requirement: "must be \"m\" or \"mm\"".into(),
+                        });
+                    }
+                };
+                gmsh::read_msh(&base_dir.join(file), scale)?
+            }
+        };
+        let locator = Locator::new(&mesh, f64::INFINITY);
+        let mut springs = Vec::new();
+        for (i, s) in self.supports.iter().enumerate() {
+            let ctx = format!("supports[{i}]");
+            crate::error::check_positive(&ctx, "tolerance_m", s.tolerance_m)?;
+            let node = locator
+                .clone()
+                .with_tolerance(s.tolerance_m)
+                .locate_all(&[s.point_m])
+                .map_err(|e| match e {
+                    FemError::Locate {
+                        x, y, z, reason, ..
+                    } => FemError::InvalidParameter {
+                        context: ctx.clone(),
+                        field: "point_m".into(),
+                        value: format!("[{x}, {y}, {z}]"),
+                        requirement: format!("must lie on the mesh: {reason}"),
+                    },
+                    other => other,
+                })?[0];
+            springs.push(NodeSpring {
+                node,
+                translational_n_per_m: s.translational_n_per_m,
+                rotational_nm_per_rad: s.rotational_nm_per_rad,
+            });
+        }
+        Ok((mesh, springs))
+    }
+}

@@ -1,0 +1,179 @@
+use super::common::*;
+use lamdyn_testkit::rel_err_f64;
+
+#[test]
+fn paper_plate_example_gives_the_flat_plate_modes() {
+    let (code, out, err) = lamdyn(&[
+        "modes",
+        "--example",
+        "paper-plate",
+        "--elements",
+        "20x20",
+        "--modes",
+        "9",
+        "--csv",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 9);
+    assert!(rows[..6].iter().all(|r| r["rigid"] == "yes"));
+    // 20 x 20 MITC4 against the Reissner-Mindlin reference 16.06997 Hz: within 0.5 %.
+    assert!(
+        rel_err_f64(num(&rows[6], "freq_hz"), 16.06997) < 5e-3,
+        "{}",
+        rows[6]["freq_hz"]
+    );
+    assert!(rows.iter().all(|r| num(r, "residual") < 1e-12));
+}
+
+#[test]
+fn text_output_reports_the_checks() {
+    let (code, out, _) = lamdyn(&[
+        "modes",
+        "--example",
+        "paper-roof-curved",
+        "--elements",
+        "16x16",
+        "--modes",
+        "10",
+    ]);
+    assert_eq!(code, 0);
+    for needle in [
+        "Sturm check",
+        "none missed",
+        "MITC4",
+        "modal mass",
+        "[Hz]",
+        "total mass",
+    ] {
+        assert!(out.contains(needle), "missing {needle:?} in\n{out}");
+    }
+}
+
+#[test]
+fn model_file_with_supports_vtu_json_and_compare() {
+    let dir = temp_dir("modes-files");
+    let model = dir.join("m.toml");
+    std::fs::write(
+        &model,
+        "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = 10\nelements_y = 8\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n\n[[supports]]\npoint_m = [0.0, 0.0, 0.0]\ntranslational_n_per_m = [0.0, 0.0, 1e4]\n\n[solver]\nmodes = 8\n",
+    )
+    .unwrap();
+    let vtu = dir.join("m.vtu");
+    let shapes = dir.join("m.json");
+    let (code, _, err) = lamdyn(&[
+        "modes",
+        model.to_str().unwrap(),
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--shapes-json",
+        shapes.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        std::fs::read_to_string(&vtu)
+            .unwrap()
+            .contains("NumberOfPoints=\"99\"")
+    );
+    let (code, out, err) = lamdyn(&[
+        "modes",
+        model.to_str().unwrap(),
+        "--compare",
+        shapes.to_str().unwrap(),
+        "--csv",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    for r in csv_rows(&out).iter().filter(|r| r["rigid"] != "yes") {
+        assert!(num(r, "compare_mac") > 0.999999, "{r:?}");
+        assert_eq!(r["compare_mode"], r["mode"]);
+    }
+}
+
+#[test]
+fn gmsh_model_relative_to_the_model_file() {
+    let dir = temp_dir("modes-gmsh");
+    let fixture = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../lamdyn-fem/testdata/gmsh/plate-v41.msh");
+    std::fs::copy(fixture, dir.join("plate.msh")).unwrap();
+    let model = dir.join("m.toml");
+    std::fs::write(&model, "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.003\n\n[solver]\nmodes = 8\n").unwrap();
+    let (code, out, err) = lamdyn(&["modes", model.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("35 nodes, 24 MITC4 elements"), "{out}");
+}
+
+#[test]
+fn bad_models_name_the_field() {
+    let dir = temp_dir("modes-bad");
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let good = "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = 10\nelements_y = 8\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n";
+    let cases = [
+        (
+            write(
+                "unknown.toml",
+                &good.replace("poisson = 0.22", "poisson = 0.22\nyoungs = 1"),
+            ),
+            "unknown field `youngs`",
+        ),
+        (
+            write(
+                "neg.toml",
+                &good.replace("thickness_m = 0.004", "thickness_m = -0.004"),
+            ),
+            "shell material: thickness_m = -0.004 must be positive",
+        ),
+        (
+            write(
+                "len.toml",
+                &good.replace("length_x_m = 0.5", "length_x_m = 0"),
+            ),
+            "rectangle: length_x_m = 0 must be positive",
+        ),
+        (
+            write("kind.toml", &good.replace("\"rectangle\"", "\"circle\"")),
+            "unknown variant `circle`",
+        ),
+        (
+            write(
+                "msh.toml",
+                "[mesh]\nkind = \"gmsh\"\nfile = \"none.msh\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
+            ),
+            "none.msh' line 0",
+        ),
+        (
+            write(
+                "unit.toml",
+                "[mesh]\nkind = \"gmsh\"\nfile = \"none.msh\"\nunit = \"inch\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
+            ),
+            "mesh: unit = inch must be \"m\" or \"mm\"",
+        ),
+        (
+            write(
+                "support.toml",
+                &format!(
+                    "{good}[[supports]]\npoint_m = [3.0, 0.0, 0.0]\ntranslational_n_per_m = [0.0, 0.0, 1.0]\n"
+                ),
+            ),
+            "supports[0]: point_m = [3, 0, 0] must lie on the mesh: nearest node",
+        ),
+        (
+            write("modes.toml", &format!("{good}[solver]\nmodes = 0\n")),
+            "modal solver: modes = 0 must lie in 1..",
+        ),
+    ];
+    for (path, want) in cases {
+        let (code, _, err) = lamdyn(&["modes", &path]);
+        assert_eq!(code, 2, "{path}: {err}");
+        assert!(err.contains(want), "want {want:?} in {err:?}");
+    }
+    let (code, _, err) = lamdyn(&["modes", "--example", "paper-plate", "--elements", "40y40"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("expected NXxNY such as 40x40, got '40y40'"),
+        "{err}"
+    );
+}
