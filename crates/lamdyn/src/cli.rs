@@ -27,6 +27,85 @@ pub enum Command {
     E756(E756Args),
     /// Free (or supported) vibration modes of a shell model: MITC4 FE, shift-invert Lanczos.
     Modes(ModesArgs),
+    /// Fit the laminate's effective modulus law E*(f) to measured FRFs through the FE model.
+    Fit(FitArgs),
+}
+
+/// `lamdyn fit`.
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Fit job (TOML, SI units): model file, measurement CSV files, law and misfit (docs/fit.md;
+    /// `--example paper-plate --write-example DIR` writes a complete one).
+    #[arg(conflicts_with = "example", required_unless_present = "example")]
+    pub job: Option<PathBuf>,
+    /// A built-in synthetic case instead of a job: the paper's plate with FRFs from a known law.
+    #[arg(long, value_enum)]
+    pub example: Option<FitExample>,
+    /// Noise seed of the example.
+    #[arg(long, default_value_t = 1, requires = "example")]
+    pub seed: u64,
+    /// Relative complex noise of the example (fraction) [default: 0.01].
+    #[arg(long, default_value_t = 0.01, value_parser = finite, requires = "example", value_name = "FRACTION")]
+    pub noise: f64,
+    /// Law to fit (overrides the job's fit.law).
+    #[arg(long, value_enum)]
+    pub law: Option<LawArg>,
+    /// Misfit (overrides the job's misfit.kind).
+    #[arg(long, value_enum)]
+    pub misfit: Option<MisfitArg>,
+    /// Covariance estimator (overrides the job's fit.covariance).
+    #[arg(long, value_enum)]
+    pub covariance: Option<CovarianceArg>,
+    /// Write report.json, one CSV per table and the RMS curves into this folder (replaced whole
+    /// once everything is computed).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Write the example as a job folder (job.toml, model.toml, channels.csv, frf.csv).
+    #[arg(long, value_name = "DIR", requires = "example")]
+    pub write_example: Option<PathBuf>,
+    /// Output format (CSV: the modulus at the resonances, a `lamdyn core --table` input).
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Built-in fit cases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FitExample {
+    /// Paper's plate, FRFs from the Table 2 eq. 7 law; fitted with eq. 7.
+    PaperPlate,
+    /// Paper's plate, FRFs from a fractional Zener law; fitted with the fractional Zener.
+    PaperPlateZener,
+}
+
+/// Laws of `lamdyn fit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LawArg {
+    /// Paper eq. 7 (E0, mu, t0, c).
+    Eq7,
+    /// Fractional-derivative Zener (G0, G_inf, tau, alpha).
+    Zener,
+    /// Free E' and eta at each measured resonance, splined between.
+    PerMode,
+}
+
+/// Misfits of `lamdyn fit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MisfitArg {
+    /// Paper eqs. 2 and 10: RMS of magnitudes over channels, absolute difference.
+    Rms,
+    /// Log of the RMS magnitudes.
+    LogRms,
+    /// Complex FRFs per channel.
+    Complex,
+}
+
+/// Covariance estimators of `lamdyn fit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CovarianceArg {
+    /// HC3 sandwich (robust to line-to-line changes of the noise).
+    Hc3,
+    /// Classical s^2 (J^T J)^-1.
+    Classical,
 }
 
 /// Built-in FE models.

@@ -8,6 +8,8 @@
 //! | `lamdyn laminate` | stack → B_eq, K_eq, φ, E_eff against frequency | [`cmd::laminate`] |
 //! | `lamdyn core` | E_eff*(f) + stack → core G'(f), η(f) by two inverses | [`cmd::core`] |
 //! | `lamdyn e756` | beam resonances → modulus and loss factor per mode | [`cmd::e756`] |
+//! | `lamdyn modes` | shell model → natural frequencies, shapes, Sturm check | [`cmd::modes`] |
+//! | `lamdyn fit` | measured FRFs + FE model → E*(f) law with intervals, Table 3 | [`cmd::fit`] |
 //!
 //! Exit codes: 0 done; 1 done but a check failed (lines without a solution); 2 error. Errors
 //! print as `lamdyn: {error}` with their causes; a closed pipe on stdout exits 0.
@@ -17,6 +19,7 @@ pub mod cmd;
 mod examples;
 mod grid;
 mod io;
+mod progress;
 pub mod table;
 
 use clap::Parser;

@@ -117,6 +117,42 @@ pub struct Report {
     pub warnings: Vec<String>,
     /// Extra machine-readable data for JSON (detailed per-line results).
     pub extra: Option<Value>,
+    /// Further tables, shown before the main one in text and included in JSON under their key;
+    /// CSV carries the main table only.
+    pub sections: Vec<Section>,
+}
+
+/// A titled table beside a report's main one.
+#[derive(Debug, Clone)]
+pub struct Section {
+    /// JSON key (and CSV file stem for commands that write one file per table).
+    pub key: &'static str,
+    /// Title in the text output.
+    pub title: String,
+    /// Columns.
+    pub columns: Vec<Column>,
+    /// Rows, one cell per column.
+    pub rows: Vec<Vec<Cell>>,
+}
+
+impl Section {
+    /// An empty section.
+    pub fn new(key: &'static str, title: impl Into<String>, columns: Vec<Column>) -> Self {
+        Self {
+            key,
+            title: title.into(),
+            columns,
+            rows: vec![],
+        }
+    }
+
+    /// Adds a row.
+    ///
+    /// # Panics
+    /// If the row's length differs from the number of columns (a programming error).
+    pub fn row(&mut self, cells: Vec<Cell>) {
+        push_row(&self.columns, &mut self.rows, cells);
+    }
 }
 
 impl Report {
@@ -130,6 +166,7 @@ impl Report {
             notes: vec![],
             warnings: vec![],
             extra: None,
+            sections: vec![],
         }
     }
 
@@ -143,12 +180,7 @@ impl Report {
     /// # Panics
     /// If the row's length differs from the number of columns (a programming error).
     pub fn row(&mut self, cells: Vec<Cell>) {
-        assert_eq!(
-            cells.len(),
-            self.columns.len(),
-            "expected one cell per column"
-        );
-        self.rows.push(cells);
+        push_row(&self.columns, &mut self.rows, cells);
     }
 
     /// Writes the report in `format` to `out` and its warnings to `err`.
@@ -179,52 +211,12 @@ impl Report {
         if !self.inputs.is_empty() {
             writeln!(out)?;
         }
-        let headers: Vec<String> = self.columns.iter().map(|c| c.header.to_string()).collect();
-        let units: Vec<String> = self
-            .columns
-            .iter()
-            .map(|c| {
-                if c.unit.is_empty() {
-                    String::new()
-                } else {
-                    format!("[{}]", c.unit)
-                }
-            })
-            .collect();
-        let body: Vec<Vec<String>> = self
-            .rows
-            .iter()
-            .map(|r| {
-                r.iter()
-                    .zip(&self.columns)
-                    .map(|(cell, col)| text_cell(cell, col))
-                    .collect()
-            })
-            .collect();
-        let widths: Vec<usize> = (0..self.columns.len())
-            .map(|j| {
-                body.iter()
-                    .map(|r| r[j].len())
-                    .chain([headers[j].len(), units[j].len()])
-                    .max()
-                    .unwrap_or(0)
-            })
-            .collect();
-        let line = |cells: &[String]| {
-            cells
-                .iter()
-                .zip(&widths)
-                .map(|(c, w)| format!("{c:>w$}"))
-                .collect::<Vec<_>>()
-                .join("  ")
-        };
-        writeln!(out, "{}", line(&headers))?;
-        if units.iter().any(|u| !u.is_empty()) {
-            writeln!(out, "{}", line(&units))?;
+        for section in &self.sections {
+            writeln!(out, "{}", section.title)?;
+            write_text_table(out, &section.columns, &section.rows)?;
+            writeln!(out)?;
         }
-        for r in &body {
-            writeln!(out, "{}", line(r))?;
-        }
+        write_text_table(out, &self.columns, &self.rows)?;
         if !self.notes.is_empty() {
             writeln!(out)?;
             for n in &self.notes {
@@ -234,44 +226,14 @@ impl Report {
         Ok(())
     }
 
-    fn write_csv(&self, out: &mut dyn Write) -> std::io::Result<()> {
-        let header: Vec<&str> = self.columns.iter().map(|c| c.key).collect();
-        writeln!(out, "{}", header.join(","))?;
-        for r in &self.rows {
-            let cells: Vec<String> = r
-                .iter()
-                .map(|c| match c {
-                    Cell::Num(v) => csv_number(*v),
-                    Cell::Text(t) if t.contains([',', '"']) => {
-                        format!("\"{}\"", t.replace('"', "\"\""))
-                    }
-                    Cell::Text(t) => t.clone(),
-                    Cell::Empty => String::new(),
-                })
-                .collect();
-            writeln!(out, "{}", cells.join(","))?;
-        }
-        Ok(())
+    /// The main table as CSV (SI units, keys as headers).
+    pub fn write_csv(&self, out: &mut dyn Write) -> std::io::Result<()> {
+        write_csv_table(out, &self.columns, &self.rows)
     }
 
-    /// The JSON form: inputs, column units, rows as objects keyed by column, warnings, extra.
+    /// The JSON form: inputs, column units, rows as objects keyed by column, warnings, extra,
+    /// sections.
     pub fn to_json(&self) -> Value {
-        let rows: Vec<Value> = self
-            .rows
-            .iter()
-            .map(|r| {
-                let mut m = Map::new();
-                for (cell, col) in r.iter().zip(&self.columns) {
-                    let v = match cell {
-                        Cell::Num(v) => json!(v),
-                        Cell::Text(t) => json!(t),
-                        Cell::Empty => Value::Null,
-                    };
-                    m.insert(col.key.to_string(), v);
-                }
-                Value::Object(m)
-            })
-            .collect();
         let inputs: Map<String, Value> = self
             .inputs
             .iter()
@@ -281,14 +243,130 @@ impl Report {
             "command": self.command,
             "version": env!("CARGO_PKG_VERSION"),
             "inputs": inputs,
-            "rows": rows,
+            "rows": json_rows(&self.columns, &self.rows),
             "warnings": self.warnings,
         });
+        if !self.sections.is_empty() {
+            let sections: Map<String, Value> = self
+                .sections
+                .iter()
+                .map(|s| (s.key.to_string(), json_rows(&s.columns, &s.rows)))
+                .collect();
+            doc["sections"] = Value::Object(sections);
+        }
         if let Some(extra) = &self.extra {
             doc["details"] = extra.clone();
         }
         doc
     }
+}
+
+/// Appends a row of one cell per column.
+///
+/// # Panics
+/// If the row's length differs from the number of columns (a programming error).
+fn push_row(columns: &[Column], rows: &mut Vec<Vec<Cell>>, cells: Vec<Cell>) {
+    assert_eq!(cells.len(), columns.len(), "expected one cell per column");
+    rows.push(cells);
+}
+
+/// Writes an aligned text table (header, unit line if any unit, rows).
+fn write_text_table(
+    out: &mut dyn Write,
+    columns: &[Column],
+    rows: &[Vec<Cell>],
+) -> std::io::Result<()> {
+    let headers: Vec<String> = columns.iter().map(|c| c.header.to_string()).collect();
+    let units: Vec<String> = columns
+        .iter()
+        .map(|c| {
+            if c.unit.is_empty() {
+                String::new()
+            } else {
+                format!("[{}]", c.unit)
+            }
+        })
+        .collect();
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            r.iter()
+                .zip(columns)
+                .map(|(cell, col)| text_cell(cell, col))
+                .collect()
+        })
+        .collect();
+    let widths: Vec<usize> = (0..columns.len())
+        .map(|j| {
+            body.iter()
+                .map(|r| r[j].len())
+                .chain([headers[j].len(), units[j].len()])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let line = |cells: &[String]| {
+        cells
+            .iter()
+            .zip(&widths)
+            .map(|(c, w)| format!("{c:>w$}"))
+            .collect::<Vec<_>>()
+            .join("  ")
+    };
+    writeln!(out, "{}", line(&headers))?;
+    if units.iter().any(|u| !u.is_empty()) {
+        writeln!(out, "{}", line(&units))?;
+    }
+    for r in &body {
+        writeln!(out, "{}", line(r))?;
+    }
+    Ok(())
+}
+
+/// Writes a CSV table: keys as the header, SI numbers, text quoted when needed.
+pub fn write_csv_table(
+    out: &mut dyn Write,
+    columns: &[Column],
+    rows: &[Vec<Cell>],
+) -> std::io::Result<()> {
+    let header: Vec<&str> = columns.iter().map(|c| c.key).collect();
+    writeln!(out, "{}", header.join(","))?;
+    for r in rows {
+        let cells: Vec<String> = r
+            .iter()
+            .map(|c| match c {
+                Cell::Num(v) => csv_number(*v),
+                Cell::Text(t) if t.contains([',', '"']) => {
+                    format!("\"{}\"", t.replace('"', "\"\""))
+                }
+                Cell::Text(t) => t.clone(),
+                Cell::Empty => String::new(),
+            })
+            .collect();
+        writeln!(out, "{}", cells.join(","))?;
+    }
+    Ok(())
+}
+
+/// Rows as JSON objects keyed by column (SI numbers, null for empty cells).
+fn json_rows(columns: &[Column], rows: &[Vec<Cell>]) -> Value {
+    rows.iter()
+        .map(|r| {
+            let m: Map<String, Value> = r
+                .iter()
+                .zip(columns)
+                .map(|(cell, col)| {
+                    let v = match cell {
+                        Cell::Num(v) => json!(v),
+                        Cell::Text(t) => json!(t),
+                        Cell::Empty => Value::Null,
+                    };
+                    (col.key.to_string(), v)
+                })
+                .collect();
+            Value::Object(m)
+        })
+        .collect()
 }
 
 /// A number in CSV: Rust's shortest round-trip form, plain between 1e-4 and 1e15, else with an

@@ -4,6 +4,7 @@
 
 pub mod core;
 pub mod e756;
+pub mod fit;
 pub mod laminate;
 pub mod modes;
 
@@ -19,6 +20,7 @@ pub fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::R
         Command::Core(args) => core::run(&args, out, err),
         Command::E756(args) => e756::run(&args, out, err),
         Command::Modes(args) => modes::run(&args, out, err),
+        Command::Fit(args) => fit::run(&args, out, err),
     }
 }
 

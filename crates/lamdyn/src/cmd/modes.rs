@@ -4,11 +4,12 @@
 use crate::Outcome;
 use crate::cli::{ModelExample, ModesArgs};
 use crate::io::read_toml;
+use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result, bail};
 use faer::Mat;
 use lamdyn_fem::assembly::Assembly;
-use lamdyn_fem::eigen::{ModalParams, ModalSolution, Progress, Shift, solve_modes};
+use lamdyn_fem::eigen::{ModalParams, ModalSolution, Shift, solve_modes};
 use lamdyn_fem::element::ShellMaterial;
 use lamdyn_fem::mesh::Mesh;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
@@ -79,21 +80,6 @@ fn example(e: ModelExample) -> ModelSpec {
     }
 }
 
-/// Progress on stderr (shown only on a terminal).
-struct Bar(indicatif::ProgressBar);
-
-impl Progress for Bar {
-    fn stage(&self, name: &str) {
-        self.0.set_message(name.to_string());
-        self.0.tick();
-    }
-    fn converged(&self, converged: usize, wanted: usize) {
-        self.0
-            .set_message(format!("Lanczos: {converged}/{wanted} modes converged"));
-        self.0.tick();
-    }
-}
-
 /// Runs `lamdyn modes`.
 pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let (mut spec, base, source) = match (&args.model, args.example) {
@@ -139,14 +125,9 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
         }
         params = params.with_shift(Shift::BelowHz(f));
     }
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} [{elapsed}] {msg}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-    );
-    let progress = Bar(bar);
+    let progress = Spinner::new();
     let sol = solve_modes(&asm, &params, &progress)?;
-    progress.0.finish_and_clear();
+    progress.finish();
 
     let report = build_report(&source, &mesh, &spec, &asm, &sol, compare.as_ref())?;
     if let Some(path) = &args.vtu {

@@ -1,0 +1,517 @@
+//! Identification of the effective modulus law E*(ω) (paper eqs. 7 and 10, Table 2).
+//!
+//! Levenberg–Marquardt ([`crate::lm`]) minimises the misfit ([`crate::misfit`]) over the law's
+//! unconstrained parameters ([`crate::law`]) from the best few points of a grid screened by
+//! misfit, built around the storage modulus measured at the peaks (`start.rs`). The
+//! per-mode law starts from the eq. 7 fit evaluated at the measured peaks. The measured peaks
+//! are matched to FE modes in order: the first to the FE mode among the first three whose
+//! frequency ratio is closest to one, each later one to the FE mode nearest after scaling by
+//! the previous peak's ratio.
+//!
+//! The starts run in parallel. A complex-FRF misfit starts from the optimum of the log-RMS one
+//! (faster, same minimum for consistent data).
+//!
+//! **Uncertainty.** With J the Jacobian of the m residuals r over the p unconstrained
+//! parameters u at the optimum, the covariance of u is either the classical
+//! S/(m − p) (JᵀJ)⁻¹ (S = Σ r²) or, by default, the HC3 sandwich
+//! (JᵀJ)⁻¹ Jᵀ diag(r_i²/(1 − h_i)²) J (JᵀJ)⁻¹ with leverages h_i = J_i (JᵀJ)⁻¹ J_iᵀ
+//! [MacKinnon & White 1985], which stays valid when the noise differs from line to line. It is
+//! mapped to the natural parameters by the delta method; 95 % intervals are ±1.96 standard
+//! deviations (normal approximation).
+
+use crate::error::{FitError, inconsistent};
+use crate::law::LawChoice;
+use crate::lm::{LmSettings, levenberg_marquardt};
+use crate::misfit::{MisfitKind, MisfitSpec, Objective};
+use crate::peaks::{Peak, find_peaks};
+use crate::start;
+use crate::synthesis::ModalModel;
+use faer::prelude::Solve;
+use faer::{Mat, Side};
+use lamdyn_frf::FrfSet;
+use num_complex::Complex64;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::time::Instant;
+
+/// The law family to fit (the per-mode anchors come from the measured peaks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LawKind {
+    /// Paper eq. 7.
+    PaperEq7,
+    /// Fractional-derivative Zener.
+    FractionalZener,
+    /// Free E' and η at each measured resonance.
+    PerMode,
+}
+
+/// Settings of [`fit`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitSettings {
+    /// The law.
+    pub law: LawKind,
+    /// The misfit.
+    pub misfit: MisfitSpec,
+    /// LM stopping rules.
+    pub lm: LmSettings,
+    /// Peak prominence for the starting values (ratio over the neighbouring valleys).
+    pub prominence: f64,
+    /// How the parameter covariance is estimated.
+    pub covariance: Covariance,
+}
+
+/// Estimator of the parameter covariance at the optimum.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Covariance {
+    /// S/(m − p) (JᵀJ)⁻¹: exact for independent residuals of equal variance.
+    Classical,
+    /// The HC3 sandwich [MacKinnon & White 1985; Long & Ervin 2000]: valid when the residuals'
+    /// variance changes from line to line (the absolute RMS misfit, where the noise scales with
+    /// the signal and the peaks dominate). The default: calibrated for all three misfits in the
+    /// recovery study of docs/fit.md, where the classical estimate covers the truth in only
+    /// 40 % of cases with the absolute RMS misfit.
+    #[default]
+    RobustHc3,
+}
+
+impl FitSettings {
+    /// `law` with `misfit` and default LM settings.
+    pub fn new(law: LawKind, misfit: MisfitSpec) -> Self {
+        Self {
+            law,
+            misfit,
+            lm: LmSettings::default(),
+            prominence: 1.5,
+            covariance: Covariance::default(),
+        }
+    }
+}
+
+/// One identified parameter.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Parameter {
+    /// Name with unit (`E0_pa`).
+    pub name: String,
+    /// Value.
+    pub value: f64,
+    /// Standard deviation (delta method), if the Jacobian has full rank.
+    pub std_dev: Option<f64>,
+    /// 95 % interval.
+    pub ci95: Option<[f64; 2]>,
+}
+
+/// One start of the multi-start LM.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StartReport {
+    /// Natural parameters at the start.
+    pub start: Vec<f64>,
+    /// Final cost Σ r².
+    pub cost: f64,
+    /// LM iterations.
+    pub iterations: usize,
+    /// Whether LM met a tolerance.
+    pub converged: bool,
+}
+
+/// The identified law and how it was found.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitResult {
+    /// The law, with its anchors for the per-mode law.
+    pub law: LawChoice,
+    /// Parameters with uncertainty.
+    pub parameters: Vec<Parameter>,
+    /// Σ r² at the optimum.
+    pub cost: f64,
+    /// √(Σ r² / m).
+    pub residual_rms: f64,
+    /// Number of residuals m.
+    pub n_residuals: usize,
+    /// Lines used.
+    pub n_lines: usize,
+    /// Misfit evaluations: grid screening, every LM start, and the preliminary fit a complex or
+    /// per-mode fit starts from.
+    pub evaluations: usize,
+    /// Why the best run stopped.
+    pub reason: String,
+    /// Whether the best run met a tolerance.
+    pub converged: bool,
+    /// All starts.
+    pub starts: Vec<StartReport>,
+    /// Measured peaks used for the starts.
+    pub peaks: Vec<Peak>,
+    /// Wall time of the fit, s.
+    pub seconds: f64,
+    #[serde(skip)]
+    cov_u: Option<Mat<f64>>,
+    #[serde(skip)]
+    u: Vec<f64>,
+}
+
+impl FitResult {
+    /// The natural parameter values.
+    pub fn values(&self) -> Vec<f64> {
+        self.parameters.iter().map(|p| p.value).collect()
+    }
+
+    /// E*(ω) of the identified law, Pa.
+    pub fn modulus(&self, omega_rad_s: f64) -> Complex64 {
+        self.law.modulus(&self.values(), omega_rad_s)
+    }
+
+    /// E'(ω), η(ω) and their standard deviations (delta method through the parameter
+    /// covariance), if available.
+    pub fn modulus_uncertainty(&self, omega_rad_s: f64) -> (f64, f64, Option<(f64, f64)>) {
+        let e = self.modulus(omega_rad_s);
+        let eta = e.im / e.re;
+        let Some(cov) = &self.cov_u else {
+            return (e.re, eta, None);
+        };
+        let p = self.u.len();
+        let grad = |k: usize| {
+            let h = 1e-6 * self.u[k].abs().max(1.0);
+            let mut up = self.u.clone();
+            up[k] += h;
+            let mut um = self.u.clone();
+            um[k] -= h;
+            let (ep, em) = (
+                self.law.modulus(&self.law.natural(&up), omega_rad_s),
+                self.law.modulus(&self.law.natural(&um), omega_rad_s),
+            );
+            (
+                (ep.re - em.re) / (2.0 * h),
+                (ep.im / ep.re - em.im / em.re) / (2.0 * h),
+            )
+        };
+        let g: Vec<(f64, f64)> = (0..p).map(grad).collect();
+        let (mut ve, mut vn) = (0.0, 0.0);
+        for a in 0..p {
+            for b in 0..p {
+                ve += g[a].0 * cov[(a, b)] * g[b].0;
+                vn += g[a].1 * cov[(a, b)] * g[b].1;
+            }
+        }
+        (e.re, eta, Some((ve.max(0.0).sqrt(), vn.max(0.0).sqrt())))
+    }
+}
+
+/// Elastic FE frequencies (Hz) at E_ref, increasing.
+pub(crate) fn elastic_hz(model: &ModalModel) -> Vec<f64> {
+    let top = model.eigenvalues().iter().cloned().fold(0.0, f64::max);
+    let mut f: Vec<f64> = model
+        .eigenvalues()
+        .iter()
+        .filter(|l| **l > 1e-6 * top)
+        .map(|l| l.sqrt() / (2.0 * PI))
+        .collect();
+    f.sort_by(f64::total_cmp);
+    f
+}
+
+/// The stiffness scale E/E_ref suggested by the first measured peak: (f_exp/f_num)² against the
+/// FE mode among the first three whose ratio is closest to one.
+pub(crate) fn start_scale(peaks: &[Peak], fe_hz: &[f64]) -> f64 {
+    let f1 = peaks[0].freq_hz;
+    fe_hz
+        .iter()
+        .take(3)
+        .map(|f| (f1 / f).powi(2))
+        .min_by(|a, b| a.ln().abs().total_cmp(&b.ln().abs()))
+        .unwrap_or(1.0)
+}
+
+/// The FE frequency (Hz, at E_ref) matching each peak: the first peak as in [`start_scale`],
+/// each later one to the FE mode nearest its frequency after scaling by the previous peak's
+/// ratio (the modulus varies smoothly with frequency, so the previous ratio is the best guess).
+pub(crate) fn match_modes(peaks: &[Peak], fe_hz: &[f64]) -> Vec<f64> {
+    let mut ratio = start_scale(peaks, fe_hz).sqrt();
+    peaks
+        .iter()
+        .map(|p| {
+            let f = fe_hz
+                .iter()
+                .cloned()
+                .min_by(|a, b| {
+                    (a * ratio - p.freq_hz)
+                        .abs()
+                        .total_cmp(&(b * ratio - p.freq_hz).abs())
+                })
+                .unwrap_or(p.freq_hz);
+            ratio = p.freq_hz / f;
+            f
+        })
+        .collect()
+}
+
+/// Fits the law of `settings` to `measured` through `model`.
+///
+/// # Errors
+/// [`FitError::Inconsistent`] for mismatched channels, an empty band, fewer residuals than
+/// parameters, no resonance peak in the band, or no start that evaluates.
+pub fn fit(
+    model: &ModalModel,
+    measured: &FrfSet,
+    settings: &FitSettings,
+) -> Result<FitResult, FitError> {
+    let clock = Instant::now();
+    // The complex misfit starts from the log-RMS optimum.
+    if settings.misfit.kind == MisfitKind::Complex {
+        let mut coarse = settings.clone();
+        coarse.misfit.kind = MisfitKind::LogRms;
+        let first = fit(model, measured, &coarse)?;
+        let objective = Objective::new(model, measured, settings.misfit.clone())?;
+        let mut result = run_starts(&objective, &first.law, vec![first.values()], settings)?;
+        result.peaks = first.peaks;
+        result.evaluations += first.evaluations;
+        result.seconds = clock.elapsed().as_secs_f64();
+        return Ok(result);
+    }
+    let objective = Objective::new(model, measured, settings.misfit.clone())?;
+    enough_residuals(&objective, settings.law)?;
+    let peaks = find_peaks(
+        measured.freqs_hz(),
+        objective.measured_rms(),
+        objective.lines(),
+        settings.prominence,
+    );
+    if peaks.is_empty() {
+        return Err(inconsistent(
+            "fit",
+            "no resonance peak in the band: no starting value for the modulus can be derived"
+                .into(),
+        ));
+    }
+    let fe = elastic_hz(model);
+    if fe.is_empty() {
+        return Err(inconsistent(
+            "fit",
+            "the modal model has no elastic mode".into(),
+        ));
+    }
+    let matched = match_modes(&peaks, &fe);
+    let storage: Vec<(f64, f64)> = peaks
+        .iter()
+        .zip(&matched)
+        .map(|(p, f)| {
+            (
+                2.0 * PI * p.freq_hz,
+                model.e_ref_pa() * (p.freq_hz / f).powi(2),
+            )
+        })
+        .collect();
+    let (law, screening, starts) = match settings.law {
+        LawKind::PaperEq7 => {
+            let grid = start::paper_eq7_grid(&storage);
+            (
+                LawChoice::PaperEq7,
+                grid.len(),
+                screened(&objective, LawChoice::PaperEq7, grid),
+            )
+        }
+        LawKind::FractionalZener => {
+            let grid = start::fractional_zener_grid(&storage);
+            (
+                LawChoice::FractionalZener,
+                grid.len(),
+                screened(&objective, LawChoice::FractionalZener, grid),
+            )
+        }
+        LawKind::PerMode => {
+            // Start from the eq. 7 fit evaluated at the peaks: a smooth first guess that keeps
+            // every anchor on its own mode.
+            let mut smooth = settings.clone();
+            smooth.law = LawKind::PaperEq7;
+            let first = fit(model, measured, &smooth)?;
+            let anchors: Vec<f64> = peaks.iter().map(|p| p.freq_hz).collect();
+            let start: Vec<f64> = anchors
+                .iter()
+                .flat_map(|f| {
+                    let e = first.modulus(2.0 * PI * f);
+                    [e.re, (e.im / e.re).clamp(1e-6, 1.0)]
+                })
+                .collect();
+            (
+                LawChoice::PerMode {
+                    anchors_hz: anchors,
+                },
+                first.evaluations,
+                vec![start],
+            )
+        }
+    };
+    let mut result = run_starts(&objective, &law, starts, settings)?;
+    result.evaluations += screening;
+    result.peaks = peaks;
+    result.seconds = clock.elapsed().as_secs_f64();
+    Ok(result)
+}
+
+/// More residuals than parameters (the per-mode law has two per peak, at least two).
+fn enough_residuals(objective: &Objective<'_>, law: LawKind) -> Result<(), FitError> {
+    let p = match law {
+        LawKind::PaperEq7 | LawKind::FractionalZener => 4,
+        LawKind::PerMode => 2,
+    };
+    let m = objective.n_residuals();
+    if m <= p {
+        return Err(inconsistent(
+            "fit",
+            format!("{m} residuals for {p} parameters: widen the band or use more lines"),
+        ));
+    }
+    Ok(())
+}
+
+/// The best few points of `grid` by misfit ([`start::screen`]).
+fn screened(objective: &Objective<'_>, law: LawChoice, grid: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    let cost = |n: &[f64]| {
+        let prepared = law.prepare(n);
+        let r = objective.residuals(&|w| prepared.modulus(w));
+        Some(r.iter().map(|v| v * v).sum::<f64>())
+    };
+    start::screen(&law, grid, &cost, STARTS)
+}
+
+/// Levenberg–Marquardt runs per fit (the best screened grid points).
+const STARTS: usize = 4;
+
+fn run_starts(
+    objective: &Objective<'_>,
+    law: &LawChoice,
+    starts: Vec<Vec<f64>>,
+    settings: &FitSettings,
+) -> Result<FitResult, FitError> {
+    let p = law.n_params();
+    let m = objective.n_residuals();
+    if m <= p {
+        return Err(inconsistent(
+            "fit",
+            format!("{m} residuals for {p} parameters: widen the band or use more lines"),
+        ));
+    }
+    let residuals = |u: &[f64]| -> Option<Vec<f64>> {
+        let n = law.natural(u);
+        if !n.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let prepared = law.prepare(&n);
+        let modulus = |w: f64| prepared.modulus(w);
+        Some(objective.residuals(&modulus))
+    };
+    // Starts run in parallel; the best final cost wins.
+    let outcomes: Vec<(Vec<f64>, Option<crate::lm::LmOutcome>)> = starts
+        .into_par_iter()
+        .map(|start| {
+            let u0 = law.unconstrained(&start);
+            let out = levenberg_marquardt(&residuals, &u0, settings.lm);
+            (start, out)
+        })
+        .collect();
+    let mut reports = Vec::new();
+    let mut best: Option<crate::lm::LmOutcome> = None;
+    let mut evaluations = 0;
+    for (start, out) in outcomes {
+        let Some(out) = out else { continue };
+        evaluations += out.evaluations;
+        reports.push(StartReport {
+            start,
+            cost: out.cost,
+            iterations: out.iterations,
+            converged: out.converged,
+        });
+        if best.as_ref().is_none_or(|b| out.cost < b.cost) {
+            best = Some(out);
+        }
+    }
+    let best =
+        best.ok_or_else(|| inconsistent("fit", "no starting point gives a finite misfit".into()))?;
+    let nat = law.natural(&best.x);
+    let cov_u = match settings.covariance {
+        Covariance::Classical => covariance(&best.jacobian, best.cost, m, p),
+        Covariance::RobustHc3 => sandwich_covariance(&best.jacobian, &best.residuals, p),
+    };
+    let stds = cov_u.as_ref().map(|c| natural_std(law, &best.x, c));
+    let parameters = law
+        .names()
+        .into_iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let sd = stds.as_ref().map(|s| s[k]);
+            Parameter {
+                name,
+                value: nat[k],
+                std_dev: sd,
+                ci95: sd.map(|s| [nat[k] - 1.96 * s, nat[k] + 1.96 * s]),
+            }
+        })
+        .collect();
+    Ok(FitResult {
+        law: law.clone(),
+        parameters,
+        cost: best.cost,
+        residual_rms: (best.cost / m as f64).sqrt(),
+        n_residuals: m,
+        n_lines: objective.lines().len(),
+        evaluations,
+        reason: best.reason.clone(),
+        converged: best.converged,
+        starts: reports,
+        peaks: vec![],
+        seconds: 0.0,
+        cov_u,
+        u: best.x,
+    })
+}
+
+/// The HC3 sandwich (JᵀJ)⁻¹ Jᵀ diag(r_i²/(1 − h_i)²) J (JᵀJ)⁻¹ with leverages
+/// h_i = J_i (JᵀJ)⁻¹ J_iᵀ, or `None` if JᵀJ is singular.
+fn sandwich_covariance(j: &Mat<f64>, r: &[f64], p: usize) -> Option<Mat<f64>> {
+    let m = j.nrows();
+    let jtj = j.transpose() * j;
+    let inv = jtj.llt(Side::Lower).ok()?.solve(Mat::<f64>::identity(p, p));
+    let leverage = |i: usize| -> f64 {
+        (0..p)
+            .map(|a| {
+                (0..p)
+                    .map(|b| j[(i, a)] * inv[(a, b)] * j[(i, b)])
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    // A leverage of one (a residual that alone fixes a parameter) is capped: its weight stays finite.
+    let jr = Mat::from_fn(m, p, |i, k| {
+        j[(i, k)] * r[i] / (1.0 - leverage(i).min(0.99))
+    });
+    let meat = jr.transpose() * &jr;
+    Some(&inv * &meat * &inv)
+}
+
+/// S/(m − p) (JᵀJ)⁻¹, or `None` if JᵀJ is singular.
+fn covariance(j: &Mat<f64>, cost: f64, m: usize, p: usize) -> Option<Mat<f64>> {
+    let jtj = j.transpose() * j;
+    let llt = jtj.llt(Side::Lower).ok()?;
+    let inv = llt.solve(Mat::<f64>::identity(p, p));
+    let s2 = cost / (m - p) as f64;
+    Some(Mat::from_fn(p, p, |a, b| s2 * inv[(a, b)]))
+}
+
+/// Standard deviations of the natural parameters by the delta method.
+fn natural_std(law: &LawChoice, u: &[f64], cov: &Mat<f64>) -> Vec<f64> {
+    let p = u.len();
+    let mut t = Mat::zeros(p, p);
+    for k in 0..p {
+        let h = 1e-7 * u[k].abs().max(1.0);
+        let mut up = u.to_vec();
+        up[k] += h;
+        let mut um = u.to_vec();
+        um[k] -= h;
+        let (np, nm) = (law.natural(&up), law.natural(&um));
+        for i in 0..p {
+            t[(i, k)] = (np[i] - nm[i]) / (2.0 * h);
+        }
+    }
+    let c = &t * cov * t.transpose();
+    (0..p).map(|i| c[(i, i)].max(0.0).sqrt()).collect()
+}

@@ -1,0 +1,329 @@
+//! Exact modal FRF synthesis for a stiffness that scales with one complex modulus.
+//!
+//! With K*(ω) = K0 s(ω), s = E*(ω)/E_ref (paper eq. 4), and the real modes of (K0, M) —
+//! K0 φ_r = λ_r M φ_r, φ_rᵀ M φ_s = δ_rs — the receptance of eq. 3 is diagonal in the modal
+//! basis for every ω and every trial modulus:
+//!
+//! H(ω) = (−ω² M + s K0)⁻¹ = Σ_r φ_r φ_rᵀ / (λ_r s(ω) − ω²)       (all modes, rigid ones with λ = 0)
+//!
+//! Kept modes r ≤ m are summed exactly. The omitted ones (λ ≫ ω²) are added as a residual
+//! flexibility from two static solves with the factorization of K − σM (σ < 0, the modal
+//! solver's shift): with a_r = λ_r − σ,
+//!
+//! R1 = (K0 − σM)⁻¹ − Σ_{r≤m} φφᵀ/a_r           = Σ_{r>m} φφᵀ/a_r
+//! R2 = (K0 − σM)⁻¹M(K0 − σM)⁻¹ − Σ_{r≤m} φφᵀ/a_r² = Σ_{r>m} φφᵀ/a_r²
+//!
+//! and, expanding 1/(λ s − ω²) = 1/(s a + d) with d = sσ − ω² to first order in d/(s a),
+//!
+//! H(ω) ≈ Σ_{r≤m} φφᵀ/(λ_r s − ω²) + R1/s − (sσ − ω²) R2/s²,
+//!
+//! whose error is O((ω²/λ_{m+1})²) relative to the omitted part. Everything is projected on the
+//! response probes C = Pᵀ Φ and the forces F = Φᵀ Q once; a line then costs O(n_resp·m·n_ref), and
+//! the RMS over responses O(m²) per line through the Gram matrix of the projected terms.
+
+use crate::error::{FitError, inconsistent};
+use crate::probe::Probe;
+use faer::Mat;
+use faer::sparse::SparseColMatRef;
+use lamdyn_fem::assembly::Assembly;
+use lamdyn_fem::eigen::ModalSolution;
+use lamdyn_fem::eigen::factor::FactorPlan;
+use lamdyn_frf::{Channel, FrfSet, Quantity};
+use num_complex::Complex64;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// The residual flexibility of the omitted modes.
+#[derive(Debug, Clone)]
+struct Residual {
+    sigma: f64,
+    r1: Mat<f64>,
+    r2: Mat<f64>,
+}
+
+/// Modal model of the responses to the references: projected modes and residual terms.
+#[derive(Debug, Clone)]
+pub struct ModalModel {
+    lambda: Vec<f64>,
+    c: Mat<f64>,
+    f: Mat<f64>,
+    residual: Option<Residual>,
+    e_ref_pa: f64,
+}
+
+/// Whether to add the residual flexibility of the omitted modes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResidualTerm {
+    /// Kept modes only.
+    None,
+    /// Kept modes plus R1/s − (sσ − ω²)R2/s² (two solves per reference).
+    Static,
+}
+
+impl ModalModel {
+    /// Projects the modes of `sol` (computed on `asm` at modulus `e_ref_pa`) on the response and
+    /// reference probes; with [`ResidualTerm::Static`], factorizes K0 − σM once more for the
+    /// residual terms.
+    ///
+    /// # Errors
+    /// [`FitError::Inconsistent`] when the model has elastic supports (they do not scale with
+    /// the modulus, so real modes of K0 no longer diagonalize K*(ω): exclude their frequency
+    /// bands instead) or shapes of the wrong size; factorization errors.
+    pub fn new(
+        asm: &Assembly,
+        sol: &ModalSolution,
+        responses: &[Probe],
+        references: &[Probe],
+        e_ref_pa: f64,
+        residual: ResidualTerm,
+    ) -> Result<Self, FitError> {
+        if !asm.springs.is_empty() {
+            return Err(inconsistent(
+                "modal synthesis",
+                format!(
+                    "the model has {} support springs; K*(w) = s(w) K0 needs a free model: exclude the supports' frequency bands from the misfit instead",
+                    asm.springs.len()
+                ),
+            ));
+        }
+        let n = asm.n_dofs();
+        if sol.shapes.nrows() != n {
+            return Err(inconsistent(
+                "modal synthesis",
+                format!(
+                    "shapes have {} rows, the model {n} dofs",
+                    sol.shapes.nrows()
+                ),
+            ));
+        }
+        let m = sol.modes.len();
+        let lambda: Vec<f64> = sol.modes.iter().map(|md| md.eigenvalue).collect();
+        let c = Mat::from_fn(responses.len(), m, |i, r| {
+            responses[i].dot(|d| sol.shapes[(d, r)])
+        });
+        let f = Mat::from_fn(m, references.len(), |r, j| {
+            references[j].dot(|d| sol.shapes[(d, r)])
+        });
+        let residual = match residual {
+            ResidualTerm::None => None,
+            ResidualTerm::Static => Some(residual_terms(
+                asm,
+                sol.info.shift,
+                &lambda,
+                &c,
+                &f,
+                responses,
+                references,
+            )?),
+        };
+        Ok(Self {
+            lambda,
+            c,
+            f,
+            residual,
+            e_ref_pa,
+        })
+    }
+
+    /// The modulus E_ref (Pa) at which K0 was assembled.
+    pub fn e_ref_pa(&self) -> f64 {
+        self.e_ref_pa
+    }
+
+    /// Eigenvalues λ_r at E_ref, rad²/s².
+    pub fn eigenvalues(&self) -> &[f64] {
+        &self.lambda
+    }
+
+    /// Number of responses and references.
+    pub fn shape(&self) -> (usize, usize) {
+        (self.c.nrows(), self.f.ncols())
+    }
+
+    /// Coefficient functions of the kept modes and of the residual terms at (ω, s).
+    fn coefficients(&self, omega: f64, s: Complex64, out: &mut Vec<Complex64>) {
+        out.clear();
+        let w2 = omega * omega;
+        out.extend(self.lambda.iter().map(|l| 1.0 / (l * s - w2)));
+        if let Some(r) = &self.residual {
+            out.push(1.0 / s);
+            out.push(-(s * r.sigma - w2) / (s * s));
+        }
+    }
+
+    /// Receptances (m/N) of all responses to all references at ω (rad/s) and s = E*(ω)/E_ref:
+    /// row-major n_resp × n_ref.
+    pub fn receptance(&self, omega: f64, s: Complex64) -> Vec<Complex64> {
+        let (nr, nf) = self.shape();
+        let mut g = Vec::with_capacity(self.lambda.len() + 2);
+        self.coefficients(omega, s, &mut g);
+        let m = self.lambda.len();
+        let mut h = vec![Complex64::new(0.0, 0.0); nr * nf];
+        for j in 0..nf {
+            let gf: Vec<Complex64> = (0..m).map(|r| g[r] * self.f[(r, j)]).collect();
+            for i in 0..nr {
+                let mut acc = Complex64::new(0.0, 0.0);
+                for r in 0..m {
+                    acc += gf[r] * self.c[(i, r)];
+                }
+                if let Some(res) = &self.residual {
+                    acc += g[m] * res.r1[(i, j)] + g[m + 1] * res.r2[(i, j)];
+                }
+                h[i * nf + j] = acc;
+            }
+        }
+        h
+    }
+
+    /// The FRF set at `freqs_hz` for the modulus law `modulus` (Pa, of ω in rad/s), as
+    /// `quantity`, computed in parallel over lines.
+    ///
+    /// # Errors
+    /// [`FitError`] from the set's checks (non-finite values, a non-increasing axis).
+    pub fn frf_set(
+        &self,
+        freqs_hz: &[f64],
+        modulus: &(dyn Fn(f64) -> Complex64 + Sync),
+        quantity: Quantity,
+        responses: Vec<Channel>,
+        references: Vec<Channel>,
+    ) -> Result<FrfSet, FitError> {
+        let (nr, nf) = self.shape();
+        if responses.len() != nr || references.len() != nf {
+            return Err(inconsistent(
+                "modal synthesis",
+                format!(
+                    "{} x {} channels for a model of {nr} x {nf}",
+                    responses.len(),
+                    references.len()
+                ),
+            ));
+        }
+        let lines: Vec<Vec<Complex64>> = freqs_hz
+            .par_iter()
+            .map(|f| {
+                let w = 2.0 * PI * f;
+                let s = modulus(w) / self.e_ref_pa;
+                let q = quantity.from_receptance(w);
+                self.receptance(w, s).into_iter().map(|h| h * q).collect()
+            })
+            .collect();
+        let nl = freqs_hz.len();
+        let mut data = vec![Complex64::new(0.0, 0.0); nr * nf * nl];
+        for (k, line) in lines.iter().enumerate() {
+            for p in 0..nr * nf {
+                data[p * nl + k] = line[p];
+            }
+        }
+        Ok(FrfSet::new(
+            freqs_hz.to_vec(),
+            responses,
+            references,
+            quantity,
+            data,
+        )?)
+    }
+
+    /// A fast evaluator of the RMS receptance over the responses for reference `j`.
+    pub fn rms_evaluator(&self, j: usize) -> RmsEvaluator {
+        let m = self.lambda.len();
+        let extra = if self.residual.is_some() { 2 } else { 0 };
+        let nr = self.c.nrows();
+        let a = Mat::from_fn(nr, m + extra, |i, k| match (k < m, &self.residual) {
+            (true, _) => self.c[(i, k)] * self.f[(k, j)],
+            (false, Some(res)) => {
+                if k == m {
+                    res.r1[(i, j)]
+                } else {
+                    res.r2[(i, j)]
+                }
+            }
+            (false, None) => 0.0,
+        });
+        let gram = a.transpose() * &a;
+        RmsEvaluator {
+            model: self.clone(),
+            gram,
+            n_responses: nr,
+        }
+    }
+}
+
+/// RMS over responses of the receptance to one reference, by the Gram matrix of the projected
+/// terms: rms²(ω) = gᴴ G g / N with g the coefficient functions at (ω, s).
+#[derive(Debug, Clone)]
+pub struct RmsEvaluator {
+    model: ModalModel,
+    gram: Mat<f64>,
+    n_responses: usize,
+}
+
+impl RmsEvaluator {
+    /// RMS receptance (m/N) at ω (rad/s) for s = E*(ω)/E_ref.
+    pub fn rms(&self, omega: f64, s: Complex64) -> f64 {
+        let mut g = Vec::new();
+        self.model.coefficients(omega, s, &mut g);
+        // G is real symmetric: gᴴGg = Σ_a G_aa |g_a|² + 2 Σ_{a<b} G_ab Re(ḡ_a g_b).
+        let k = g.len();
+        let mut acc = 0.0;
+        for a in 0..k {
+            let ga = g[a];
+            acc += self.gram[(a, a)] * ga.norm_sqr();
+            let mut cross = 0.0;
+            for b in a + 1..k {
+                let gb = g[b];
+                cross += self.gram[(a, b)] * (ga.re * gb.re + ga.im * gb.im);
+            }
+            acc += 2.0 * cross;
+        }
+        (acc.max(0.0) / self.n_responses as f64).sqrt()
+    }
+}
+
+/// R1 and R2 of the module doc, projected on the probes.
+fn residual_terms(
+    asm: &Assembly,
+    sigma: f64,
+    lambda: &[f64],
+    c: &Mat<f64>,
+    f: &Mat<f64>,
+    responses: &[Probe],
+    references: &[Probe],
+) -> Result<Residual, FitError> {
+    let n = asm.n_dofs();
+    let plan = FactorPlan::new(&asm.pattern)?;
+    let k = asm.total_stiffness_values(1.0);
+    let shifted = asm.shifted_values(&k, sigma);
+    let factor = plan.llt(
+        SparseColMatRef::new(asm.stiffness.symbolic(), &shifted),
+        sigma,
+        references.len(),
+    )?;
+    let mut x = Mat::from_fn(n, references.len(), |d, j| {
+        references[j]
+            .entries()
+            .iter()
+            .filter(|(e, _)| *e == d)
+            .map(|(_, w)| w)
+            .sum()
+    });
+    factor.solve_in_place(x.as_mut());
+    let mut y = Mat::zeros(n, references.len());
+    lamdyn_fem::sparse::symmetric_matmul(asm.mass.as_ref(), x.as_ref(), y.as_mut());
+    factor.solve_in_place(y.as_mut());
+    let m = lambda.len();
+    let project = |v: &Mat<f64>, power: i32| {
+        Mat::from_fn(responses.len(), references.len(), |i, j| {
+            let full = responses[i].dot(|d| v[(d, j)]);
+            let kept: f64 = (0..m)
+                .map(|r| c[(i, r)] * f[(r, j)] / (lambda[r] - sigma).powi(power))
+                .sum();
+            full - kept
+        })
+    };
+    Ok(Residual {
+        sigma,
+        r1: project(&x, 1),
+        r2: project(&y, 2),
+    })
+}

@@ -1,0 +1,9 @@
+//! Integration tests of lamdyn-fit.
+
+mod it {
+    mod common;
+    mod errors;
+    mod misfit;
+    mod recovery;
+    mod synthesis;
+}

@@ -1,0 +1,410 @@
+//! A plain CSV layout for FRF sets, for data that does not come as UFF.
+//!
+//! **Channels file** (`name,role,x_m,y_m,z_m,dx,dy,dz`): one line per response or reference
+//! channel, `role` = `response` or `reference`, position in m and direction in the global frame.
+//!
+//! **FRF file**: an optional first line `# quantity = accelerance` (or `receptance`,
+//! `mobility`), then a header `f_hz,R@F:re,R@F:im,...` with one pair of columns per response `R`
+//! and reference `F` named in the channels file, then one line per frequency (Hz, increasing).
+//! Every response × reference pair must appear once.
+//!
+//! Lines starting with `#` are comments; fields are separated by commas.
+
+use crate::{Channel, FrfError, FrfSet, Quantity};
+use num_complex::Complex64;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+fn err(path: &str, line: usize, reason: String) -> FrfError {
+    FrfError::File {
+        path: path.into(),
+        line,
+        reason,
+    }
+}
+
+/// Data lines of a CSV text: (1-based line number, fields), comments and blank lines skipped.
+fn lines(text: &str) -> impl Iterator<Item = (usize, Vec<&str>)> {
+    text.lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .map(|(i, l)| (i, l.split(',').map(str::trim).collect()))
+}
+
+fn number(path: &str, line: usize, column: &str, s: &str) -> Result<f64, FrfError> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(err(
+            path,
+            line,
+            format!("column '{column}': '{s}' is not a finite number"),
+        )),
+    }
+}
+
+/// Parses a channels table: (responses, references) in file order.
+///
+/// # Errors
+/// [`FrfError::File`] naming the line: wrong field count, bad numbers, unknown role, repeated
+/// names, zero directions.
+pub fn parse_channels(path: &str, text: &str) -> Result<(Vec<Channel>, Vec<Channel>), FrfError> {
+    let mut it = lines(text);
+    let Some((hl, header)) = it.next() else {
+        return Err(err(
+            path,
+            0,
+            "empty: expected the header name,role,x_m,y_m,z_m,dx,dy,dz".into(),
+        ));
+    };
+    let want = ["name", "role", "x_m", "y_m", "z_m", "dx", "dy", "dz"];
+    if header != want {
+        return Err(err(
+            path,
+            hl,
+            format!(
+                "header must be {}, got {}",
+                want.join(","),
+                header.join(",")
+            ),
+        ));
+    }
+    let (mut responses, mut references) = (Vec::new(), Vec::new());
+    let mut seen: HashMap<String, usize> = HashMap::new();
+    for (line, f) in it {
+        if f.len() != 8 {
+            return Err(err(path, line, format!("{} fields, expected 8", f.len())));
+        }
+        if let Some(prev) = seen.insert(f[0].to_string(), line) {
+            return Err(err(
+                path,
+                line,
+                format!("channel '{}' was already defined on line {prev}", f[0]),
+            ));
+        }
+        let v: Vec<f64> = (2..8)
+            .map(|k| number(path, line, want[k], f[k]))
+            .collect::<Result<_, _>>()?;
+        let ch = Channel::new(f[0], [v[0], v[1], v[2]], [v[3], v[4], v[5]])
+            .map_err(|e| err(path, line, e.to_string()))?;
+        match f[1] {
+            "response" => responses.push(ch),
+            "reference" => references.push(ch),
+            other => {
+                return Err(err(
+                    path,
+                    line,
+                    format!("role '{other}' must be response or reference"),
+                ));
+            }
+        }
+    }
+    if responses.is_empty() || references.is_empty() {
+        return Err(err(
+            path,
+            0,
+            format!(
+                "{} responses and {} references: need at least one of each",
+                responses.len(),
+                references.len()
+            ),
+        ));
+    }
+    Ok((responses, references))
+}
+
+/// Parses an FRF file against channels.
+///
+/// # Errors
+/// [`FrfError::File`] naming the line and column: unknown channels, missing pairs, bad numbers,
+/// a non-increasing frequency axis, wrong field counts.
+pub fn parse_frf(
+    path: &str,
+    text: &str,
+    responses: Vec<Channel>,
+    references: Vec<Channel>,
+) -> Result<FrfSet, FrfError> {
+    let quantity = text
+        .lines()
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix('#')
+                .and_then(|r| r.trim().strip_prefix("quantity"))
+        })
+        .map(|r| r.trim().trim_start_matches('=').trim())
+        .map(|q| match q {
+            "receptance" => Ok(Quantity::Receptance),
+            "mobility" => Ok(Quantity::Mobility),
+            "accelerance" => Ok(Quantity::Accelerance),
+            other => Err(err(
+                path,
+                1,
+                format!("quantity '{other}' must be receptance, mobility or accelerance"),
+            )),
+        })
+        .transpose()?
+        .unwrap_or(Quantity::Receptance);
+    let mut it = lines(text);
+    let Some((hl, header)) = it.next() else {
+        return Err(err(
+            path,
+            0,
+            "empty: expected a header f_hz,R@F:re,R@F:im,...".into(),
+        ));
+    };
+    if header.first() != Some(&"f_hz") {
+        return Err(err(path, hl, "the first column must be f_hz".into()));
+    }
+    let resp: HashMap<&str, usize> = responses
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.name.as_str(), i))
+        .collect();
+    let refs: HashMap<&str, usize> = references
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.name.as_str(), i))
+        .collect();
+    // column → (pair index, is imaginary)
+    let n_pairs = responses.len() * references.len();
+    let mut columns = Vec::new();
+    let mut filled = vec![[false; 2]; n_pairs];
+    for name in &header[1..] {
+        let (pair, part) = name.rsplit_once(':').ok_or_else(|| {
+            err(
+                path,
+                hl,
+                format!("column '{name}' must be RESPONSE@REFERENCE:re or :im"),
+            )
+        })?;
+        let (r, f) = pair.split_once('@').ok_or_else(|| {
+            err(
+                path,
+                hl,
+                format!("column '{name}' must be RESPONSE@REFERENCE:re or :im"),
+            )
+        })?;
+        let i = *resp.get(r).ok_or_else(|| {
+            err(
+                path,
+                hl,
+                format!("column '{name}': response '{r}' is not in the channels file"),
+            )
+        })?;
+        let j = *refs.get(f).ok_or_else(|| {
+            err(
+                path,
+                hl,
+                format!("column '{name}': reference '{f}' is not in the channels file"),
+            )
+        })?;
+        let im = match part {
+            "re" => false,
+            "im" => true,
+            other => {
+                return Err(err(
+                    path,
+                    hl,
+                    format!("column '{name}': part '{other}' must be re or im"),
+                ));
+            }
+        };
+        let p = i * references.len() + j;
+        if filled[p][im as usize] {
+            return Err(err(path, hl, format!("column '{name}' appears twice")));
+        }
+        filled[p][im as usize] = true;
+        columns.push((p, im));
+    }
+    if let Some(p) = filled.iter().position(|f| !(f[0] && f[1])) {
+        return Err(err(
+            path,
+            hl,
+            format!(
+                "no columns for {}@{} (:re and :im needed)",
+                responses[p / references.len()].name,
+                references[p % references.len()].name
+            ),
+        ));
+    }
+    let mut freqs = Vec::new();
+    let mut values: Vec<Vec<Complex64>> = vec![Vec::new(); n_pairs];
+    for (line, f) in it {
+        if f.len() != header.len() {
+            return Err(err(
+                path,
+                line,
+                format!("{} fields, the header has {}", f.len(), header.len()),
+            ));
+        }
+        let hz = number(path, line, "f_hz", f[0])?;
+        if let Some(prev) = freqs.last() {
+            if hz <= *prev {
+                return Err(err(
+                    path,
+                    line,
+                    format!("f_hz must increase: {hz} after {prev}"),
+                ));
+            }
+        }
+        freqs.push(hz);
+        for v in values.iter_mut() {
+            v.push(Complex64::new(0.0, 0.0));
+        }
+        for (k, &(p, im)) in columns.iter().enumerate() {
+            let x = number(path, line, header[k + 1], f[k + 1])?;
+            let slot = values[p].last_mut().expect("pushed above");
+            if im {
+                slot.im = x;
+            } else {
+                slot.re = x;
+            }
+        }
+    }
+    let data = values.into_iter().flatten().collect();
+    FrfSet::new(freqs, responses, references, quantity, data)
+        .map_err(|e| err(path, 0, e.to_string()))
+}
+
+/// Writes the channels table of a set.
+pub fn write_channels(set: &FrfSet) -> String {
+    let mut s = String::from("name,role,x_m,y_m,z_m,dx,dy,dz\n");
+    for (role, chans) in [
+        ("response", set.responses()),
+        ("reference", set.references()),
+    ] {
+        for c in chans {
+            let _ = writeln!(
+                s,
+                "{},{role},{},{},{},{},{},{}",
+                c.name,
+                c.point_m[0],
+                c.point_m[1],
+                c.point_m[2],
+                c.direction[0],
+                c.direction[1],
+                c.direction[2]
+            );
+        }
+    }
+    s
+}
+
+/// Writes the FRF file of a set (shortest round-trip numbers).
+pub fn write_frf(set: &FrfSet) -> String {
+    let q = match set.quantity() {
+        Quantity::Receptance => "receptance",
+        Quantity::Mobility => "mobility",
+        Quantity::Accelerance => "accelerance",
+    };
+    let mut s = format!("# quantity = {q}\nf_hz");
+    for r in set.responses() {
+        for f in set.references() {
+            let _ = write!(s, ",{}@{}:re,{}@{}:im", r.name, f.name, r.name, f.name);
+        }
+    }
+    s.push('\n');
+    for (k, hz) in set.freqs_hz().iter().enumerate() {
+        let _ = write!(s, "{hz}");
+        for i in 0..set.responses().len() {
+            for j in 0..set.references().len() {
+                let v = set.curve(i, j)[k];
+                let _ = write!(s, ",{:e},{:e}", v.re, v.im);
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> FrfSet {
+        let r = vec![
+            Channel::new("p1+Z", [0.0, 0.0, 0.0], [0.0, 0.0, 2.0]).unwrap(),
+            Channel::new("p2+X", [0.1, 0.0, 0.0], [1.0, 0.0, 0.0]).unwrap(),
+        ];
+        let f = vec![Channel::new("hammer", [0.0, 0.1, 0.0], [0.0, 0.0, -1.0]).unwrap()];
+        let data = (0..6)
+            .map(|k| Complex64::new(k as f64 * 0.1, -(k as f64) * 1e-7))
+            .collect();
+        FrfSet::new(vec![1.0, 2.0, 3.5], r, f, Quantity::Accelerance, data).unwrap()
+    }
+
+    #[test]
+    fn round_trip() {
+        let set = sample();
+        let (r, f) = parse_channels("c.csv", &write_channels(&set)).unwrap();
+        let back = parse_frf("h.csv", &write_frf(&set), r, f).unwrap();
+        assert_eq!(back, set);
+        assert_eq!(
+            set.responses()[0].direction,
+            [0.0, 0.0, 1.0],
+            "directions are normalised"
+        );
+    }
+
+    #[test]
+    fn errors_name_line_and_column() {
+        let set = sample();
+        let (r, f) = parse_channels("c.csv", &write_channels(&set)).unwrap();
+        let text = write_frf(&set);
+        let bad = text.replacen("2,", "2x,", 1);
+        let e = parse_frf("h.csv", &bad, r.clone(), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "error reading 'h.csv' line 4: column 'f_hz': '2x' is not a finite number"
+        );
+        let bad = text.replacen("p2+X@hammer:im", "p3+X@hammer:im", 1);
+        let e = parse_frf("h.csv", &bad, r.clone(), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "error reading 'h.csv' line 2: column 'p3+X@hammer:im': response 'p3+X' is not in the channels file"
+        );
+        let bad = text.replacen("\n3.5,", "\n1.5,", 1);
+        let e = parse_frf("h.csv", &bad, r.clone(), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "error reading 'h.csv' line 5: f_hz must increase: 1.5 after 2"
+        );
+        let e = parse_channels(
+            "c.csv",
+            "name,role,x_m,y_m,z_m,dx,dy,dz\na,response,0,0,0,0,0,0\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            e,
+            "error reading 'c.csv' line 2: channel 'a': the direction is zero"
+        );
+        let e = parse_channels(
+            "c.csv",
+            "name,role,x_m,y_m,z_m,dx,dy,dz\na,sensor,0,0,0,0,0,1\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            e,
+            "error reading 'c.csv' line 2: role 'sensor' must be response or reference"
+        );
+    }
+
+    #[test]
+    fn rms_and_quantity_conversion() {
+        let set = sample();
+        let rms = set.rms(0);
+        let want = ((set.curve(0, 0)[1].norm_sqr() + set.curve(1, 0)[1].norm_sqr()) / 2.0).sqrt();
+        assert!((rms[1] - want).abs() < 1e-15);
+        let rec = set.to_quantity(Quantity::Receptance);
+        let w = 2.0 * std::f64::consts::PI * 2.0;
+        assert!((rec.curve(0, 0)[1] * (-w * w) - set.curve(0, 0)[1]).norm() < 1e-15);
+    }
+}
