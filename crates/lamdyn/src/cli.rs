@@ -29,6 +29,62 @@ pub enum Command {
     Modes(ModesArgs),
     /// Fit the laminate's effective modulus law E*(f) to measured FRFs through the FE model.
     Fit(FitArgs),
+    /// Universal File Format (UFF/UNV) files: list contents, convert.
+    #[command(subcommand)]
+    Uff(UffCommand),
+}
+
+/// `lamdyn uff ...`.
+#[derive(Debug, Subcommand)]
+pub enum UffCommand {
+    /// List the datasets of a file (streams it: data is not loaded).
+    Info(UffInfoArgs),
+    /// Convert a file: to CSV (FRF set: channels.csv + frf.csv), JSON, VTK (mesh and mode
+    /// shapes), or between ASCII and binary 58b (other datasets copied verbatim).
+    Convert(UffConvertArgs),
+}
+
+/// `lamdyn uff info`.
+#[derive(Debug, Args)]
+pub struct UffInfoArgs {
+    /// The UFF file.
+    pub file: PathBuf,
+    /// Output format.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Targets of `lamdyn uff convert`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum UffTarget {
+    /// UFF with every dataset in ASCII.
+    Ascii,
+    /// UFF with datasets 58 as binary 58b (little endian unless --big-endian).
+    Binary,
+    /// The FRFs as an FRF set: OUT is a folder receiving channels.csv and frf.csv (SI units).
+    Csv,
+    /// Every dataset as JSON.
+    Json,
+    /// Mesh (15/2411, 2412, 82) and mode shapes (55) as a VTK .vtu file for ParaView.
+    Vtu,
+}
+
+/// `lamdyn uff convert`.
+#[derive(Debug, Args)]
+pub struct UffConvertArgs {
+    /// The UFF file to read.
+    pub input: PathBuf,
+    /// The file (or folder, for csv) to write; written whole or not at all.
+    pub output: PathBuf,
+    /// What to write.
+    #[arg(long, value_enum)]
+    pub to: UffTarget,
+    /// Binary 58b in big-endian byte order.
+    #[arg(long)]
+    pub big_endian: bool,
+    /// Accept datasets 58 whose data holds fewer points than announced (keeps those found).
+    #[arg(long)]
+    pub lenient: bool,
 }
 
 /// `lamdyn fit`.

@@ -9,4 +9,5 @@ mod it {
     mod laminate;
     mod modes;
     mod robustness;
+    mod uff;
 }

@@ -61,10 +61,16 @@ fn default_misfit() -> MisfitSpec {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeasurementSpec {
-    /// Channels table (CSV), relative to the job file.
-    channels: PathBuf,
-    /// FRF table (CSV), relative to the job file.
-    frf: PathBuf,
+    /// Channels table (CSV), relative to the job file (with `frf`).
+    #[serde(default)]
+    channels: Option<PathBuf>,
+    /// FRF table (CSV), relative to the job file (with `channels`).
+    #[serde(default)]
+    frf: Option<PathBuf>,
+    /// A UFF file whose complex FRFs (datasets 58) and nodes (15/2411) are the measurement,
+    /// instead of `channels` and `frf`.
+    #[serde(default)]
+    uff: Option<PathBuf>,
     /// Largest distance from a channel's point to its node, m.
     #[serde(default = "default_tolerance")]
     tolerance_m: f64,
@@ -290,23 +296,7 @@ fn from_job(path: &Path, spinner: &Spinner) -> Result<Problem> {
             format!("{modes}: keep at least the 6 rigid-body modes and one elastic mode"),
         ));
     }
-    let (channels_path, frf_path) = (
-        relative(&base, &job.measurement.channels),
-        relative(&base, &job.measurement.frf),
-    );
-    let text = |p: &Path| {
-        std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
-    };
-    let (responses, references) = lamdyn_frf::csv::parse_channels(
-        &channels_path.display().to_string(),
-        &text(&channels_path)?,
-    )?;
-    let measured = lamdyn_frf::csv::parse_frf(
-        &frf_path.display().to_string(),
-        &text(&frf_path)?,
-        responses,
-        references,
-    )?;
+    let (measured, frf_path) = read_measurement(&job.measurement, &base, path)?;
     if job.misfit.reference >= measured.references().len() {
         return Err(bad(
             "misfit.reference",
@@ -328,9 +318,9 @@ fn from_job(path: &Path, spinner: &Spinner) -> Result<Problem> {
     let asm = Assembly::new(&mesh, &spec.material, &[])
         .with_context(|| format!("invalid model '{}'", model_path.display()))?;
     let resp = probes(&mesh, measured.responses(), tol)
-        .with_context(|| format!("channels of '{}'", channels_path.display()))?;
+        .with_context(|| format!("channels of '{}'", frf_path.display()))?;
     let refs = probes(&mesh, measured.references(), tol)
-        .with_context(|| format!("channels of '{}'", channels_path.display()))?;
+        .with_context(|| format!("channels of '{}'", frf_path.display()))?;
     let sol = solve_modes(&asm, &ModalParams::lowest(modes), spinner)?;
     spinner.stage("projecting modes and residual terms");
     let residual = if job.residual {
@@ -358,6 +348,42 @@ fn from_job(path: &Path, spinner: &Spinner) -> Result<Problem> {
         truth: None,
         model_seconds: clock.elapsed().as_secs_f64(),
     })
+}
+
+/// The measured FRF set of a job: CSV channels + FRF tables, or a UFF file; and the path named in
+/// messages.
+fn read_measurement(m: &MeasurementSpec, base: &Path, job: &Path) -> Result<(FrfSet, PathBuf)> {
+    let text = |p: &Path| {
+        std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
+    };
+    match (&m.channels, &m.frf, &m.uff) {
+        (Some(c), Some(f), None) => {
+            let (channels_path, frf_path) = (relative(base, c), relative(base, f));
+            let (responses, references) = lamdyn_frf::csv::parse_channels(
+                &channels_path.display().to_string(),
+                &text(&channels_path)?,
+            )?;
+            let set = lamdyn_frf::csv::parse_frf(
+                &frf_path.display().to_string(),
+                &text(&frf_path)?,
+                responses,
+                references,
+            )?;
+            Ok((set, frf_path))
+        }
+        (None, None, Some(u)) => {
+            let p = relative(base, u);
+            let file = lamdyn_uff::read_path(&p, lamdyn_uff::ReadOptions::default())
+                .map_err(|e| anyhow::anyhow!(e))?;
+            let set = lamdyn_uff::frf::to_frf_set(&file)
+                .map_err(|e| anyhow::anyhow!("'{}': {e}", p.display()))?;
+            Ok((set, p))
+        }
+        _ => bail!(
+            "error in '{}': measurement: give either channels and frf (CSV) or uff",
+            job.display()
+        ),
+    }
 }
 
 /// Writes the example case as a job directory: model.toml, channels.csv, frf.csv, job.toml.

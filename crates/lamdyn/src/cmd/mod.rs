@@ -7,6 +7,7 @@ pub mod e756;
 pub mod fit;
 pub mod laminate;
 pub mod modes;
+pub mod uff;
 
 use crate::Outcome;
 use crate::cli::{Cli, Command, KinematicsArg};
@@ -21,6 +22,7 @@ pub fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::R
         Command::E756(args) => e756::run(&args, out, err),
         Command::Modes(args) => modes::run(&args, out, err),
         Command::Fit(args) => fit::run(&args, out, err),
+        Command::Uff(cmd) => uff::run(&cmd, out, err),
     }
 }
 

@@ -237,3 +237,57 @@ fn bad_inputs_give_clear_errors() {
     assert_eq!(code, 2);
     assert!(err.contains("noise"), "{err}");
 }
+
+/// The measurement as a binary UFF file (nodes 2411 + FRFs 58b written by lamdyn-uff) gives the
+/// same fit as the CSV files it was made from.
+#[test]
+fn uff_measurement_gives_the_csv_result() {
+    let base = example_job();
+    let text = |n: &str| std::fs::read_to_string(base.join(n)).unwrap();
+    let (r, f) = lamdyn_frf::csv::parse_channels("channels.csv", &text("channels.csv")).unwrap();
+    let set = lamdyn_frf::csv::parse_frf("frf.csv", &text("frf.csv"), r, f).unwrap();
+    let datasets = lamdyn_uff::frf::from_frf_set(&set).unwrap();
+    let dir = temp_dir("fit-uff");
+    let uff = dir.join("test.uff");
+    std::fs::write(
+        &uff,
+        lamdyn_uff::write(
+            &datasets,
+            lamdyn_uff::Encoding::Binary {
+                little_endian: true,
+            },
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let job = dir.join("job.toml");
+    std::fs::write(
+        &job,
+        format!(
+            "model = {:?}\n[measurement]\nuff = {:?}\ntolerance_m = 1e-6\n",
+            base.join("model.toml"),
+            uff
+        ),
+    )
+    .unwrap();
+    let (code, from_uff, err) = lamdyn(&["fit", job.to_str().unwrap(), "--csv"]);
+    assert_eq!(code, 0, "{err}");
+    let (_, from_csv, _) = lamdyn(&["fit", base.join("job.toml").to_str().unwrap(), "--csv"]);
+    assert_eq!(from_uff, from_csv);
+    // Both sources at once is an error naming the field.
+    std::fs::write(
+        &job,
+        format!(
+            "model = {:?}\n[measurement]\nuff = {:?}\nfrf = \"x.csv\"\n",
+            base.join("model.toml"),
+            uff
+        ),
+    )
+    .unwrap();
+    let (code, _, err) = lamdyn(&["fit", job.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("either channels and frf (CSV) or uff"),
+        "{err}"
+    );
+}
