@@ -1,4 +1,5 @@
-//! Test helpers shared by the lamdyn crates: relative errors, tolerances, and frequency grids.
+//! Test helpers shared by the lamdyn crates: relative errors, tolerances, frequency grids, and
+//! the reader of complex columns written by Python (the free-free beam fixture).
 //!
 //! Tolerances come from one place: [`tol`] is c·n·ε for a computation of n rounding steps, so a
 //! test states how many operations it trusts instead of a bare `1e-9`.
@@ -60,4 +61,26 @@ pub fn proptest_config(cases: u32) -> proptest::test_runner::Config {
         failure_persistence: None,
         ..Config::default()
     }
+}
+
+/// One complex value per line written by Python (`(-0.07+2.6e-08j)`), as in the free-free beam
+/// fixture of lamdyn-ema. Panics on malformed lines (test data).
+pub fn python_complex_column(text: &str) -> Vec<Complex64> {
+    text.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let t = l
+                .trim()
+                .trim_start_matches('(')
+                .trim_end_matches(')')
+                .trim_end_matches('j');
+            let b = t.as_bytes();
+            let cut = (1..b.len())
+                .rev()
+                .find(|&p| (b[p] == b'+' || b[p] == b'-') && !matches!(b[p - 1], b'e' | b'E'))
+                .unwrap_or_else(|| panic!("'{l}' is not a Python complex literal"));
+            let num = |s: &str| s.parse::<f64>().unwrap_or_else(|_| panic!("'{l}': '{s}'"));
+            Complex64::new(num(&t[..cut]), num(&t[cut..]))
+        })
+        .collect()
 }

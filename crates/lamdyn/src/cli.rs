@@ -32,6 +32,53 @@ pub enum Command {
     /// Universal File Format (UFF/UNV) files: list contents, convert.
     #[command(subcommand)]
     Uff(UffCommand),
+    /// Experimental modal analysis of measured FRFs: poles (LSCF), stabilization, modes.
+    Ema(EmaArgs),
+}
+
+/// `lamdyn ema`.
+#[derive(Debug, Args)]
+pub struct EmaArgs {
+    /// FRFs in a UFF file (complex datasets 58/58b; nodes 15/2411 for the channel positions).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["channels", "frf"], required_unless_present = "frf")]
+    pub uff: Option<PathBuf>,
+    /// Channels table (CSV: name,role,x_m,y_m,z_m,dx,dy,dz), with --frf.
+    #[arg(long, value_name = "FILE", requires = "frf")]
+    pub channels: Option<PathBuf>,
+    /// FRF table (CSV: f_hz,R@F:re,R@F:im,...), with --channels.
+    #[arg(long, value_name = "FILE", requires = "channels")]
+    pub frf: Option<PathBuf>,
+    /// Band LO,HI in Hz [default: all lines above 0 Hz].
+    #[arg(long, value_name = "LO,HI", value_delimiter = ',', value_parser = finite)]
+    pub band_hz: Option<Vec<f64>>,
+    /// Highest model order of the stabilization diagram [default: 60].
+    #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u32).range(2..=400))]
+    pub max_order: u32,
+    /// Lowest model order [default: 2].
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=400))]
+    pub min_order: u32,
+    /// Order step [default: 2].
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=50))]
+    pub order_step: u32,
+    /// Pick the stable pole nearest each of these frequencies (Hz) instead of the automatic
+    /// selection.
+    #[arg(long, value_name = "HZ,..", value_delimiter = ',', value_parser = finite)]
+    pub near_hz: Option<Vec<f64>>,
+    /// Window around each --near-hz frequency, Hz [default: 1].
+    #[arg(long, default_value_t = 1.0, value_parser = finite)]
+    pub window_hz: f64,
+    /// Name of the driving-point response (mass-normalised shapes).
+    #[arg(long, value_name = "NAME")]
+    pub driving: Option<String>,
+    /// Time constant of the exponential window applied to the data, s (its damping is removed).
+    #[arg(long, value_name = "S", value_parser = finite, allow_negative_numbers = true)]
+    pub exp_tau_s: Option<f64>,
+    /// Skip the refinement of the poles (LSFD on the diagram's poles only).
+    #[arg(long)]
+    pub no_refine: bool,
+    /// Output format (JSON adds the diagram, shapes and auto-MAC).
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// `lamdyn uff ...`.

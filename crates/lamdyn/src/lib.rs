@@ -10,6 +10,7 @@
 //! | `lamdyn e756` | beam resonances → modulus and loss factor per mode | [`cmd::e756`] |
 //! | `lamdyn modes` | shell model → natural frequencies, shapes, Sturm check | [`cmd::modes`] |
 //! | `lamdyn fit` | measured FRFs + FE model → E*(f) law with intervals, Table 3 | [`cmd::fit`] |
+//! | `lamdyn ema` | measured FRFs → stabilization diagram, modes, damping, shapes | [`cmd::ema`] |
 //! | `lamdyn uff info\|convert` | list a UFF file; convert to CSV/JSON or ASCII ↔ binary | [`cmd::uff`] |
 //!
 //! Exit codes: 0 done; 1 done but a check failed (lines without a solution); 2 error. Errors

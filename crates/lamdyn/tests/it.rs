@@ -5,6 +5,7 @@ mod it {
     mod common;
     mod core;
     mod e756;
+    mod ema;
     mod fit;
     mod laminate;
     mod modes;

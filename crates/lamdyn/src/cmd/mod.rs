@@ -4,6 +4,7 @@
 
 pub mod core;
 pub mod e756;
+pub mod ema;
 pub mod fit;
 pub mod laminate;
 pub mod modes;
@@ -23,6 +24,7 @@ pub fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::R
         Command::Modes(args) => modes::run(&args, out, err),
         Command::Fit(args) => fit::run(&args, out, err),
         Command::Uff(cmd) => uff::run(&cmd, out, err),
+        Command::Ema(args) => ema::run(&args, out, err),
     }
 }
 

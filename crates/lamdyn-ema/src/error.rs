@@ -1,0 +1,24 @@
+//! Errors of the EMA crate.
+
+use thiserror::Error;
+
+/// What went wrong in identification.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum EmaError {
+    /// Inputs that do not fit together or are out of range, naming the input.
+    #[error("{what}: {reason}")]
+    Invalid {
+        /// Which input (band, orders, FRFs, time data, ...).
+        what: String,
+        /// What is wrong, with the numbers.
+        reason: String,
+    },
+}
+
+pub(crate) fn invalid(what: &str, reason: String) -> EmaError {
+    EmaError::Invalid {
+        what: what.into(),
+        reason,
+    }
+}

@@ -1,0 +1,250 @@
+//! The whole identification of an FRF set: LSCF poles at every order → stabilization diagram →
+//! physical poles (automatic, or near given frequencies) → pole refinement and residues (LSFD
+//! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
+//! correlation with the measured ones, and the CMIF.
+
+use crate::error::{EmaError, invalid};
+use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz};
+use crate::lsfd::{ModalFit, frac, lsfd, refine};
+use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode};
+use crate::spectra::correct_exponential_window;
+use crate::stabilization::{
+    DiagramPole, SelectedPole, StabilityCriteria, diagram, select_auto, select_near,
+};
+use lamdyn_frf::FrfSet;
+use num_complex::Complex64;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Settings of [`identify`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmaSettings {
+    /// Band [f_lo, f_hi], Hz (default: the set's lines above 0 Hz).
+    pub band_hz: Option<[f64; 2]>,
+    /// Lowest, highest model order and step (default 2, 60, 2: the orders of sdypy-EMA's
+    /// `pol_order_high = 30`).
+    pub orders: (usize, usize, usize),
+    /// Stability tolerances.
+    pub criteria: StabilityCriteria,
+    /// Pick the stable pole nearest each of these frequencies (Hz) instead of the automatic
+    /// selection.
+    pub near_hz: Option<Vec<f64>>,
+    /// Window around each `near_hz` frequency, Hz.
+    pub window_hz: f64,
+    /// Levenberg–Marquardt iterations of the pole refinement (0: LSFD on the diagram's poles).
+    pub refine_iterations: usize,
+    /// Index of the driving-point response (mass-normalised shapes), if any.
+    pub driving: Option<usize>,
+    /// Time constant of an exponential window applied to the data, s: its damping is removed
+    /// from the identified poles.
+    pub exp_tau_s: Option<f64>,
+}
+
+impl Default for EmaSettings {
+    fn default() -> Self {
+        Self {
+            band_hz: None,
+            orders: (2, 60, 2),
+            criteria: StabilityCriteria::default(),
+            near_hz: None,
+            window_hz: 1.0,
+            refine_iterations: 30,
+            driving: None,
+            exp_tau_s: None,
+        }
+    }
+}
+
+/// One identified mode.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Mode {
+    /// Natural frequency |λ|/2π, Hz.
+    pub freq_hz: f64,
+    /// Viscous damping ratio ζ.
+    pub damping_ratio: f64,
+    /// Loss factor η = 2ζ (hysteretic equivalent at resonance).
+    pub loss_factor: f64,
+    /// Pole λ, rad/s (exponential-window damping removed).
+    pub pole: Complex64,
+    /// Stable poles in its column of the diagram (0 for a pole picked near a given frequency).
+    pub stable_count: usize,
+    /// Complex shape over the responses (reference 0; mass-normalised with a driving point).
+    pub shape: Vec<Complex64>,
+    /// Real mode closest to the shape.
+    pub real_shape: Vec<f64>,
+    /// Modal phase collinearity.
+    pub mpc: f64,
+    /// Mean phase deviation, degrees.
+    pub mpd_deg: f64,
+}
+
+/// Everything [`identify`] found.
+#[derive(Debug, Clone, Serialize)]
+pub struct EmaResult {
+    /// Band used, Hz.
+    pub band_hz: [f64; 2],
+    /// The stabilization diagram.
+    pub diagram: Vec<DiagramPole>,
+    /// The modes, increasing frequency.
+    pub modes: Vec<Mode>,
+    /// MAC between the modes' shapes.
+    pub auto_mac: Vec<Vec<f64>>,
+    /// FRAC of each regenerated curve (response-major, then reference) over the band.
+    pub correlation: Vec<f64>,
+    /// Curve labels `response@reference`, in the order of `correlation`.
+    pub curve_names: Vec<String>,
+    /// CMIF singular values per line (largest first).
+    pub cmif: Vec<Vec<f64>>,
+    /// Peaks of the first CMIF in the band.
+    pub cmif_peaks: Vec<CmifPeak>,
+    /// Frequencies asked for (`near_hz`) where no stable pole was found.
+    pub missing_hz: Vec<f64>,
+    /// The modal model (poles as identified, before the window correction).
+    #[serde(skip)]
+    pub fit: Option<ModalFit>,
+    /// Wall time: poles and diagram, then refinement and residues, s.
+    pub seconds: [f64; 2],
+}
+
+/// Identifies the modes of `set` (module docs).
+///
+/// # Errors
+/// [`EmaError::Invalid`] for bad bands or orders ([`lscf`]), no physical pole, or a
+/// driving-point index out of range.
+pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
+    let clock = Instant::now();
+    let freqs = set.freqs_hz();
+    let (nr, nf) = (set.responses().len(), set.references().len());
+    if let Some(d) = s.driving {
+        if d >= nr {
+            return Err(invalid(
+                "driving point",
+                format!("response index {d}, but the set has {nr} responses"),
+            ));
+        }
+    }
+    let band = s.band_hz.unwrap_or([
+        freqs.iter().copied().find(|f| *f > 0.0).unwrap_or(0.0),
+        freqs[freqs.len() - 1],
+    ]);
+    let curves: Vec<&[Complex64]> = (0..nr)
+        .flat_map(|i| (0..nf).map(move |j| (i, j)))
+        .map(|(i, j)| set.curve(i, j))
+        .collect();
+    let names: Vec<String> = (0..nr)
+        .flat_map(|i| {
+            (0..nf)
+                .map(move |j| format!("{}@{}", set.responses()[i].name, set.references()[j].name))
+        })
+        .collect();
+    let (lo, hi, step) = s.orders;
+    let orders = lscf(
+        freqs,
+        &curves,
+        &LscfSettings {
+            band_hz: band,
+            min_order: lo,
+            max_order: hi,
+            step,
+        },
+    )?;
+    let diag = diagram(&orders, &s.criteria);
+    let (selected, missing_hz): (Vec<SelectedPole>, Vec<f64>) = match &s.near_hz {
+        Some(targets) => {
+            let picks = select_near(&diag, targets, s.window_hz);
+            let missing = targets
+                .iter()
+                .zip(&picks)
+                .filter(|(_, p)| p.is_none())
+                .map(|(t, _)| *t)
+                .collect();
+            (picks.into_iter().flatten().collect(), missing)
+        }
+        None => (select_auto(&diag, &s.criteria), vec![]),
+    };
+    if selected.is_empty() {
+        return Err(invalid(
+            "poles",
+            format!(
+                "no stable pole in [{}, {}] Hz up to order {hi}: raise the order or widen the band",
+                band[0], band[1]
+            ),
+        ));
+    }
+    let t_poles = clock.elapsed().as_secs_f64();
+    let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
+    let fit = if s.refine_iterations > 0 {
+        refine(
+            freqs,
+            &curves,
+            set.quantity(),
+            &poles,
+            band,
+            s.refine_iterations,
+        )?
+    } else {
+        lsfd(freqs, &curves, set.quantity(), &poles, band)?
+    };
+    let lines: Vec<usize> = (0..freqs.len())
+        .filter(|&k| freqs[k] >= band[0] && freqs[k] <= band[1])
+        .collect();
+    let correlation = (0..curves.len())
+        .map(|o| {
+            let syn: Vec<Complex64> = freqs.iter().map(|f| fit.synthesize(o, *f)).collect();
+            frac(curves[o], &syn, &lines)
+        })
+        .collect();
+    // Shapes over the responses for reference 0 (curve index i·nf).
+    let modes: Vec<Mode> = (0..fit.poles.len())
+        .map(|r| {
+            let all = fit.shape(r, s.driving.map(|d| d * nf));
+            let shape: Vec<Complex64> = (0..nr).map(|i| all[i * nf]).collect();
+            let pole = s.exp_tau_s.map_or(fit.poles[r], |tau| {
+                correct_exponential_window(fit.poles[r], tau)
+            });
+            let z = pole_damping(pole);
+            Mode {
+                freq_hz: pole_freq_hz(pole),
+                damping_ratio: z,
+                loss_factor: 2.0 * z,
+                pole,
+                stable_count: selected.get(r).map_or(0, |p| p.count),
+                real_shape: real_mode(&shape),
+                mpc: mpc(&shape),
+                mpd_deg: mpd(&shape),
+                shape,
+            }
+        })
+        .collect();
+    let auto_mac = modes
+        .iter()
+        .map(|a| modes.iter().map(|b| mac(&a.shape, &b.shape)).collect())
+        .collect();
+    let cmif: Vec<Vec<f64>> = (0..freqs.len())
+        .map(|k| {
+            let h: Vec<Complex64> = (0..nr)
+                .flat_map(|i| (0..nf).map(move |j| (i, j)))
+                .map(|(i, j)| set.curve(i, j)[k])
+                .collect();
+            cmif_line(&h, nf)
+        })
+        .collect();
+    let first: Vec<f64> = cmif.iter().map(|v| v[0]).collect();
+    let band_peaks = cmif_peaks(freqs, &first, 1.5)
+        .into_iter()
+        .filter(|p| p.freq_hz >= band[0] && p.freq_hz <= band[1])
+        .collect();
+    Ok(EmaResult {
+        band_hz: band,
+        diagram: diag,
+        modes,
+        auto_mac,
+        correlation,
+        curve_names: names,
+        cmif,
+        cmif_peaks: band_peaks,
+        missing_hz,
+        fit: Some(fit),
+        seconds: [t_poles, clock.elapsed().as_secs_f64() - t_poles],
+    })
+}

@@ -1,0 +1,25 @@
+//! # lamdyn-ema
+//!
+//! Experimental modal analysis: from impact-test FRFs to poles, damping and mode shapes.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`identify`] | the whole chain on an FRF set: diagram, selection, refinement, modes |
+//! | [`lscf`] | LSCF / RFP-Z common-denominator poles at many orders in one pass |
+//! | [`stabilization`] | stabilization diagram, automatic and targeted pole selection |
+//! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC |
+//! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
+//! | [`spectra`] | H1/H2/Hv and coherence from hammer hits, force and exponential windows |
+
+#![deny(missing_docs)]
+#![allow(clippy::needless_range_loop)]
+
+mod error;
+pub mod identify;
+pub mod lscf;
+pub mod lsfd;
+pub mod shapes;
+pub mod spectra;
+pub mod stabilization;
+
+pub use error::EmaError;

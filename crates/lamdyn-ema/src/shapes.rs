@@ -1,0 +1,154 @@
+//! Mode-shape indicators: MAC, MPC, MPD, complex-to-real conversion, CMIF.
+//!
+//! - MAC(a, b) = |aᴴb|² / ((aᴴa)(bᴴb)) [Allemang & Brown 1982].
+//! - MPC = ((s_xx − s_yy)² + 4 s_xy²) / (s_xx + s_yy)² with s_xx = ReᵀRe, s_yy = ImᵀIm,
+//!   s_xy = ReᵀIm: 1 for a vector whose components are collinear in the complex plane (a real
+//!   mode), 0 for a circular one [Pappa et al. 1993].
+//! - MPD: the amplitude-weighted mean angle (degrees) between each component and the principal
+//!   direction θ₀ of the components in the complex plane (the major axis of [s_xx s_xy; s_xy
+//!   s_yy]); 0 for a real mode.
+//! - Real mode: the components rotated by −θ₀, real parts kept.
+//! - CMIF: per line, the singular values of the responses × references FRF matrix, largest
+//!   first [Shih et al. 1988]; with one reference, the 2-norm of the FRF column.
+
+use num_complex::Complex64;
+use serde::Serialize;
+
+/// Modal assurance criterion.
+pub fn mac(a: &[Complex64], b: &[Complex64]) -> f64 {
+    let ab: Complex64 = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
+    let aa: f64 = a.iter().map(Complex64::norm_sqr).sum();
+    let bb: f64 = b.iter().map(Complex64::norm_sqr).sum();
+    ab.norm_sqr() / (aa * bb).max(f64::MIN_POSITIVE)
+}
+
+/// (s_xx, s_yy, s_xy).
+fn moments(v: &[Complex64]) -> (f64, f64, f64) {
+    v.iter().fold((0.0, 0.0, 0.0), |(a, b, c), z| {
+        (a + z.re * z.re, b + z.im * z.im, c + z.re * z.im)
+    })
+}
+
+/// Principal angle θ₀ of the components in the complex plane.
+fn principal_angle(v: &[Complex64]) -> f64 {
+    let (sxx, syy, sxy) = moments(v);
+    0.5 * (2.0 * sxy).atan2(sxx - syy)
+}
+
+/// Modal phase collinearity.
+pub fn mpc(v: &[Complex64]) -> f64 {
+    let (sxx, syy, sxy) = moments(v);
+    let d = (sxx + syy).powi(2);
+    if d == 0.0 {
+        0.0
+    } else {
+        ((sxx - syy).powi(2) + 4.0 * sxy * sxy) / d
+    }
+}
+
+/// Mean phase deviation, degrees.
+pub fn mpd(v: &[Complex64]) -> f64 {
+    let t = principal_angle(v);
+    let (mut num, mut den) = (0.0, 0.0);
+    for z in v {
+        let r = z * Complex64::from_polar(1.0, -t);
+        // Angle to the line (either direction along it).
+        let dev = r.im.atan2(r.re.abs()).abs();
+        num += z.norm() * dev;
+        den += z.norm();
+    }
+    if den == 0.0 {
+        0.0
+    } else {
+        (num / den).to_degrees()
+    }
+}
+
+/// The real mode closest to a complex one: rotated by −θ₀, real parts.
+pub fn real_mode(v: &[Complex64]) -> Vec<f64> {
+    let rot = Complex64::from_polar(1.0, -principal_angle(v));
+    v.iter().map(|z| (z * rot).re).collect()
+}
+
+/// CMIF values of one line: singular values of the n_resp × n_ref matrix `h` (row-major),
+/// largest first.
+pub fn cmif_line(h: &[Complex64], n_ref: usize) -> Vec<f64> {
+    if n_ref == 1 {
+        return vec![h.iter().map(Complex64::norm_sqr).sum::<f64>().sqrt()];
+    }
+    let n_resp = h.len() / n_ref;
+    let g = faer::Mat::<faer::c64>::from_fn(n_ref, n_ref, |a, b| {
+        let s: Complex64 = (0..n_resp)
+            .map(|i| h[i * n_ref + a].conj() * h[i * n_ref + b])
+            .sum();
+        faer::c64::new(s.re, s.im)
+    });
+    let mut ev: Vec<f64> = g
+        .self_adjoint_eigenvalues(faer::Side::Lower)
+        .map(|v| v.into_iter().map(|x| x.max(0.0).sqrt()).collect())
+        .unwrap_or_default();
+    ev.sort_by(|a, b| b.total_cmp(a));
+    ev
+}
+
+/// A CMIF peak.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CmifPeak {
+    /// Frequency, Hz.
+    pub freq_hz: f64,
+    /// First singular value there.
+    pub value: f64,
+}
+
+/// Local maxima of the first CMIF curve that stand `prominence` times above the lower of the
+/// neighbouring minima.
+pub fn cmif_peaks(freqs_hz: &[f64], first: &[f64], prominence: f64) -> Vec<CmifPeak> {
+    let n = first.len();
+    let mut out = Vec::new();
+    for k in 1..n.saturating_sub(1) {
+        if !(first[k] > first[k - 1] && first[k] >= first[k + 1]) {
+            continue;
+        }
+        let left = (0..k)
+            .rev()
+            .take_while(|&j| j == k - 1 || first[j] <= first[j + 1])
+            .map(|j| first[j])
+            .fold(f64::INFINITY, f64::min);
+        let right = (k + 1..n)
+            .take_while(|&j| j == k + 1 || first[j] <= first[j - 1])
+            .map(|j| first[j])
+            .fold(f64::INFINITY, f64::min);
+        if first[k] >= prominence * left.max(right) {
+            out.push(CmifPeak {
+                freq_hz: freqs_hz[k],
+                value: first[k],
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn indicators_of_real_and_complex_vectors() {
+        let real: Vec<Complex64> = [1.0, -2.0, 0.5]
+            .iter()
+            .map(|x| Complex64::from_polar(*x, 0.7))
+            .collect();
+        assert!((mpc(&real) - 1.0).abs() < 1e-12 && mpd(&real) < 1e-9);
+        let r = real_mode(&real);
+        assert!((r[1] / r[0] + 2.0).abs() < 1e-12);
+        let circ = [Complex64::new(1.0, 0.0), Complex64::new(0.0, 1.0)];
+        assert!(mpc(&circ) < 1e-12);
+        assert!((mac(&real, &real) - 1.0).abs() < 1e-12);
+        let other = [
+            Complex64::new(1.0, 0.0),
+            Complex64::new(0.5, 0.0),
+            Complex64::new(0.0, 0.0),
+        ];
+        assert!(mac(&real, &other) < 1.0);
+    }
+}
