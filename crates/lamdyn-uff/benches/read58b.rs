@@ -2,7 +2,7 @@
 //! (the side-by-side comparison with pyuff on a ≥ 100 MB file is tools/uff/bench_vs_pyuff.py).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use lamdyn_uff::d58::{Abscissa, AxisSpec, Dof, Function58, Ordinate, OrdinateType};
+use lamdyn_uff::d58::{Dof, Function58};
 use lamdyn_uff::{Dataset, Encoding, read, write};
 use num_complex::Complex64;
 use std::hint::black_box;
@@ -10,46 +10,25 @@ use std::hint::black_box;
 fn file(n_frf: usize, lines: usize) -> Vec<u8> {
     let sets: Vec<Dataset> = (0..n_frf)
         .map(|i| {
-            Dataset::Function(Box::new(Function58 {
-                id_lines: [
-                    "bench".into(),
-                    "NONE".into(),
-                    "NONE".into(),
-                    "NONE".into(),
-                    "NONE".into(),
-                ],
-                function_type: 4,
-                function_id: i as i64 + 1,
-                version: 0,
-                load_case: 0,
-                response: Dof {
+            Dataset::Function(Box::new(Function58::complex_frf(
+                "bench",
+                i as i64 + 1,
+                Dof {
                     entity: "NONE".into(),
                     node: i as i64 + 1,
                     direction: 3,
                 },
-                reference: Dof {
+                Dof {
                     entity: "NONE".into(),
                     node: 1000,
                     direction: -3,
                 },
-                ordinate_type: OrdinateType::ComplexDouble,
-                abscissa: Abscissa::Even {
-                    start: 0.0,
-                    step: 0.25,
-                },
-                z_value: 0.0,
-                axes: [
-                    AxisSpec::none(),
-                    AxisSpec::none(),
-                    AxisSpec::none(),
-                    AxisSpec::none(),
-                ],
-                data: Ordinate::Complex(
-                    (0..lines)
-                        .map(|k| Complex64::new(k as f64, -(k as f64)))
-                        .collect(),
-                ),
-            }))
+                0.0,
+                0.25,
+                (0..lines)
+                    .map(|k| Complex64::new(k as f64, -(k as f64)))
+                    .collect(),
+            )))
         })
         .collect();
     write(

@@ -2,52 +2,31 @@
 //! `uff_bench write PATH N_FRF LINES` writes N_FRF complex-double FRFs of LINES lines as binary
 //! 58b; `uff_bench read PATH` reads the file and prints `seconds datasets checksum`.
 
-use lamdyn_uff::d58::{Abscissa, AxisSpec, Dof, Function58, Ordinate, OrdinateType};
+use lamdyn_uff::d58::{Dof, Function58, Ordinate};
 use lamdyn_uff::{Dataset, Encoding, ReadOptions, read_path, write};
 use num_complex::Complex64;
 use std::time::Instant;
 
 fn frf(i: usize, lines: usize) -> Dataset {
-    Dataset::Function(Box::new(Function58 {
-        id_lines: [
-            format!("FRF {i}"),
-            "NONE".into(),
-            "NONE".into(),
-            "lamdyn bench".into(),
-            "NONE".into(),
-        ],
-        function_type: 4,
-        function_id: i as i64 + 1,
-        version: 0,
-        load_case: 0,
-        response: Dof {
+    Dataset::Function(Box::new(Function58::complex_frf(
+        &format!("FRF {i}"),
+        i as i64 + 1,
+        Dof {
             entity: "NONE".into(),
             node: i as i64 + 1,
             direction: 3,
         },
-        reference: Dof {
+        Dof {
             entity: "NONE".into(),
             node: 100_000,
             direction: -3,
         },
-        ordinate_type: OrdinateType::ComplexDouble,
-        abscissa: Abscissa::Even {
-            start: 0.0,
-            step: 0.25,
-        },
-        z_value: 0.0,
-        axes: [
-            AxisSpec::none(),
-            AxisSpec::none(),
-            AxisSpec::none(),
-            AxisSpec::none(),
-        ],
-        data: Ordinate::Complex(
-            (0..lines)
-                .map(|k| Complex64::from_polar(1.0 / (1.0 + k as f64), (i + k) as f64 * 0.01))
-                .collect(),
-        ),
-    }))
+        0.0,
+        0.25,
+        (0..lines)
+            .map(|k| Complex64::from_polar(1.0 / (1.0 + k as f64), (i + k) as f64 * 0.01))
+            .collect(),
+    )))
 }
 
 fn main() {

@@ -176,6 +176,47 @@ pub struct Function58 {
 }
 
 impl Function58 {
+    /// A complex-double FRF (function type 4) from `response` to `reference` on an even
+    /// frequency axis (Hz), with unknown units (set `axes` for units) and one ID line.
+    pub fn complex_frf(
+        id: &str,
+        function_id: i64,
+        response: Dof,
+        reference: Dof,
+        start_hz: f64,
+        step_hz: f64,
+        data: Vec<Complex64>,
+    ) -> Self {
+        Self {
+            id_lines: [
+                id.into(),
+                "NONE".into(),
+                "NONE".into(),
+                "NONE".into(),
+                "NONE".into(),
+            ],
+            function_type: 4,
+            function_id,
+            version: 0,
+            load_case: 0,
+            response,
+            reference,
+            ordinate_type: OrdinateType::ComplexDouble,
+            abscissa: Abscissa::Even {
+                start: start_hz,
+                step: step_hz,
+            },
+            z_value: 0.0,
+            axes: [
+                AxisSpec::none(),
+                AxisSpec::none(),
+                AxisSpec::none(),
+                AxisSpec::none(),
+            ],
+            data: Ordinate::Complex(data),
+        }
+    }
+
     /// The abscissa values.
     pub fn x(&self) -> Vec<f64> {
         match &self.abscissa {
