@@ -22,3 +22,25 @@ pub(crate) fn invalid(what: &str, reason: String) -> EmaError {
         reason,
     }
 }
+
+/// Every curve has one value per frequency line.
+pub(crate) fn check_curves(
+    freqs_hz: &[f64],
+    curves: &[&[num_complex::Complex64]],
+) -> Result<(), EmaError> {
+    match curves
+        .iter()
+        .enumerate()
+        .find(|(_, c)| c.len() != freqs_hz.len())
+    {
+        Some((o, c)) => Err(invalid(
+            "FRFs",
+            format!(
+                "curve {o} has {} values for {} frequency lines",
+                c.len(),
+                freqs_hz.len()
+            ),
+        )),
+        None => Ok(()),
+    }
+}

@@ -22,7 +22,7 @@
 //! The roots x_r of A give the poles λ_r = −ln(x_r)/Δt; the physical ones (Im λ > 0, Re λ < 0,
 //! |λ|/2π in the band) are kept.
 
-use crate::error::{EmaError, invalid};
+use crate::error::{EmaError, check_curves, invalid};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use num_complex::Complex64;
@@ -201,20 +201,7 @@ pub fn lscf(
     if curves.is_empty() {
         return Err(invalid("FRFs", "no FRF given".into()));
     }
-    if let Some((o, c)) = curves
-        .iter()
-        .enumerate()
-        .find(|(_, c)| c.len() != freqs_hz.len())
-    {
-        return Err(invalid(
-            "FRFs",
-            format!(
-                "curve {o} has {} values for {} frequency lines",
-                c.len(),
-                freqs_hz.len()
-            ),
-        ));
-    }
+    check_curves(freqs_hz, curves)?;
     let lines: Vec<usize> = (0..freqs_hz.len())
         .filter(|&k| freqs_hz[k] >= lo && freqs_hz[k] <= hi)
         .collect();

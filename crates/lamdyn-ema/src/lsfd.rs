@@ -21,7 +21,7 @@
 //! (up to scale). With a driving point p (response = reference), mass-normalised complex modes
 //! A_r = φ φᵀ/(2iω_d) give φ_p = √(2iω_d A_r,pp) and φ_o = 2iω_d A_r,op/φ_p.
 
-use crate::error::{EmaError, invalid};
+use crate::error::{EmaError, check_curves, invalid};
 use faer::Mat;
 use faer::linalg::solvers::{Solve, SolveLstsq};
 use lamdyn_frf::Quantity;
@@ -76,20 +76,7 @@ pub fn lsfd(
     if poles.is_empty() {
         return Err(invalid("poles", "no pole to fit residues for".into()));
     }
-    if let Some((o, c)) = curves
-        .iter()
-        .enumerate()
-        .find(|(_, c)| c.len() != freqs_hz.len())
-    {
-        return Err(invalid(
-            "FRFs",
-            format!(
-                "curve {o} has {} values for {} lines",
-                c.len(),
-                freqs_hz.len()
-            ),
-        ));
-    }
+    check_curves(freqs_hz, curves)?;
     let lines: Vec<usize> = (0..freqs_hz.len())
         .filter(|&k| freqs_hz[k] > 0.0 && freqs_hz[k] >= band_hz[0] && freqs_hz[k] <= band_hz[1])
         .collect();

@@ -190,6 +190,7 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
     let mut responses: Vec<Dof> = Vec::new();
     let mut references: Vec<Dof> = Vec::new();
     let mut quantity = None;
+    let mut scales = Vec::with_capacity(frfs.len());
     for f in &frfs {
         if f.x() != x {
             return Err(convert(format!(
@@ -198,7 +199,8 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
                 dof_name(&f.reference)
             )));
         }
-        let q = quantity_of(f, &units)?.0;
+        let (q, scale) = quantity_of(f, &units)?;
+        scales.push(scale);
         if quantity.is_some_and(|p| p != q) {
             return Err(convert(format!(
                 "FRF {} is a {q:?}, the first FRF a {:?}",
@@ -219,7 +221,7 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
     let (nr, nf) = (responses.len(), references.len());
     let mut data = vec![Complex64::new(f64::NAN, f64::NAN); nr * nf * nl];
     let mut seen = vec![false; nr * nf];
-    for f in &frfs {
+    for (f, scale) in frfs.iter().zip(&scales) {
         let i = responses.iter().position(|r| r == &f.response).unwrap_or(0);
         let j = references
             .iter()
@@ -232,7 +234,6 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
                 dof_name(&f.reference)
             )));
         }
-        let scale = quantity_of(f, &units)?.1;
         if let Ordinate::Complex(v) = &f.data {
             for (k, h) in v.iter().enumerate() {
                 data[(i * nf + j) * nl + k] = h * scale;

@@ -407,59 +407,48 @@ pub fn parse_2420(ds: &RawDataset) -> Result<Vec<CoordinateSystem>, UffError> {
         .collect())
 }
 
-/// Writes a dataset 15.
+/// Writes a dataset 15 (coordinates in E13.5 on the node's line).
 ///
 /// # Errors
 /// [`UffError::Write`] for non-finite coordinates.
 pub fn write_15(nodes: &[Node], out: &mut String) -> Result<(), UffError> {
-    out.push_str("    -1\n    15\n");
-    for n in nodes {
-        finite(n)?;
-        let _ = writeln!(
-            out,
-            "{:>10}{:>10}{:>10}{:>10}{}{}{}",
-            n.label,
-            n.definition_cs,
-            n.displacement_cs,
-            n.color,
-            e13(n.xyz[0]),
-            e13(n.xyz[1]),
-            e13(n.xyz[2])
-        );
-    }
-    out.push_str("    -1\n");
-    Ok(())
+    write_nodes(nodes, "    15", "", e13, out)
 }
 
-fn finite(n: &Node) -> Result<(), UffError> {
-    if n.xyz.iter().all(|v| v.is_finite()) {
-        Ok(())
-    } else {
-        Err(UffError::Write(format!(
-            "node {} has a non-finite coordinate",
-            n.label
-        )))
-    }
-}
-
-/// Writes a dataset 2411.
+/// Writes a dataset 2411 (coordinates in E25.16 on a line of their own).
 ///
 /// # Errors
 /// [`UffError::Write`] for non-finite coordinates.
 pub fn write_2411(nodes: &[Node], out: &mut String) -> Result<(), UffError> {
-    out.push_str("    -1\n  2411\n");
+    write_nodes(nodes, "  2411", "\n", e25, out)
+}
+
+/// The node datasets: labels and systems in 4I10, then `sep` and the coordinates in `coord`.
+fn write_nodes(
+    nodes: &[Node],
+    number: &str,
+    sep: &str,
+    coord: fn(f64) -> String,
+    out: &mut String,
+) -> Result<(), UffError> {
+    let _ = writeln!(out, "    -1\n{number}");
     for n in nodes {
-        finite(n)?;
+        if !n.xyz.iter().all(|v| v.is_finite()) {
+            return Err(UffError::Write(format!(
+                "node {} has a non-finite coordinate",
+                n.label
+            )));
+        }
         let _ = writeln!(
             out,
-            "{:>10}{:>10}{:>10}{:>10}\n{}{}{}",
+            "{:>10}{:>10}{:>10}{:>10}{sep}{}{}{}",
             n.label,
             n.definition_cs,
             n.displacement_cs,
             n.color,
-            e25(n.xyz[0]),
-            e25(n.xyz[1]),
-            e25(n.xyz[2])
+            coord(n.xyz[0]),
+            coord(n.xyz[1]),
+            coord(n.xyz[2])
         );
     }
     out.push_str("    -1\n");
