@@ -3,7 +3,8 @@
 stabilization diagram at orders 2-60 (sdypy: pol_order_high=30) on synthetic accelerance FRFs
 with known poles and 40 dB noise, in two shapes: 243 FRFs x 321 lines and 9 FRFs x 51201 lines.
 
-Timing: lamdyn `lscf_timing` (LSCF at every order + classification) against sdypy
+Timing: lamdyn `lscf_timing` (LSCF at every order + classification by frequency and damping,
+as sdypy; a second figure adds mode vectors and the vector criterion) against sdypy
 `Model.get_poles()`, each the median of REPEATS calls within one process (warm: thread pools,
 FFT plans and imports set up), on this machine's cores.
 Accuracy: for each true mode, the pole nearest to it at the highest order, from each tool's
@@ -76,6 +77,8 @@ def run_case(n_out, n_lines, f_max):
         # Warm timings on both sides: lamdyn's median over REPEATS calls in one process, sdypy's
         # over REPEATS calls of get_poles in this one.
         lam = [float(subprocess.run([TIMING, ch, fr, "5", str(f_max), str(REPEATS)], check=True, capture_output=True, text=True).stdout)]
+        # The same with mode vectors and the vector criterion (sdypy has none).
+        lam_v = float(subprocess.run([TIMING, ch, fr, "5", str(f_max), str(REPEATS), "vectors"], check=True, capture_output=True, text=True).stdout)
         sd = []
         for _ in range(REPEATS):
             m = EMA.Model(frf=frf, freq=freq, lower=5, upper=f_max, pol_order_high=30, frf_type="accelerance")
@@ -93,7 +96,7 @@ def run_case(n_out, n_lines, f_max):
             out = subprocess.run([LAMDYN, "ema", "--channels", ch, "--frf", fr, "--band-hz", f"5,{f_max}", "--near-hz", near, "--window-hz", "0.3", "--json"] + extra, capture_output=True, text=True).stdout
             rows = json.loads(out)["rows"]
             res[label] = nearest_errors(np.array([r["freq_hz"] for r in rows]), np.array([r["damping_ratio"] for r in rows]))
-    return statistics.median(lam), statistics.median(sd), sd_err, res
+    return statistics.median(lam), statistics.median(sd), sd_err, res, lam_v
 
 
 def fmt(errs):
@@ -102,8 +105,8 @@ def fmt(errs):
 
 print(f"{os.cpu_count()} cores; sdypy-EMA {getattr(EMA, '__version__', '?')}; median of {REPEATS}; orders 2-60 step 2; 6 modes, 40 dB noise")
 print()
-print("| data | lamdyn diagram | sdypy get_poles | ratio | max freq / damping error: sdypy diagram | lamdyn diagram | lamdyn refined |")
-print("|---|---|---|---|---|---|---|")
+print("| data | lamdyn diagram | sdypy get_poles | ratio | lamdyn diagram + mode vectors | max freq / damping error: sdypy diagram | lamdyn diagram | lamdyn refined |")
+print("|---|---|---|---|---|---|---|---|")
 for n_out, n_lines, f_max in ((243, 321, 130.0), (9, 51201, 130.0)):
-    tl, ts, sd_err, res = run_case(n_out, n_lines, f_max)
-    print(f"| {n_out} FRFs x {n_lines} lines | {tl * 1e3:.1f} ms | {ts * 1e3:.1f} ms | {ts / tl:.1f}x | {fmt(sd_err)} | {fmt(res['diagram'])} | {fmt(res['refined'])} |")
+    tl, ts, sd_err, res, tv = run_case(n_out, n_lines, f_max)
+    print(f"| {n_out} FRFs x {n_lines} lines | {tl * 1e3:.1f} ms | {ts * 1e3:.1f} ms | {ts / tl:.1f}x | {tv * 1e3:.1f} ms ({ts / tv:.1f}x) | {fmt(sd_err)} | {fmt(res['diagram'])} | {fmt(res['refined'])} |")

@@ -1,5 +1,5 @@
 //! Times the stabilization diagram (LSCF poles at orders 2..=60 step 2 and their
-//! classification) on a CSV FRF set: `lscf_timing CHANNELS FRF LO_HZ HI_HZ REPEATS`.
+//! classification) on a CSV FRF set: `lscf_timing CHANNELS FRF LO_HZ HI_HZ REPEATS [vectors]`.
 //! Prints the median wall time in seconds (used by tools/ema/bench_vs_sdypy.py).
 
 use lamdyn_ema::lscf::{LscfSettings, lscf};
@@ -13,6 +13,8 @@ fn main() {
     let set = lamdyn_frf::csv::parse_frf(&a[2], &read(&a[2]), r, f).expect("frf");
     let band = [a[3].parse().expect("lo"), a[4].parse().expect("hi")];
     let repeats: usize = a[5].parse().expect("repeats");
+    // Optional 6th argument `vectors`: mode vectors and the vector criterion as well.
+    let mode_vectors = a.get(6).is_some_and(|v| v == "vectors");
     let curves: Vec<&[num_complex::Complex64]> = (0..set.responses().len())
         .map(|i| set.curve(i, 0))
         .collect();
@@ -23,10 +25,8 @@ fn main() {
                 set.freqs_hz(),
                 &curves,
                 &LscfSettings {
-                    band_hz: band,
-                    min_order: 2,
-                    max_order: 60,
-                    step: 2,
+                    mode_vectors,
+                    ..LscfSettings::new(band, (2, 60, 2))
                 },
             )
             .expect("lscf");

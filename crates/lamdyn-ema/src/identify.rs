@@ -26,6 +26,11 @@ pub struct EmaSettings {
     pub orders: (usize, usize, usize),
     /// Stability tolerances.
     pub criteria: StabilityCriteria,
+    /// With several references: PolyMAX (pLSCF, the references of each response modelled
+    /// jointly) when true, single-reference LSCF over every curve when false.
+    pub polymax: bool,
+    /// Mode vectors in the diagram (the vector stability criterion).
+    pub mode_vectors: bool,
     /// Pick the stable pole nearest each of these frequencies (Hz) instead of the automatic
     /// selection.
     pub near_hz: Option<Vec<f64>>,
@@ -46,6 +51,8 @@ impl Default for EmaSettings {
             band_hz: None,
             orders: (2, 60, 2),
             criteria: StabilityCriteria::default(),
+            polymax: true,
+            mode_vectors: true,
             near_hz: None,
             window_hz: 1.0,
             refine_iterations: 30,
@@ -70,6 +77,9 @@ pub struct Mode {
     pub stable_count: usize,
     /// Complex shape over the responses (reference 0; mass-normalised with a driving point).
     pub shape: Vec<Complex64>,
+    /// Modal participation factors over the references: the dominant right singular vector of
+    /// the mode's residue matrix (responses × references), largest component 1.
+    pub participation: Vec<Complex64>,
     /// Real mode closest to the shape.
     pub real_shape: Vec<f64>,
     /// Modal phase collinearity.
@@ -104,6 +114,35 @@ pub struct EmaResult {
     pub fit: Option<ModalFit>,
     /// Wall time: poles and diagram, then refinement and residues, s.
     pub seconds: [f64; 2],
+}
+
+/// Participation factors of mode r (see [`Mode::participation`]): power iteration on RᴴR with
+/// R the residue matrix (responses × references).
+fn participation(fit: &ModalFit, r: usize, nr: usize, nf: usize) -> Vec<Complex64> {
+    let res = |i: usize, j: usize| fit.residues[i * nf + j][r];
+    let mut g = vec![Complex64::new(0.0, 0.0); nf * nf];
+    for a in 0..nf {
+        for b in 0..nf {
+            g[a * nf + b] = (0..nr).map(|i| res(i, a).conj() * res(i, b)).sum();
+        }
+    }
+    let mut v = vec![Complex64::new(1.0, 0.0); nf];
+    for _ in 0..100 {
+        let w: Vec<Complex64> = (0..nf)
+            .map(|a| (0..nf).map(|b| g[a * nf + b] * v[b]).sum())
+            .collect();
+        let norm = w.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
+        if norm == 0.0 {
+            break;
+        }
+        v = w.iter().map(|z| z / norm).collect();
+    }
+    let big = v
+        .iter()
+        .copied()
+        .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+        .unwrap_or(Complex64::new(1.0, 0.0));
+    v.iter().map(|z| z / big).collect()
 }
 
 /// Identifies the modes of `set` (module docs).
@@ -142,10 +181,9 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
         freqs,
         &curves,
         &LscfSettings {
-            band_hz: band,
-            min_order: lo,
-            max_order: hi,
-            step,
+            references: if s.polymax { nf } else { 1 },
+            mode_vectors: s.mode_vectors,
+            ..LscfSettings::new(band, (lo, hi, step))
         },
     )?;
     let diag = diagram(&orders, &s.criteria);
@@ -210,6 +248,7 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
                 pole,
                 stable_count: selected.get(r).map_or(0, |p| p.count),
                 real_shape: real_mode(&shape),
+                participation: participation(&fit, r, nr, nf),
                 mpc: mpc(&shape),
                 mpd_deg: mpd(&shape),
                 shape,

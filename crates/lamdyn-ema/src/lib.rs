@@ -14,6 +14,7 @@
 #![deny(missing_docs)]
 #![allow(clippy::needless_range_loop)]
 
+mod companion;
 mod error;
 pub mod identify;
 pub mod lscf;

@@ -43,7 +43,8 @@ pub struct SpectraSettings {
     pub trigger: f64,
     /// Samples kept before the trigger.
     pub pretrigger: usize,
-    /// Record length after the start, samples (the FFT length).
+    /// Record length after the start, samples (the FFT length); 0: the longest record every
+    /// hit holds.
     pub length: usize,
     /// Force window length, s.
     pub force_window_s: f64,
@@ -100,6 +101,20 @@ fn double_hit(f: &[f64], start: usize, threshold: f64) -> bool {
     f[start + fall..].iter().any(|v| v.abs() > threshold * peak)
 }
 
+/// The first sample whose |force| reaches `trigger` × the peak.
+fn trigger_index(force: &[f64], trigger: f64) -> usize {
+    let peak = force.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    force
+        .iter()
+        .position(|v| v.abs() >= trigger * peak)
+        .unwrap_or(0)
+}
+
+/// The record's first sample: `pretrigger` samples before the trigger (module docs).
+fn record_start(force: &[f64], s: &SpectraSettings) -> usize {
+    trigger_index(force, s.trigger).saturating_sub(s.pretrigger)
+}
+
 /// H1, H2, Hv and coherence from `hits` (module docs).
 ///
 /// # Errors
@@ -109,9 +124,17 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
     if hits.is_empty() {
         return Err(invalid("time data", "no hit".into()));
     }
+    let length = match s.length {
+        0 => hits
+            .iter()
+            .map(|h| h.force.len().saturating_sub(record_start(&h.force, s)))
+            .min()
+            .unwrap_or(0),
+        n => n,
+    };
     if !(s.rate_hz.is_finite()
         && s.rate_hz > 0.0
-        && s.length >= 4
+        && length >= 4
         && s.force_window_s > 0.0
         && (0.0..1.0).contains(&s.trigger))
     {
@@ -119,7 +142,7 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
             "settings",
             format!(
                 "rate {} Hz, length {}, force window {} s, trigger {}: rate and window must be positive, length at least 4, trigger in [0, 1)",
-                s.rate_hz, s.length, s.force_window_s, s.trigger
+                s.rate_hz, length, s.force_window_s, s.trigger
             ),
         ));
     }
@@ -132,9 +155,9 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
         }
     }
     let n_resp = hits[0].responses.len();
-    let nl = s.length / 2 + 1;
+    let nl = length / 2 + 1;
     let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(s.length);
+    let fft = planner.plan_fft_forward(length);
     let (mut sxx, mut syx, mut syy) = (
         vec![0.0; nl],
         vec![vec![Complex64::new(0.0, 0.0); nl]; n_resp],
@@ -177,18 +200,14 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
         if peak == 0.0 {
             return Err(invalid("time data", format!("hit {h}: the force is zero")));
         }
-        let trig = hit
-            .force
-            .iter()
-            .position(|v| v.abs() >= s.trigger * peak)
-            .unwrap_or(0);
+        let trig = trigger_index(&hit.force, s.trigger);
         let start = trig.saturating_sub(s.pretrigger);
-        if start + s.length > n {
+        if start + length > n {
             return Err(invalid(
                 "time data",
                 format!(
                     "hit {h}: {n} samples, but the record needs {} from sample {start}",
-                    s.length
+                    length
                 ),
             ));
         }
@@ -203,7 +222,7 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
                 warnings.push(format!("hit {h}: response {c} overload (clipped samples)"));
             }
         }
-        let win: Vec<f64> = (0..s.length)
+        let win: Vec<f64> = (0..length)
             .map(|k| {
                 s.exp_tau_s
                     .map_or(1.0, |tau| (-(k as f64) / (s.rate_hz * tau)).exp())
@@ -211,7 +230,7 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
             .collect();
         let fw = (s.force_window_s * s.rate_hz).round() as usize;
         let taper = (fw / 10).max(1);
-        let mut x: Vec<f64> = (0..s.length)
+        let mut x: Vec<f64> = (0..length)
             .map(|k| {
                 let w = if k >= fw {
                     0.0
@@ -231,7 +250,7 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
             sxx[k] += xs[k].norm_sqr();
         }
         for (c, r) in hit.responses.iter().enumerate() {
-            let mut y: Vec<f64> = (0..s.length).map(|k| r[start + k] * win[k]).collect();
+            let mut y: Vec<f64> = (0..length).map(|k| r[start + k] * win[k]).collect();
             fft.process(&mut y, &mut spectrum)
                 .map_err(|e| invalid("FFT", e.to_string()))?;
             for k in 0..nl {
@@ -241,7 +260,7 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
         }
     }
     let freqs_hz = (0..nl)
-        .map(|k| k as f64 * s.rate_hz / s.length as f64)
+        .map(|k| k as f64 * s.rate_hz / length as f64)
         .collect();
     let channels = (0..n_resp)
         .map(|c| {

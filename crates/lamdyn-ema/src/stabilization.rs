@@ -2,10 +2,13 @@
 //!
 //! **Classification.** A pole at order n is compared with the nearest pole (in frequency) of
 //! the previous order: *stable in frequency* if |Δf|/f ≤ `freq_tol` (default 1 %), *stable in
-//! damping* as well if |Δζ|/ζ ≤ `damping_tol` (default 5 %), the criteria of sdypy-EMA and of
-//! most commercial tools.
+//! damping* as well if |Δζ|/ζ ≤ `damping_tol` (default 5 %) (the criteria of sdypy-EMA), and
+//! *stable in vector* as well if the two poles' mode vectors (from the LSCF numerators) have
+//! 1 − MAC ≤ `vector_tol` (default 2 %, the usual commercial default). A pole counts as
+//! *stable* when it passes every criterion the diagram has data for (the vector one only when
+//! mode vectors were computed).
 //!
-//! **Automatic selection.** Poles stable in frequency and damping are clustered across orders
+//! **Automatic selection.** Stable poles are clustered across orders
 //! by frequency (a pole joins the cluster whose median frequency is within `freq_tol`); a
 //! cluster holding stable poles at no fewer than `min_fraction` of the orders above its first
 //! appearance is a physical mode, represented by its pole at the median frequency (spurious
@@ -16,6 +19,7 @@
 //! it at the highest order where one exists within `window_hz`.
 
 use crate::lscf::{OrderPoles, pole_damping, pole_freq_hz};
+use crate::shapes::mac;
 use num_complex::Complex64;
 use serde::Serialize;
 
@@ -28,6 +32,8 @@ pub enum Stability {
     Frequency,
     /// Frequency and damping within tolerance.
     FrequencyDamping,
+    /// Frequency, damping and mode vector within tolerance.
+    FrequencyDampingVector,
 }
 
 /// A pole in the diagram.
@@ -43,6 +49,20 @@ pub struct DiagramPole {
     pub damping: f64,
     /// Stability against the previous order.
     pub stability: Stability,
+    /// MAC of its mode vector with the matched pole's of the previous order (when both have
+    /// mode vectors).
+    pub vector_mac: Option<f64>,
+}
+
+impl DiagramPole {
+    /// Passes every criterion the diagram has data for (module docs).
+    pub fn is_stable(&self) -> bool {
+        match self.stability {
+            Stability::FrequencyDampingVector => true,
+            Stability::FrequencyDamping => self.vector_mac.is_none(),
+            _ => false,
+        }
+    }
 }
 
 /// Tolerances of the diagram and of the selection.
@@ -52,6 +72,8 @@ pub struct StabilityCriteria {
     pub freq_tol: f64,
     /// Relative damping tolerance.
     pub damping_tol: f64,
+    /// Mode-vector tolerance on 1 − MAC.
+    pub vector_tol: f64,
     /// Fraction of the orders above a cluster's first one that must hold a stable pole.
     pub min_fraction: f64,
 }
@@ -61,6 +83,7 @@ impl Default for StabilityCriteria {
         Self {
             freq_tol: 0.01,
             damping_tol: 0.05,
+            vector_tol: 0.02,
             min_fraction: 0.5,
         }
     }
@@ -69,34 +92,44 @@ impl Default for StabilityCriteria {
 /// Classifies every pole of `orders` (increasing order).
 pub fn diagram(orders: &[OrderPoles], c: &StabilityCriteria) -> Vec<DiagramPole> {
     let mut out = Vec::new();
-    let mut previous: &[Complex64] = &[];
+    let mut previous: Option<&OrderPoles> = None;
     for op in orders {
-        for &p in &op.poles {
+        for (r, &p) in op.poles.iter().enumerate() {
             let (f, z) = (pole_freq_hz(p), pole_damping(p));
-            let near = previous.iter().min_by(|a, b| {
-                (pole_freq_hz(**a) - f)
-                    .abs()
-                    .total_cmp(&(pole_freq_hz(**b) - f).abs())
+            let near = previous.and_then(|prev| {
+                (0..prev.poles.len()).min_by(|&a, &b| {
+                    (pole_freq_hz(prev.poles[a]) - f)
+                        .abs()
+                        .total_cmp(&(pole_freq_hz(prev.poles[b]) - f).abs())
+                })
             });
-            let stability = match near {
-                Some(q) if (pole_freq_hz(*q) - f).abs() <= c.freq_tol * f => {
-                    if (pole_damping(*q) - z).abs() <= c.damping_tol * z.abs() {
-                        Stability::FrequencyDamping
-                    } else {
-                        Stability::Frequency
+            let (mut stability, mut vector_mac) = (Stability::New, None);
+            if let (Some(prev), Some(q)) = (previous, near) {
+                let qp = prev.poles[q];
+                if (pole_freq_hz(qp) - f).abs() <= c.freq_tol * f {
+                    stability = Stability::Frequency;
+                    if (pole_damping(qp) - z).abs() <= c.damping_tol * z.abs() {
+                        stability = Stability::FrequencyDamping;
+                        vector_mac = match (op.vectors.get(r), prev.vectors.get(q)) {
+                            (Some(a), Some(b)) => Some(mac(a, b)),
+                            _ => None,
+                        };
+                        if vector_mac.is_some_and(|m| 1.0 - m <= c.vector_tol) {
+                            stability = Stability::FrequencyDampingVector;
+                        }
                     }
                 }
-                _ => Stability::New,
-            };
+            }
             out.push(DiagramPole {
                 order: op.order,
                 pole: p,
                 freq_hz: f,
                 damping: z,
                 stability,
+                vector_mac,
             });
         }
-        previous = &op.poles;
+        previous = Some(op);
     }
     out
 }
@@ -129,10 +162,7 @@ pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<Select
         o
     };
     let mut clusters: Vec<Vec<DiagramPole>> = Vec::new();
-    for p in diagram
-        .iter()
-        .filter(|p| p.stability == Stability::FrequencyDamping)
-    {
+    for p in diagram.iter().filter(|p| p.is_stable()) {
         let hit = clusters.iter_mut().find(|cl| {
             let mut f: Vec<f64> = cl.iter().map(|q| q.freq_hz).collect();
             f.sort_by(f64::total_cmp);

@@ -8,6 +8,12 @@
 //! and reference `F` named in the channels file, then one line per frequency (Hz, increasing).
 //! Every response × reference pair must appear once.
 //!
+//! **Time file** (one per hammer hit): an optional first line `# quantity = accelerance` (what
+//! the responses are: `receptance` = displacement in m, `mobility` = velocity in m/s,
+//! `accelerance` = acceleration in m/s²), then a header `t_s,NAME,...` naming the reference
+//! (the force, N) and every response of the channels file, then one line per sample at a
+//! uniform time step.
+//!
 //! Lines starting with `#` are comments; fields are separated by commas.
 
 use crate::{Channel, FrfError, FrfSet, Quantity};
@@ -41,6 +47,121 @@ fn number(path: &str, line: usize, column: &str, s: &str) -> Result<f64, FrfErro
             format!("column '{column}': '{s}' is not a finite number"),
         )),
     }
+}
+
+/// The `# quantity = ...` line of an FRF or time file (receptance if absent).
+fn declared_quantity(path: &str, text: &str) -> Result<Quantity, FrfError> {
+    text.lines()
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix('#')
+                .and_then(|r| r.trim().strip_prefix("quantity"))
+        })
+        .map(|r| r.trim().trim_start_matches('=').trim())
+        .map(|q| match q {
+            "receptance" => Ok(Quantity::Receptance),
+            "mobility" => Ok(Quantity::Mobility),
+            "accelerance" => Ok(Quantity::Accelerance),
+            other => Err(err(
+                path,
+                1,
+                format!("quantity '{other}' must be receptance, mobility or accelerance"),
+            )),
+        })
+        .transpose()
+        .map(|q| q.unwrap_or(Quantity::Receptance))
+}
+
+/// One hammer hit read from a time file: the force and the responses sampled at `rate_hz`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeRecord {
+    /// Sampling rate, Hz.
+    pub rate_hz: f64,
+    /// What the responses are (their SI unit follows).
+    pub quantity: Quantity,
+    /// Force, N.
+    pub force: Vec<f64>,
+    /// Responses in the order of the channels file.
+    pub responses: Vec<Vec<f64>>,
+}
+
+/// Parses a time file (module docs) against the channels file's `responses` and single
+/// `reference` (the hammer).
+///
+/// # Errors
+/// [`FrfError::File`] naming the line: missing or unknown columns, bad numbers, fewer than two
+/// samples, a non-uniform or non-increasing time step.
+pub fn parse_time(
+    path: &str,
+    text: &str,
+    responses: &[Channel],
+    reference: &Channel,
+) -> Result<TimeRecord, FrfError> {
+    let quantity = declared_quantity(path, text)?;
+    let mut it = lines(text);
+    let Some((hl, header)) = it.next() else {
+        return Err(err(path, 0, "empty: expected a header t_s,NAME,...".into()));
+    };
+    if header.first() != Some(&"t_s") {
+        return Err(err(path, hl, "the first column must be t_s".into()));
+    }
+    let column = |name: &str| {
+        header[1..]
+            .iter()
+            .position(|h| *h == name)
+            .map(|c| c + 1)
+            .ok_or_else(|| err(path, hl, format!("no column for channel '{name}'")))
+    };
+    let force_col = column(&reference.name)?;
+    let resp_cols: Vec<usize> = responses
+        .iter()
+        .map(|c| column(&c.name))
+        .collect::<Result<_, _>>()?;
+    let (mut t, mut force, mut line_of) = (Vec::new(), Vec::new(), Vec::new());
+    let mut resp = vec![Vec::new(); responses.len()];
+    for (line, fields) in it {
+        line_of.push(line);
+        if fields.len() != header.len() {
+            return Err(err(
+                path,
+                line,
+                format!("{} fields, the header has {}", fields.len(), header.len()),
+            ));
+        }
+        t.push(number(path, line, "t_s", fields[0])?);
+        force.push(number(path, line, &reference.name, fields[force_col])?);
+        for (r, &c) in resp.iter_mut().zip(&resp_cols) {
+            r.push(number(path, line, header[c], fields[c])?);
+        }
+    }
+    if t.len() < 2 {
+        return Err(err(
+            path,
+            hl,
+            format!("{} samples: at least 2 needed", t.len()),
+        ));
+    }
+    let dt = t[1] - t[0];
+    if let Some(k) = t
+        .windows(2)
+        .position(|w| !(w[1] - w[0] > 0.0 && ((w[1] - w[0]) - dt).abs() <= 1e-6 * dt))
+    {
+        return Err(err(
+            path,
+            line_of[k + 1],
+            format!(
+                "time step {} s after {} s, the first step is {dt} s: the sampling must be uniform",
+                t[k + 1] - t[k],
+                t[k]
+            ),
+        ));
+    }
+    Ok(TimeRecord {
+        rate_hz: 1.0 / dt,
+        quantity,
+        force,
+        responses: resp,
+    })
 }
 
 /// Parses a channels table: (responses, references) in file order.
@@ -124,26 +245,7 @@ pub fn parse_frf(
     responses: Vec<Channel>,
     references: Vec<Channel>,
 ) -> Result<FrfSet, FrfError> {
-    let quantity = text
-        .lines()
-        .find_map(|l| {
-            l.trim()
-                .strip_prefix('#')
-                .and_then(|r| r.trim().strip_prefix("quantity"))
-        })
-        .map(|r| r.trim().trim_start_matches('=').trim())
-        .map(|q| match q {
-            "receptance" => Ok(Quantity::Receptance),
-            "mobility" => Ok(Quantity::Mobility),
-            "accelerance" => Ok(Quantity::Accelerance),
-            other => Err(err(
-                path,
-                1,
-                format!("quantity '{other}' must be receptance, mobility or accelerance"),
-            )),
-        })
-        .transpose()?
-        .unwrap_or(Quantity::Receptance);
+    let quantity = declared_quantity(path, text)?;
     let mut it = lines(text);
     let Some((hl, header)) = it.next() else {
         return Err(err(

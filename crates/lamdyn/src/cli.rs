@@ -32,7 +32,8 @@ pub enum Command {
     /// Universal File Format (UFF/UNV) files: list contents, convert.
     #[command(subcommand)]
     Uff(UffCommand),
-    /// Experimental modal analysis of measured FRFs: poles (LSCF), stabilization, modes.
+    /// Experimental modal analysis of measured FRFs or hammer-test time data: poles (LSCF or
+    /// PolyMAX), stabilization diagram, modes, CMIF; charts with --out.
     Ema(EmaArgs),
 }
 
@@ -40,14 +41,46 @@ pub enum Command {
 #[derive(Debug, Args)]
 pub struct EmaArgs {
     /// FRFs in a UFF file (complex datasets 58/58b; nodes 15/2411 for the channel positions).
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["channels", "frf"], required_unless_present = "frf")]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["channels", "frf", "time"], required_unless_present_any = ["frf", "time"])]
     pub uff: Option<PathBuf>,
-    /// Channels table (CSV: name,role,x_m,y_m,z_m,dx,dy,dz), with --frf.
-    #[arg(long, value_name = "FILE", requires = "frf")]
+    /// Channels table (CSV: name,role,x_m,y_m,z_m,dx,dy,dz), with --frf or --time.
+    #[arg(long, value_name = "FILE")]
     pub channels: Option<PathBuf>,
     /// FRF table (CSV: f_hz,R@F:re,R@F:im,...), with --channels.
-    #[arg(long, value_name = "FILE", requires = "channels")]
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "channels",
+        conflicts_with = "time"
+    )]
     pub frf: Option<PathBuf>,
+    /// Hammer-test time data, one CSV per hit (t_s,FORCE,RESPONSE,...; optional first line
+    /// `# quantity = accelerance`), with --channels naming one reference (the hammer). Repeat
+    /// for several hits: they are averaged.
+    #[arg(long, value_name = "FILE", requires = "channels")]
+    pub time: Vec<PathBuf>,
+    /// FRF estimator for time data.
+    #[arg(long, value_enum, default_value_t = Estimator::H1)]
+    pub estimator: Estimator,
+    /// Trigger level for time data, fraction of each hit's peak force [default: 0.05].
+    #[arg(long, default_value_t = 0.05, value_parser = finite)]
+    pub trigger: f64,
+    /// Time kept before the trigger, s [default: 0.001].
+    #[arg(long, default_value_t = 0.001, value_parser = finite)]
+    pub pretrigger_s: f64,
+    /// Force window after the record start, s [default: 0.05].
+    #[arg(long, default_value_t = 0.05, value_parser = finite)]
+    pub force_window_s: f64,
+    /// Record length, s [default: the longest every hit holds].
+    #[arg(long, value_name = "S", value_parser = finite)]
+    pub record_s: Option<f64>,
+    /// With several references, one LSCF over every curve instead of PolyMAX.
+    #[arg(long)]
+    pub single_reference: bool,
+    /// Folder for the results: modes.csv, diagram.csv, result.json and the stabilization
+    /// diagram and CMIF charts (SVG and PNG); replaced as a whole, only when everything worked.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
     /// Band LO,HI in Hz [default: all lines above 0 Hz].
     #[arg(long, value_name = "LO,HI", value_delimiter = ',', value_parser = finite)]
     pub band_hz: Option<Vec<f64>>,
@@ -70,7 +103,8 @@ pub struct EmaArgs {
     /// Name of the driving-point response (mass-normalised shapes).
     #[arg(long, value_name = "NAME")]
     pub driving: Option<String>,
-    /// Time constant of the exponential window applied to the data, s (its damping is removed).
+    /// Time constant of the exponential window applied to the data, s (its damping is removed);
+    /// with --time the window is applied to the records here.
     #[arg(long, value_name = "S", value_parser = finite, allow_negative_numbers = true)]
     pub exp_tau_s: Option<f64>,
     /// Skip the refinement of the poles (LSFD on the diagram's poles only).
@@ -79,6 +113,17 @@ pub struct EmaArgs {
     /// Output format (JSON adds the diagram, shapes and auto-MAC).
     #[command(flatten)]
     pub output: OutputArgs,
+}
+
+/// FRF estimators from time data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Estimator {
+    /// H1 = Gyx/Gxx: unbiased by response noise (the usual choice for hammer tests).
+    H1,
+    /// H2 = Gyy/Gxy: unbiased by force noise.
+    H2,
+    /// Hv = sqrt(H1 H2) with the phase of H1.
+    Hv,
 }
 
 /// `lamdyn uff ...`.

@@ -1,14 +1,118 @@
-//! `lamdyn ema`: measured FRFs (UFF or CSV) → stabilization diagram, modes with damping and
-//! shapes, the regenerated FRFs' correlation and the CMIF peaks (lamdyn-ema does the work).
+//! `lamdyn ema`: measured FRFs (UFF or CSV) or hammer-test time data (CSV, one file per hit) →
+//! stabilization diagram, modes with damping and shapes, the regenerated FRFs' correlation and
+//! the CMIF peaks (lamdyn-ema does the work), and with `--out` a results folder with the charts
+//! (lamdyn-report draws them).
 
 use crate::Outcome;
-use crate::cli::EmaArgs;
+use crate::cli::{EmaArgs, Estimator};
+use crate::io::write_dir_atomically;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
+use lamdyn_ema::spectra::{Hit, Spectra, SpectraSettings, estimate};
 use lamdyn_frf::FrfSet;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// What the time data added: the estimator's warnings and each response's coherence.
+struct TimeInfo {
+    hits: usize,
+    spectra: Spectra,
+}
+
+fn read_text(p: &Path) -> Result<String> {
+    std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
+}
+
+/// FRFs estimated from hammer-test time files (one per hit) and the channels table.
+fn frfs_from_time(
+    channels: &Path,
+    files: &[PathBuf],
+    args: &EmaArgs,
+) -> Result<(FrfSet, TimeInfo)> {
+    let (responses, references) =
+        lamdyn_frf::csv::parse_channels(&channels.display().to_string(), &read_text(channels)?)?;
+    let [hammer] = &references[..] else {
+        bail!(
+            "'{}': time data needs exactly one reference channel (the hammer), the file has {}",
+            channels.display(),
+            references.len()
+        );
+    };
+    let mut hits = Vec::with_capacity(files.len());
+    let (mut rate, mut quantity) = (None, None);
+    for f in files {
+        let rec = lamdyn_frf::csv::parse_time(
+            &f.display().to_string(),
+            &read_text(f)?,
+            &responses,
+            hammer,
+        )?;
+        let r0 = *rate.get_or_insert(rec.rate_hz);
+        if (rec.rate_hz - r0).abs() > 1e-6 * r0 {
+            bail!(
+                "'{}': sampled at {} Hz, the first hit at {r0} Hz",
+                f.display(),
+                rec.rate_hz
+            );
+        }
+        if *quantity.get_or_insert(rec.quantity) != rec.quantity {
+            bail!(
+                "'{}': its responses are {}, the first hit's {}",
+                f.display(),
+                rec.quantity.unit(),
+                quantity.map_or("", |q| q.unit())
+            );
+        }
+        hits.push(Hit {
+            force: rec.force,
+            responses: rec.responses,
+        });
+    }
+    let rate_hz = rate.ok_or_else(|| anyhow!("no --time file given"))?;
+    for (name, v) in [
+        ("--trigger", args.trigger),
+        ("--pretrigger-s", args.pretrigger_s),
+        ("--force-window-s", args.force_window_s),
+    ] {
+        if v < 0.0 {
+            bail!("{name} {v} must not be negative");
+        }
+    }
+    let settings = SpectraSettings {
+        rate_hz,
+        trigger: args.trigger,
+        pretrigger: (args.pretrigger_s * rate_hz).round() as usize,
+        length: args.record_s.map_or(0, |t| (t * rate_hz).round() as usize),
+        force_window_s: args.force_window_s,
+        exp_tau_s: args.exp_tau_s,
+        double_hit: 0.2,
+    };
+    let spectra = estimate(&hits, &settings).context("FRF estimation from the time data failed")?;
+    let data = spectra
+        .channels
+        .iter()
+        .flat_map(|c| match args.estimator {
+            Estimator::H1 => c.h1.clone(),
+            Estimator::H2 => c.h2.clone(),
+            Estimator::Hv => c.hv.clone(),
+        })
+        .collect();
+    let set = FrfSet::new(
+        spectra.freqs_hz.clone(),
+        responses,
+        references,
+        quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
+        data,
+    )?;
+    Ok((
+        set,
+        TimeInfo {
+            hits: hits.len(),
+            spectra,
+        },
+    ))
+}
 
 /// The FRF set named by the arguments.
 pub(crate) fn read_frfs(
@@ -34,7 +138,9 @@ pub(crate) fn read_frfs(
                 format!("CSV '{}' with channels '{}'", f.display(), c.display()),
             ))
         }
-        _ => bail!("give --uff FILE, or --channels FILE and --frf FILE"),
+        _ => bail!(
+            "give --uff FILE, --channels FILE with --frf FILE, or --channels FILE with --time FILE..."
+        ),
     }
 }
 
@@ -46,6 +152,7 @@ fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
             args.order_step as usize,
         ),
         near_hz: args.near_hz.clone(),
+        polymax: !args.single_reference,
         window_hz: args.window_hz,
         exp_tau_s: args.exp_tau_s,
         ..Default::default()
@@ -99,14 +206,38 @@ fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
 
 /// Runs `lamdyn ema`.
 pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
-    let (set, source) = read_frfs(
-        args.uff.as_deref(),
-        args.channels.as_deref(),
-        args.frf.as_deref(),
-    )?;
+    let (set, source, time) = match (&args.channels, args.time.is_empty()) {
+        (Some(c), false) => {
+            let (set, info) = frfs_from_time(c, &args.time, args)?;
+            let src = format!(
+                "{} hit(s) of time data ({:?} estimator) with channels '{}'",
+                info.hits,
+                args.estimator,
+                c.display()
+            );
+            (set, src, Some(info))
+        }
+        _ => {
+            let (set, src) = read_frfs(
+                args.uff.as_deref(),
+                args.channels.as_deref(),
+                args.frf.as_deref(),
+            )?;
+            (set, src, None)
+        }
+    };
     let s = settings(args, &set)?;
     let r = identify(&set, &s).context("identification failed")?;
-    let report = build_report(&set, &source, &s, &r);
+    let mut report = build_report(&set, &source, &s, &r);
+    if let Some(info) = &time {
+        add_time_info(&mut report, &set, &r, info);
+    }
+    if let Some(dir) = &args.out {
+        write_results(dir, &set, &r, &report)?;
+        report
+            .notes
+            .push(format!("results and charts written to '{}'", dir.display()));
+    }
     report.write(args.output.format(), out, err)?;
     Ok(
         if r.correlation.iter().all(|c| *c >= 0.9) && r.missing_hz.is_empty() {
@@ -144,7 +275,12 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
     report.input(
         "method",
         format!(
-            "LSCF (z-domain common denominator) orders {}-{} step {} on {:.3}-{:.3} Hz; stable: df/f <= {} %, dzeta/zeta <= {} %; {}; {}",
+            "{} orders {}-{} step {} on {:.3}-{:.3} Hz; stable: df/f <= {} %, dzeta/zeta <= {} %{}; {}; {}",
+            if s.polymax && set.references().len() > 1 {
+                "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
+            } else {
+                "LSCF (z-domain common denominator)"
+            },
             s.orders.0,
             s.orders.1,
             s.orders.2,
@@ -152,6 +288,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
             r.band_hz[1],
             100.0 * s.criteria.freq_tol,
             100.0 * s.criteria.damping_tol,
+            if s.mode_vectors { format!(", 1 - MAC(mode vectors) <= {} %", 100.0 * s.criteria.vector_tol) } else { String::new() },
             if s.near_hz.is_some() { "poles picked near the given frequencies" } else { "automatic selection (clusters stable over half the orders)" },
             if s.refine_iterations > 0 { "poles refined with LSFD residues (variable projection)" } else { "LSFD residues on the diagram's poles" }
         ),
@@ -224,7 +361,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
         ));
     }
     report.notes.push("zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and MPD 0 for a real (normal) mode.".into());
-    report.notes.push("stable: poles stable in frequency and damping in the mode's column of the diagram (0 when picked with --near-hz).".into());
+    report.notes.push("stable: poles stable in frequency, damping and mode vector in the mode's column of the diagram (0 when picked with --near-hz).".into());
     let cell = |v: f64| serde_json::json!(v);
     report.extra = Some(serde_json::json!({
         "modes": r.modes,
@@ -235,4 +372,77 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
         "responses": set.responses().iter().map(|c| &c.name).collect::<Vec<_>>(),
     }));
     report
+}
+
+/// Coherence per response over the band and the estimator's warnings.
+fn add_time_info(report: &mut Report, set: &FrfSet, r: &EmaResult, info: &TimeInfo) {
+    let f = set.freqs_hz();
+    let band: Vec<usize> = (0..f.len())
+        .filter(|&k| f[k] >= r.band_hz[0] && f[k] <= r.band_hz[1])
+        .collect();
+    let mut sec = Section::new(
+        "coherence",
+        "Coherence over the band",
+        vec![
+            Column::new("response", "response", "", Fmt::Fixed(0)),
+            Column::new("min", "min", "", Fmt::Fixed(4)),
+            Column::new("mean", "mean", "", Fmt::Fixed(4)),
+        ],
+    );
+    for (c, ch) in info.spectra.channels.iter().zip(set.responses()) {
+        let vals: Vec<f64> = band.iter().map(|&k| c.coherence[k]).collect();
+        let min = vals.iter().copied().fold(f64::INFINITY, f64::min);
+        let mean = vals.iter().sum::<f64>() / vals.len().max(1) as f64;
+        sec.row(vec![ch.name.clone().into(), min.into(), mean.into()]);
+    }
+    report.sections.push(sec);
+    report
+        .warnings
+        .extend(info.spectra.warnings.iter().cloned());
+}
+
+/// Writes modes.csv, diagram.csv, result.json and the charts into `dir` atomically.
+fn write_results(dir: &Path, set: &FrfSet, r: &EmaResult, report: &Report) -> Result<()> {
+    use lamdyn_report::ema::{cmif_chart, stabilization_chart};
+    let mut modes =
+        String::from("mode,freq_hz,damping_ratio,loss_factor,mpc,mpd_deg,stable_poles\n");
+    for (k, m) in r.modes.iter().enumerate() {
+        modes += &format!(
+            "{},{},{},{},{},{},{}\n",
+            k + 1,
+            m.freq_hz,
+            m.damping_ratio,
+            m.loss_factor,
+            m.mpc,
+            m.mpd_deg,
+            m.stable_count
+        );
+    }
+    let mut diagram = String::from("order,freq_hz,damping_ratio,stability,vector_mac\n");
+    for p in &r.diagram {
+        diagram += &format!(
+            "{},{},{},{:?},{}\n",
+            p.order,
+            p.freq_hz,
+            p.damping,
+            p.stability,
+            p.vector_mac.map_or(String::new(), |m| m.to_string())
+        );
+    }
+    let mut json = Vec::new();
+    report.write(crate::table::Format::Json, &mut json, &mut std::io::sink())?;
+    let (stab, cmif) = (
+        stabilization_chart(r, set.freqs_hz()),
+        cmif_chart(r, set.freqs_hz()),
+    );
+    let files: Vec<(&str, Vec<u8>)> = vec![
+        ("modes.csv", modes.into_bytes()),
+        ("diagram.csv", diagram.into_bytes()),
+        ("result.json", json),
+        ("stabilization.svg", stab.render_svg()?.into_bytes()),
+        ("stabilization.png", stab.render_png()?),
+        ("cmif.svg", cmif.render_svg()?.into_bytes()),
+        ("cmif.png", cmif.render_png()?),
+    ];
+    write_dir_atomically(dir, &files)
 }
