@@ -1,0 +1,232 @@
+//! FRFs of the layered model with a frequency-dependent core, by projection onto a reduced
+//! basis, and the direct complex solve that checks them.
+//!
+//! With the core layer's stiffness assembled at a modulus G_a, the dynamic stiffness at ω is
+//!
+//!   Z(ω) = K_e + s(ω) K_c − ω² M,  s(ω) = G*(ω)/G_a,
+//!
+//! (K_e the elastic layers, K_c the core: scaling the whole core matrix by one complex factor
+//! assumes a constant Poisson's ratio of the core) and the receptance to a load f is
+//! u = Z(ω)⁻¹ f. The reduced basis V holds, at each reference core modulus G_j with
+//! K_j = K_e + (G_j/G_a) K_c: the real modes φ of (K_j, M), the static residual vectors
+//! (K_j − σM)⁻¹ f of the loads, and the modes' static sensitivity to the core
+//! (K_j − σM)⁻¹ K_c φ (σ < 0 keeps a free model's matrix invertible); the whole is made
+//! M-orthonormal (numerically dependent columns are dropped) [Plouin & Balmès 1999, "Steel/viscoelastic/steel
+//! sandwich shells: computational methods and experimental validations", IMAC XVII; Balmès 1996
+//! for the multi-model reduction]. Then u ≈ V (Vᵀ Z(ω) V)⁻¹ Vᵀ f: one small dense complex solve
+//! per line. The direct route factors the sparse complex Z(ω) (faer's sparse LU) per line.
+
+use crate::error::BenchError;
+use crate::system::LayeredSystem;
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side, c64};
+use num_complex::Complex64;
+
+/// The reduced model: basis and projected matrices.
+pub struct ReducedModel {
+    /// Basis V (n × m), M-orthonormal.
+    pub basis: Mat<f64>,
+    /// Vᵀ K_e V.
+    k_elastic: Mat<f64>,
+    /// Vᵀ K_c V at the assembled core modulus.
+    k_core: Mat<f64>,
+    /// Vᵀ M V (≈ I).
+    mass: Mat<f64>,
+}
+
+/// Stiffness scale per layer: 1 everywhere, `core` on layer `core_layer`.
+fn scales(n_layers: usize, core_layer: usize, core: f64) -> Vec<f64> {
+    (0..n_layers)
+        .map(|l| if l == core_layer { core } else { 1.0 })
+        .collect()
+}
+
+/// Elastic-layer and core stiffness of `sys` (the core's alone, and everything else).
+fn split_stiffness(
+    sys: &LayeredSystem,
+    core_layer: usize,
+) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
+    let n = sys.k_layers.len();
+    (
+        sys.stiffness(&scales(n, core_layer, 0.0)),
+        sys.k_layers[core_layer].clone(),
+    )
+}
+
+impl ReducedModel {
+    /// Builds the basis (module docs): `modes` real modes at each of the core-modulus ratios
+    /// `ratios` (G_j/G_a), plus the residual vectors of `loads`, with shift `shift` (rad²/s²).
+    ///
+    /// # Errors
+    /// [`BenchError::Invalid`] for a core layer out of range or no load; [`BenchError::Solver`]
+    /// from the eigen or static solves.
+    pub fn new(
+        sys: &LayeredSystem,
+        core_layer: usize,
+        ratios: &[f64],
+        modes: usize,
+        loads: &[Vec<f64>],
+        shift: f64,
+    ) -> Result<Self, BenchError> {
+        let n_layers = sys.k_layers.len();
+        if core_layer >= n_layers {
+            return Err(BenchError::Invalid(format!(
+                "core layer {} of {n_layers} layers",
+                core_layer + 1
+            )));
+        }
+        if loads.is_empty() || ratios.is_empty() {
+            return Err(BenchError::Invalid(
+                "the basis needs at least one load and one reference core modulus".into(),
+            ));
+        }
+        let n = sys.n_dofs;
+        let mut cols: Vec<Mat<f64>> = Vec::new();
+        for &r in ratios {
+            let scale = scales(n_layers, core_layer, r);
+            let phi = sys.modes(&scale, modes, shift)?.1;
+            let shifted = &sys.stiffness(&scale) + &(&sys.m * (-shift));
+            let llt = shifted
+                .sp_cholesky(Side::Lower)
+                .map_err(|e| BenchError::Solver(format!("static residual: {e:?}")))?;
+            let mut f = Mat::from_fn(n, loads.len(), |i, j| loads[j][i]);
+            llt.solve_in_place(f.as_mut());
+            cols.push(f);
+            // How the modes change with the core modulus: (K_j − σM)⁻¹ K_c φ.
+            let mut sens = &sys.k_layers[core_layer] * &phi;
+            llt.solve_in_place(sens.as_mut());
+            cols.push(phi);
+            cols.push(sens);
+        }
+        let width: usize = cols.iter().map(|c| c.ncols()).sum();
+        let mut v = Mat::<f64>::zeros(n, width);
+        let mut at = 0;
+        for c in &cols {
+            v.as_mut().subcols_mut(at, c.ncols()).copy_from(c);
+            at += c.ncols();
+        }
+        let basis = m_orthonormal(&v, &sys.m);
+        let (ke, kc) = split_stiffness(sys, core_layer);
+        let project = |a: &SparseColMat<usize, f64>| {
+            let av = a * &basis;
+            basis.transpose() * &av
+        };
+        Ok(Self {
+            k_elastic: project(&ke),
+            k_core: project(&kc),
+            mass: project(&sys.m),
+            basis,
+        })
+    }
+
+    /// Basis size m.
+    pub fn size(&self) -> usize {
+        self.basis.ncols()
+    }
+
+    /// Responses u at `dofs` to the load `load` at ω (rad/s) with core scale s(ω), m/N.
+    pub fn response(
+        &self,
+        load: &[f64],
+        omega: f64,
+        core_scale: Complex64,
+        dofs: &[usize],
+    ) -> Vec<Complex64> {
+        let m = self.size();
+        let z = Mat::from_fn(m, m, |i, j| {
+            let v = Complex64::new(
+                self.k_elastic[(i, j)] - omega * omega * self.mass[(i, j)],
+                0.0,
+            ) + core_scale * self.k_core[(i, j)];
+            c64::new(v.re, v.im)
+        });
+        let f = self.basis.transpose() * Mat::from_fn(load.len(), 1, |i, _| load[i]);
+        let rhs = Mat::from_fn(m, 1, |i, _| c64::new(f[(i, 0)], 0.0));
+        let q = z.partial_piv_lu().solve(&rhs);
+        dofs.iter()
+            .map(|&d| {
+                let mut acc = Complex64::new(0.0, 0.0);
+                for k in 0..m {
+                    acc += Complex64::new(q[(k, 0)].re, q[(k, 0)].im) * self.basis[(d, k)];
+                }
+                acc
+            })
+            .collect()
+    }
+}
+
+/// The columns of `v` made M-orthonormal by modified Gram–Schmidt in the M inner product,
+/// applied twice ("twice is enough", Giraud et al. 2005) after scaling each column to unit
+/// M-norm; a column whose M-norm falls below 1e-8 after projection is dependent and dropped.
+fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
+    let n = v.nrows();
+    let mut kept: Vec<Mat<f64>> = Vec::new();
+    let mut m_kept: Vec<Mat<f64>> = Vec::new();
+    let m_norm = |x: &Mat<f64>| -> f64 {
+        let mx = m * x;
+        (x.transpose() * &mx)[(0, 0)].max(0.0).sqrt()
+    };
+    for j in 0..v.ncols() {
+        let mut x = Mat::from_fn(n, 1, |i, _| v[(i, j)]);
+        let norm = m_norm(&x);
+        if norm == 0.0 || !norm.is_finite() {
+            continue;
+        }
+        x *= 1.0 / norm;
+        for _ in 0..2 {
+            for (q, mq) in kept.iter().zip(&m_kept) {
+                let c = (mq.transpose() * &x)[(0, 0)];
+                x -= q * c;
+            }
+        }
+        let left = m_norm(&x);
+        if left < 1e-8 {
+            continue;
+        }
+        x *= 1.0 / left;
+        m_kept.push(m * &x);
+        kept.push(x);
+    }
+    Mat::from_fn(n, kept.len(), |i, j| kept[j][(i, 0)])
+}
+
+/// The direct route: u at `dofs` from the sparse complex solve of Z(ω) u = f.
+///
+/// # Errors
+/// [`BenchError::Solver`] if the sparse LU fails (Z singular).
+pub fn direct_response(
+    sys: &LayeredSystem,
+    core_layer: usize,
+    load: &[f64],
+    omega: f64,
+    core_scale: Complex64,
+    dofs: &[usize],
+) -> Result<Vec<Complex64>, BenchError> {
+    let (ke, kc) = split_stiffness(sys, core_layer);
+    let n = sys.n_dofs;
+    let mut t: Vec<Triplet<usize, usize, c64>> = Vec::new();
+    let mut add = |a: &SparseColMat<usize, f64>, w: Complex64| {
+        for j in 0..n {
+            let rows = a.row_idx_of_col_raw(j);
+            let vals = a.val_of_col(j);
+            for (&i, &x) in rows.iter().zip(vals) {
+                t.push(Triplet::new(i, j, c64::new(w.re * x, w.im * x)));
+            }
+        }
+    };
+    add(&ke, Complex64::new(1.0, 0.0));
+    add(&kc, core_scale);
+    add(&sys.m, Complex64::new(-omega * omega, 0.0));
+    let z = SparseColMat::<usize, c64>::try_new_from_triplets(n, n, &t)
+        .map_err(|e| BenchError::Solver(format!("sparse assembly: {e:?}")))?;
+    let lu = z
+        .sp_lu()
+        .map_err(|e| BenchError::Solver(format!("sparse LU of Z(omega): {e:?}")))?;
+    let mut rhs = Mat::from_fn(n, 1, |i, _| c64::new(load[i], 0.0));
+    lu.solve_in_place(rhs.as_mut());
+    Ok(dofs
+        .iter()
+        .map(|&d| Complex64::new(rhs[(d, 0)].re, rhs[(d, 0)].im))
+        .collect())
+}

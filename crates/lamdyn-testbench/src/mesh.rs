@@ -1,0 +1,246 @@
+//! Structured meshes of 20-node hexahedra for a layered plate or shallow shell: every layer
+//! gets its own elements through the thickness.
+//!
+//! The reference surface is the laminate's mid-thickness surface z₀(x, y) = (x − a/2)²/(2R_x) +
+//! (y − b/2)²/(2R_y) over [0, a] × [0, b] (a shallow doubly curved cap; flat when both radii are
+//! infinite). A point at height s through the thickness lies at (x, y, z₀) + s n(x, y), n the
+//! unit normal of the surface, so every layer keeps its thickness on the curved part.
+//!
+//! Nodes sit on a fine grid of (2n_x + 1) × (2n_y + 1) × (2n_z + 1) points; the serendipity
+//! element uses those with at most one odd index (corners and mid-edges).
+
+use crate::error::BenchError;
+use crate::hex20::NODES;
+
+/// One layer of the stack, bottom to top.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LayerMesh {
+    /// Thickness, m.
+    pub thickness_m: f64,
+    /// Elements through this layer's thickness (at least 1).
+    pub elements: usize,
+}
+
+/// A layered plate or shallow shell to mesh (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayeredPlateSpec {
+    /// Length a along x, m.
+    pub length_m: f64,
+    /// Width b along y, m.
+    pub width_m: f64,
+    /// Elements along x.
+    pub nx: usize,
+    /// Elements along y.
+    pub ny: usize,
+    /// Radius of curvature along x, m (infinite: straight).
+    pub radius_x_m: f64,
+    /// Radius of curvature along y, m (infinite: straight).
+    pub radius_y_m: f64,
+    /// The layers, bottom to top.
+    pub layers: Vec<LayerMesh>,
+}
+
+/// A hexahedral mesh: nodes, 20-node elements (C3D20 order) and each element's layer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HexMesh {
+    /// Node coordinates, m.
+    pub nodes: Vec<[f64; 3]>,
+    /// Element connectivity.
+    pub elements: Vec<[usize; 20]>,
+    /// Layer index of each element.
+    pub layer: Vec<usize>,
+}
+
+impl LayeredPlateSpec {
+    /// Checks the numbers (positive sizes and counts, radii positive or infinite).
+    fn validate(&self) -> Result<(), BenchError> {
+        let bad = |field: &str, why: String| Err(BenchError::Invalid(format!("{field}: {why}")));
+        for (name, v) in [("length_m", self.length_m), ("width_m", self.width_m)] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, format!("{v} must be a positive length"));
+            }
+        }
+        for (name, v) in [
+            ("radius_x_m", self.radius_x_m),
+            ("radius_y_m", self.radius_y_m),
+        ] {
+            if v.is_nan() || v <= 0.0 {
+                return bad(name, format!("{v} must be positive (inf for straight)"));
+            }
+        }
+        if self.nx == 0 || self.ny == 0 {
+            return bad("elements", format!("{} x {} in plane", self.nx, self.ny));
+        }
+        if self.layers.is_empty() {
+            return bad("layers", "no layer".into());
+        }
+        for (i, l) in self.layers.iter().enumerate() {
+            if !(l.thickness_m.is_finite() && l.thickness_m > 0.0) {
+                return bad(
+                    &format!("layer {}", i + 1),
+                    format!("thickness {} m must be positive", l.thickness_m),
+                );
+            }
+            if l.elements == 0 {
+                return bad(
+                    &format!("layer {}", i + 1),
+                    "needs at least one element".into(),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Mid-surface height and unit normal at (x, y).
+    fn surface(&self, x: f64, y: f64) -> (f64, [f64; 3]) {
+        let (dx, dy) = (x - 0.5 * self.length_m, y - 0.5 * self.width_m);
+        let z = dx * dx / (2.0 * self.radius_x_m) + dy * dy / (2.0 * self.radius_y_m);
+        let (gx, gy) = (dx / self.radius_x_m, dy / self.radius_y_m);
+        let norm = (1.0 + gx * gx + gy * gy).sqrt();
+        (z, [-gx / norm, -gy / norm, 1.0 / norm])
+    }
+
+    /// Builds the mesh.
+    ///
+    /// # Errors
+    /// [`BenchError::Invalid`] naming the field for non-positive sizes, thicknesses or counts.
+    pub fn build(&self) -> Result<HexMesh, BenchError> {
+        self.validate()?;
+        // Heights s of the fine grid through the thickness (2 n_z + 1), mid-thickness at 0.
+        let total: f64 = self.layers.iter().map(|l| l.thickness_m).sum();
+        let mut s = vec![-0.5 * total];
+        let mut fine_layer = Vec::new();
+        for (li, l) in self.layers.iter().enumerate() {
+            let h = l.thickness_m / (2 * l.elements) as f64;
+            for _ in 0..2 * l.elements {
+                s.push(s[s.len() - 1] + h);
+            }
+            fine_layer.extend(std::iter::repeat_n(li, l.elements));
+        }
+        let (fx, fy, fz) = (2 * self.nx + 1, 2 * self.ny + 1, s.len());
+        let mut id = vec![usize::MAX; fx * fy * fz];
+        let mut nodes = Vec::new();
+        for k in 0..fz {
+            for j in 0..fy {
+                for i in 0..fx {
+                    if (i % 2) + (j % 2) + (k % 2) > 1 {
+                        continue;
+                    }
+                    let x = self.length_m * i as f64 / (fx - 1) as f64;
+                    let y = self.width_m * j as f64 / (fy - 1) as f64;
+                    let (z, n) = self.surface(x, y);
+                    id[(k * fy + j) * fx + i] = nodes.len();
+                    nodes.push([x + s[k] * n[0], y + s[k] * n[1], z + s[k] * n[2]]);
+                }
+            }
+        }
+        let nz = fz / 2;
+        let mut elements = Vec::with_capacity(self.nx * self.ny * nz);
+        let mut layer = Vec::with_capacity(elements.capacity());
+        for ek in 0..nz {
+            for ej in 0..self.ny {
+                for ei in 0..self.nx {
+                    let mut conn = [0; 20];
+                    for (a, c) in NODES.iter().enumerate() {
+                        let i = 2 * ei + (c[0] + 1.0) as usize;
+                        let j = 2 * ej + (c[1] + 1.0) as usize;
+                        let k = 2 * ek + (c[2] + 1.0) as usize;
+                        conn[a] = id[(k * fy + j) * fx + i];
+                    }
+                    elements.push(conn);
+                    layer.push(fine_layer[ek]);
+                }
+            }
+        }
+        Ok(HexMesh {
+            nodes,
+            elements,
+            layer,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(rx: f64) -> LayeredPlateSpec {
+        LayeredPlateSpec {
+            length_m: 0.6,
+            width_m: 0.4,
+            nx: 3,
+            ny: 2,
+            radius_x_m: rx,
+            radius_y_m: f64::INFINITY,
+            layers: vec![
+                LayerMesh {
+                    thickness_m: 0.003,
+                    elements: 1,
+                },
+                LayerMesh {
+                    thickness_m: 0.001,
+                    elements: 2,
+                },
+                LayerMesh {
+                    thickness_m: 0.003,
+                    elements: 1,
+                },
+            ],
+        }
+    }
+
+    /// Node and element counts of the serendipity grid; every node used; layers in order.
+    #[test]
+    fn counts_and_layers() {
+        let m = spec(f64::INFINITY).build().unwrap();
+        let (nx, ny, nz) = (3, 2, 4);
+        let corners = (nx + 1) * (ny + 1) * (nz + 1);
+        let edges = nx * (ny + 1) * (nz + 1) + ny * (nx + 1) * (nz + 1) + nz * (nx + 1) * (ny + 1);
+        assert_eq!(m.nodes.len(), corners + edges);
+        assert_eq!(m.elements.len(), nx * ny * nz);
+        let mut used = vec![false; m.nodes.len()];
+        m.elements.iter().flatten().for_each(|&n| used[n] = true);
+        assert!(used.iter().all(|u| *u));
+        assert_eq!(m.layer[..6], [0; 6]);
+        assert_eq!(m.layer[6..18], [1; 12]);
+        assert_eq!(m.layer[18..], [2; 6]);
+        // Flat: bottom at −3.5 mm, top at +3.5 mm.
+        let zmin = m.nodes.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+        assert!((zmin + 0.0035).abs() < 1e-15);
+    }
+
+    /// On a curved mesh each layer keeps its thickness along the normal, and every element has
+    /// a positive Jacobian.
+    #[test]
+    fn curved_layers_keep_their_thickness() {
+        let s = spec(1.0);
+        let m = s.build().unwrap();
+        let glass = crate::hex20::Elastic {
+            young_pa: 70e9,
+            poisson: 0.22,
+            density_kg_m3: 2500.0,
+        };
+        for e in &m.elements {
+            let x: [[f64; 3]; 20] = std::array::from_fn(|a| m.nodes[e[a]]);
+            assert!(crate::hex20::matrices(&x, &glass).is_some());
+        }
+        // Corner node 0 of element 0 (bottom) to node 4 (top of the bottom layer): 3 mm.
+        let e = m.elements[0];
+        let d: f64 = (0..3)
+            .map(|c| (m.nodes[e[4]][c] - m.nodes[e[0]][c]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((d - 0.003).abs() < 1e-15, "{d}");
+    }
+
+    #[test]
+    fn bad_specs_name_the_field() {
+        let mut s = spec(1.0);
+        s.layers[1].thickness_m = 0.0;
+        let e = s.build().unwrap_err().to_string();
+        assert!(e.contains("layer 2") && e.contains("thickness"), "{e}");
+        let mut s = spec(-1.0);
+        s.nx = 3;
+        assert!(s.build().unwrap_err().to_string().contains("radius_x_m"));
+    }
+}

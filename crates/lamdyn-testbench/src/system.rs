@@ -1,0 +1,165 @@
+//! Assembly of the layered hexahedral model into sparse K and M, and its lowest modes by the
+//! shift-invert Lanczos of lamdyn-fem on a faer sparse Cholesky of K − σM.
+//!
+//! Each layer has its own material; K = Σ_layers K_l, so a layer's stiffness can later be
+//! scaled by a frequency-dependent modulus (the core). Free-free models have six zero
+//! eigenvalues; a negative shift σ keeps K − σM positive definite.
+
+use crate::error::BenchError;
+use crate::hex20::{Elastic, matrices};
+use crate::mesh::HexMesh;
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, MatMut, MatRef, Par, Side};
+use lamdyn_fem::eigen::lanczos::{LanczosParams, ShiftInvert, lanczos};
+use rayon::prelude::*;
+
+/// Sparse stiffness per layer and the total mass of a layered hexahedral model.
+pub struct LayeredSystem {
+    /// Stiffness of each layer's elements (full symmetric storage), N/m.
+    pub k_layers: Vec<SparseColMat<usize, f64>>,
+    /// Consistent mass, kg.
+    pub m: SparseColMat<usize, f64>,
+    /// Dofs: 3 per node (u_x, u_y, u_z).
+    pub n_dofs: usize,
+}
+
+impl LayeredSystem {
+    /// Assembles `mesh` with one material per layer.
+    ///
+    /// # Errors
+    /// [`BenchError::Invalid`] for a material count that differs from the layers, or an element
+    /// with a non-positive Jacobian.
+    pub fn assemble(mesh: &HexMesh, materials: &[Elastic]) -> Result<Self, BenchError> {
+        let n_layers = mesh.layer.iter().max().map_or(0, |l| l + 1);
+        if materials.len() != n_layers {
+            return Err(BenchError::Invalid(format!(
+                "{} materials for {n_layers} layers",
+                materials.len()
+            )));
+        }
+        let n = 3 * mesh.nodes.len();
+        let element: Vec<(usize, Vec<f64>, Vec<f64>)> = mesh
+            .elements
+            .par_iter()
+            .zip(&mesh.layer)
+            .enumerate()
+            .map(|(e, (conn, &l))| {
+                let x: [[f64; 3]; 20] = std::array::from_fn(|a| mesh.nodes[conn[a]]);
+                matrices(&x, &materials[l])
+                    .map(|(k, m)| (l, k, m))
+                    .ok_or_else(|| {
+                        BenchError::Invalid(format!("element {e}: non-positive Jacobian"))
+                    })
+            })
+            .collect::<Result<_, _>>()?;
+        let dofs = |conn: &[usize; 20]| -> [usize; 60] {
+            std::array::from_fn(|q| 3 * conn[q / 3] + q % 3)
+        };
+        let mut k_trip: Vec<Vec<Triplet<usize, usize, f64>>> = vec![Vec::new(); n_layers];
+        let mut m_trip = Vec::with_capacity(mesh.elements.len() * 3600);
+        for (conn, (l, k, m)) in mesh.elements.iter().zip(&element) {
+            let d = dofs(conn);
+            for p in 0..60 {
+                for q in 0..60 {
+                    k_trip[*l].push(Triplet::new(d[p], d[q], k[p * 60 + q]));
+                    if m[p * 60 + q] != 0.0 {
+                        m_trip.push(Triplet::new(d[p], d[q], m[p * 60 + q]));
+                    }
+                }
+            }
+        }
+        let build = |t: &[Triplet<usize, usize, f64>]| {
+            SparseColMat::try_new_from_triplets(n, n, t)
+                .map_err(|e| BenchError::Solver(format!("sparse assembly: {e:?}")))
+        };
+        Ok(Self {
+            k_layers: k_trip.iter().map(|t| build(t)).collect::<Result<_, _>>()?,
+            m: build(&m_trip)?,
+            n_dofs: n,
+        })
+    }
+
+    /// Total stiffness with layer l's stiffness scaled by `scale[l]`.
+    pub fn stiffness(&self, scale: &[f64]) -> SparseColMat<usize, f64> {
+        let mut k = &self.k_layers[0] * scale[0];
+        for (kl, s) in self.k_layers.iter().zip(scale).skip(1) {
+            k = &k + &(kl * *s);
+        }
+        k
+    }
+
+    /// The `count` lowest eigenpairs (ω² in rad²/s², M-orthonormal vectors) of K φ = ω² M φ
+    /// with layer stiffnesses scaled by `scale`, by shift-invert Lanczos about `shift` (rad²/s²;
+    /// negative for a free-free model).
+    ///
+    /// # Errors
+    /// [`BenchError::Solver`] if K − σM is not positive definite or Lanczos does not converge.
+    pub fn modes(
+        &self,
+        scale: &[f64],
+        count: usize,
+        shift: f64,
+    ) -> Result<(Vec<f64>, Mat<f64>), BenchError> {
+        let k = self.stiffness(scale);
+        let shifted = &k + &(&self.m * (-shift));
+        let llt = shifted.sp_cholesky(Side::Lower).map_err(|e| {
+            BenchError::Solver(format!("K - sigma M is not positive definite: {e:?}"))
+        })?;
+        let op = Operator {
+            llt,
+            m: &self.m,
+            n: self.n_dofs,
+        };
+        let block = 4;
+        let out = lanczos(
+            &op,
+            LanczosParams {
+                wanted: count,
+                subspace: count + 10 * block,
+                block,
+                tolerance: 1e-12,
+                max_restarts: 200,
+                seed: 2026,
+                par: Par::Seq,
+            },
+            Mat::<f64>::zeros(self.n_dofs, 0).as_ref(),
+            Mat::<f64>::zeros(self.n_dofs, 0).as_ref(),
+            &mut |_| {},
+        );
+        if out.converged < count {
+            return Err(BenchError::Solver(format!(
+                "Lanczos converged {} of {count} modes",
+                out.converged
+            )));
+        }
+        // θ = 1/(λ − σ), descending θ = ascending λ.
+        let lambda = out.theta.iter().map(|t| shift + 1.0 / t).collect();
+        Ok((lambda, out.vectors))
+    }
+}
+
+struct Operator<'a> {
+    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    m: &'a SparseColMat<usize, f64>,
+    n: usize,
+}
+
+impl ShiftInvert for Operator<'_> {
+    fn dim(&self) -> usize {
+        self.n
+    }
+    fn mass(&self, x: MatRef<'_, f64>, y: MatMut<'_, f64>) {
+        faer::sparse::linalg::matmul::sparse_dense_matmul(
+            y,
+            faer::Accum::Replace,
+            self.m.as_ref(),
+            x,
+            1.0,
+            Par::Seq,
+        );
+    }
+    fn solve(&self, mut x: MatMut<'_, f64>) {
+        self.llt.solve_in_place(x.as_mut());
+    }
+}
