@@ -120,6 +120,23 @@ impl ReducedModel {
         })
     }
 
+    /// Complex eigenvalues λ = ω²(1 + iη) of the reduced model with a frequency-independent core
+    /// scale s (Vᵀ M V = I, so the eigenvalues of Vᵀ(K_e + s K_c)V), increasing real part: the
+    /// natural frequencies √Re λ/2π and modal loss factors Im λ/Re λ.
+    pub fn complex_eigenvalues(&self, core_scale: Complex64) -> Vec<Complex64> {
+        let m = self.size();
+        let z = Mat::from_fn(m, m, |i, j| {
+            let v = Complex64::new(self.k_elastic[(i, j)], 0.0) + core_scale * self.k_core[(i, j)];
+            c64::new(v.re, v.im)
+        });
+        let mut out: Vec<Complex64> = z
+            .eigenvalues()
+            .map(|v| v.iter().map(|e| Complex64::new(e.re, e.im)).collect())
+            .unwrap_or_default();
+        out.sort_by(|a, b| a.re.total_cmp(&b.re));
+        out
+    }
+
     /// Basis size m.
     pub fn size(&self) -> usize {
         self.basis.ncols()

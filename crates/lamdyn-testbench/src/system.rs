@@ -22,6 +22,8 @@ pub struct LayeredSystem {
     pub m: SparseColMat<usize, f64>,
     /// Dofs: 3 per node (u_x, u_y, u_z).
     pub n_dofs: usize,
+    /// Grounded springs (supports) on single dofs, N/m, added to every stiffness.
+    pub springs: Option<SparseColMat<usize, f64>>,
 }
 
 impl LayeredSystem {
@@ -77,16 +79,45 @@ impl LayeredSystem {
             k_layers: k_trip.iter().map(|t| build(t)).collect::<Result<_, _>>()?,
             m: build(&m_trip)?,
             n_dofs: n,
+            springs: None,
         })
     }
 
-    /// Total stiffness with layer l's stiffness scaled by `scale[l]`.
+    /// Adds grounded springs (dof, stiffness N/m): elastic supports, or with a stiffness far
+    /// above the structure's (a penalty) fixed dofs.
+    ///
+    /// # Errors
+    /// [`BenchError::Invalid`] for a dof out of range or a negative or non-finite stiffness.
+    pub fn add_springs(&mut self, springs: &[(usize, f64)]) -> Result<(), BenchError> {
+        let mut t: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(springs.len());
+        for &(d, k) in springs {
+            if d >= self.n_dofs || !(k.is_finite() && k >= 0.0) {
+                return Err(BenchError::Invalid(format!(
+                    "spring on dof {d} of {} with stiffness {k} N/m",
+                    self.n_dofs
+                )));
+            }
+            t.push(Triplet::new(d, d, k));
+        }
+        let add = SparseColMat::try_new_from_triplets(self.n_dofs, self.n_dofs, &t)
+            .map_err(|e| BenchError::Solver(format!("springs: {e:?}")))?;
+        self.springs = Some(match self.springs.take() {
+            Some(s) => &s + &add,
+            None => add,
+        });
+        Ok(())
+    }
+
+    /// Total stiffness with layer l's stiffness scaled by `scale[l]`, springs included.
     pub fn stiffness(&self, scale: &[f64]) -> SparseColMat<usize, f64> {
         let mut k = &self.k_layers[0] * scale[0];
         for (kl, s) in self.k_layers.iter().zip(scale).skip(1) {
             k = &k + &(kl * *s);
         }
-        k
+        match &self.springs {
+            Some(sp) => &k + sp,
+            None => k,
+        }
     }
 
     /// The `count` lowest eigenpairs (ω² in rad²/s², M-orthonormal vectors) of K φ = ω² M φ
