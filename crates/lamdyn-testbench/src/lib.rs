@@ -9,6 +9,7 @@
 //! | [`cases`] | named cases: the CalculiX cross-check laminate |
 //! | [`frf`] | FRFs with a frequency-dependent core: reduced basis, and the direct check |
 //! | [`hex20`] | the C3D20 element: shape functions, stiffness, consistent mass |
+//! | [`impact`] | a simulated impact test: sensor grid, hammer, accelerance FRFs, noise |
 //! | [`mesh`] | layered plates and shallow shells of hexahedra |
 //! | [`system`] | sparse K per layer and M; lowest modes by shift-invert Lanczos |
 //!
@@ -21,6 +22,7 @@ pub mod cases;
 mod error;
 pub mod frf;
 pub mod hex20;
+pub mod impact;
 pub mod mesh;
 pub mod system;
 

@@ -49,6 +49,8 @@ pub struct HexMesh {
     pub elements: Vec<[usize; 20]>,
     /// Layer index of each element.
     pub layer: Vec<usize>,
+    /// Nodes of the top surface with its outward unit normal there.
+    pub top: Vec<(usize, [f64; 3])>,
 }
 
 impl LayeredPlateSpec {
@@ -120,6 +122,7 @@ impl LayeredPlateSpec {
         let (fx, fy, fz) = (2 * self.nx + 1, 2 * self.ny + 1, s.len());
         let mut id = vec![usize::MAX; fx * fy * fz];
         let mut nodes = Vec::new();
+        let mut top = Vec::new();
         for k in 0..fz {
             for j in 0..fy {
                 for i in 0..fx {
@@ -130,6 +133,9 @@ impl LayeredPlateSpec {
                     let y = self.width_m * j as f64 / (fy - 1) as f64;
                     let (z, n) = self.surface(x, y);
                     id[(k * fy + j) * fx + i] = nodes.len();
+                    if k == fz - 1 {
+                        top.push((nodes.len(), n));
+                    }
                     nodes.push([x + s[k] * n[0], y + s[k] * n[1], z + s[k] * n[2]]);
                 }
             }
@@ -156,6 +162,7 @@ impl LayeredPlateSpec {
             nodes,
             elements,
             layer,
+            top,
         })
     }
 }
