@@ -72,26 +72,21 @@ fn simply_supported_sandwich_beam_matches_mead_markus() {
     let rb = ReducedModel::new(&sys, 1, &[1.0, core_star.norm()], 12, &[load], -1.0).unwrap();
     let lambda = rb.complex_eigenvalues(core_star);
 
+    let face = Face {
+        thickness_m: hf,
+        density_kg_m3: rho_glass,
+        young_pa: e_glass,
+        poisson: 0.0,
+        loss_factor: 0.0,
+    };
     let stack = SandwichStack::new(
-        Face {
-            thickness_m: hf,
-            density_kg_m3: rho_glass,
-            young_pa: e_glass,
-            poisson: 0.0,
-            loss_factor: 0.0,
-        },
+        face,
         CoreGeometry {
             thickness_m: hc,
             density_kg_m3: rho_core,
             poisson: 0.0,
         },
-        Face {
-            thickness_m: hf,
-            density_kg_m3: rho_glass,
-            young_pa: e_glass,
-            poisson: 0.0,
-            loss_factor: 0.0,
-        },
+        face,
         None,
     )
     .unwrap();
