@@ -1,5 +1,5 @@
 //! Roots of a monic real matrix polynomial A(x) = I xⁿ + Σ_{l<n} α_l x^l (N_i × N_i blocks) and
-//! its null vectors at a root: the last step of LSCF (N_i = 1) and PolyMAX (N_i > 1).
+//! its null vector at a root: the last step of LSCF (N_i = 1) and PolyMAX (N_i > 1).
 //!
 //! The roots are the eigenvalues of the block companion matrix [Gohberg, Lancaster & Rodman,
 //! *Matrix Polynomials*, 1982, §1.1]
@@ -17,9 +17,9 @@
 //! skips the Hessenberg reduction a general eigensolver starts with (half the time of a
 //! stabilization diagram on many FRFs). Block companions (N_i > 1), and the rare companion on
 //! which the iteration does not converge, go to faer's real eigensolver without threads (the
-//! model orders already run in parallel). Null vectors at a root x are
+//! model orders already run in parallel). The right null vector v (A(x) v = 0) at a root x is
 //! found by one step of inverse iteration on A(x) (x is a root to machine precision, so one step
-//! converges): the right one v (A(x) v = 0) and the left one l (lᵀ A(x) = 0).
+//! converges).
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
@@ -73,18 +73,12 @@ impl MatrixPolynomial {
         })
     }
 
-    /// Right and left null vectors (v, l) of A(x) at a root x, each scaled to unit 2-norm.
-    pub fn null_vectors(&self, x: Complex64) -> (Vec<Complex64>, Vec<Complex64>) {
-        let m = self.size;
-        if m == 1 {
-            let one = vec![Complex64::new(1.0, 0.0)];
-            return (one.clone(), one);
+    /// The right null vector v of A(x) (A(x) v = 0) at a root x, scaled to unit 2-norm.
+    pub fn null_vector(&self, x: Complex64) -> Vec<Complex64> {
+        if self.size == 1 {
+            return vec![Complex64::new(1.0, 0.0)];
         }
-        let a = self.at(x);
-        (
-            inverse_iteration(&a),
-            inverse_iteration(&a.transpose().to_owned()),
-        )
+        inverse_iteration(&self.at(x))
     }
 }
 
@@ -406,8 +400,7 @@ mod tests {
 
     /// A(x) = I x² + α_1 x + α_0 built from known roots: (x − 2)(x − 3) on the diagonal and
     /// (x + 1)(x − 0.5) coupled by a rotation Q: A = Q diag(p1, p2) Qᵀ. Its roots are the four
-    /// scalar roots, and the null vectors at x = 2 are the first column of Q (right and left,
-    /// since A is symmetric).
+    /// scalar roots, and the null vector at x = 2 is the first column of Q.
     #[test]
     fn roots_and_null_vectors_of_a_known_matrix_polynomial() {
         let (c, s) = (0.6_f64, 0.8_f64);
@@ -433,11 +426,9 @@ mod tests {
         for (got, want) in r.iter().zip([-0.5, 1.0, 2.0, 3.0]) {
             assert!((got - want).abs() < 1e-12, "{r:?}");
         }
-        let (v, l) = poly.null_vectors(Complex64::new(2.0, 0.0));
-        for w in [v, l] {
-            // Parallel to (c, s): |wᴴ q1| = 1.
-            let dot = w[0].conj() * c + w[1].conj() * s;
-            assert!((dot.norm() - 1.0).abs() < 1e-10, "{w:?}");
-        }
+        let w = poly.null_vector(Complex64::new(2.0, 0.0));
+        // Parallel to (c, s): |wᴴ q1| = 1.
+        let dot = w[0].conj() * c + w[1].conj() * s;
+        assert!((dot.norm() - 1.0).abs() < 1e-10, "{w:?}");
     }
 }

@@ -540,7 +540,7 @@ impl OrderModel<'_> {
         // Correlations c_rb(m) (rows b·lags + m + n), real and imaginary parts side by side.
         let mut corr = Mat::<f64>::zeros(ni * lags, 2 * np);
         for (r, &x) in xs.iter().enumerate() {
-            let (v, _) = self.poly.null_vectors(x);
+            let v = self.poly.null_vector(x);
             let yr: Vec<Complex64> = (0..=n)
                 .map(|j| Complex64::new(y[(j, 2 * r)], y[(j, 2 * r + 1)]))
                 .collect();

@@ -142,10 +142,17 @@ impl ReducedModel {
         self.basis.ncols()
     }
 
-    /// Responses u at `dofs` to the load `load` at ω (rad/s) with core scale s(ω), m/N.
+    /// The load in the basis, Vᵀ f: computed once, used at every line by [`Self::response`].
+    pub fn project_load(&self, load: &[f64]) -> Vec<f64> {
+        let f = self.basis.transpose() * Mat::from_fn(load.len(), 1, |i, _| load[i]);
+        (0..f.nrows()).map(|i| f[(i, 0)]).collect()
+    }
+
+    /// Responses u at `dofs` to the load with basis coordinates `load_r` ([`Self::project_load`])
+    /// at ω (rad/s) with core scale s(ω), m/N.
     pub fn response(
         &self,
-        load: &[f64],
+        load_r: &[f64],
         omega: f64,
         core_scale: Complex64,
         dofs: &[usize],
@@ -158,8 +165,7 @@ impl ReducedModel {
             ) + core_scale * self.k_core[(i, j)];
             c64::new(v.re, v.im)
         });
-        let f = self.basis.transpose() * Mat::from_fn(load.len(), 1, |i, _| load[i]);
-        let rhs = Mat::from_fn(m, 1, |i, _| c64::new(f[(i, 0)], 0.0));
+        let rhs = Mat::from_fn(m, 1, |i, _| c64::new(load_r[i], 0.0));
         let q = z.partial_piv_lu().solve(&rhs);
         dofs.iter()
             .map(|&d| {

@@ -186,10 +186,11 @@ pub fn simulate(
         .iter()
         .flat_map(|(node, _)| (0..3).map(move |c| 3 * node + c))
         .collect();
+    let load_r = model.project_load(&load);
     let mut curves = vec![Vec::with_capacity(freqs.len()); axes.len()];
     for &f in &freqs {
         let w = 2.0 * PI * f;
-        let u = model.response(&load, w, core_scale(w), &dofs);
+        let u = model.response(&load_r, w, core_scale(w), &dofs);
         for (a, (_, d)) in axes.iter().enumerate() {
             let r: Complex64 = (0..3).map(|c| u[3 * a + c] * d[c]).sum();
             curves[a].push(-w * w * r);
