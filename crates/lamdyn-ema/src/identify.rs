@@ -34,8 +34,12 @@ pub struct EmaSettings {
     /// Pick the stable pole nearest each of these frequencies (Hz) instead of the automatic
     /// selection.
     pub near_hz: Option<Vec<f64>>,
-    /// Window around each `near_hz` frequency, Hz.
+    /// Window around each `near_hz` and `reject_hz` frequency, Hz.
     pub window_hz: f64,
+    /// Poles to reject (support resonances, rigid-body modes on soft supports), Hz: the modes
+    /// within `window_hz` of one stay in the modal model (they shape the regenerated FRFs) but
+    /// are reported apart, not as structural modes.
+    pub reject_hz: Vec<f64>,
     /// Levenberg–Marquardt iterations of the pole refinement (0: LSFD on the diagram's poles).
     pub refine_iterations: usize,
     /// Index of the driving-point response (mass-normalised shapes), if any.
@@ -55,6 +59,7 @@ impl Default for EmaSettings {
             mode_vectors: true,
             near_hz: None,
             window_hz: 1.0,
+            reject_hz: vec![],
             refine_iterations: 30,
             driving: None,
             exp_tau_s: None,
@@ -97,6 +102,8 @@ pub struct EmaResult {
     pub diagram: Vec<DiagramPole>,
     /// The modes, increasing frequency.
     pub modes: Vec<Mode>,
+    /// Modes rejected by `reject_hz` (still in the modal model).
+    pub rejected: Vec<Mode>,
     /// MAC between the modes' shapes.
     pub auto_mac: Vec<Vec<f64>>,
     /// FRAC of each regenerated curve (response-major, then reference) over the band.
@@ -233,7 +240,7 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
         })
         .collect();
     // Shapes over the responses for reference 0 (curve index i·nf).
-    let modes: Vec<Mode> = (0..fit.poles.len())
+    let all_modes: Vec<Mode> = (0..fit.poles.len())
         .map(|r| {
             let all = fit.shape(r, s.driving.map(|d| d * nf));
             let shape: Vec<Complex64> = (0..nr).map(|i| all[i * nf]).collect();
@@ -255,6 +262,11 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
             }
         })
         .collect();
+    let (rejected, modes): (Vec<Mode>, Vec<Mode>) = all_modes.into_iter().partition(|m| {
+        s.reject_hz
+            .iter()
+            .any(|f| (m.freq_hz - f).abs() <= s.window_hz)
+    });
     let auto_mac = modes
         .iter()
         .map(|a| modes.iter().map(|b| mac(&a.shape, &b.shape)).collect())
@@ -277,6 +289,7 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
         band_hz: band,
         diagram: diag,
         modes,
+        rejected,
         auto_mac,
         correlation,
         curve_names: names,

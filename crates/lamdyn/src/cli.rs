@@ -97,7 +97,11 @@ pub struct EmaArgs {
     /// selection.
     #[arg(long, value_name = "HZ,..", value_delimiter = ',', value_parser = finite)]
     pub near_hz: Option<Vec<f64>>,
-    /// Window around each --near-hz frequency, Hz [default: 1].
+    /// Reject the modes near these frequencies (support resonances): kept in the modal model,
+    /// reported apart.
+    #[arg(long, value_name = "HZ,..", value_delimiter = ',', value_parser = finite)]
+    pub reject_hz: Option<Vec<f64>>,
+    /// Window around each --near-hz and --reject-hz frequency, Hz [default: 1].
     #[arg(long, default_value_t = 1.0, value_parser = finite)]
     pub window_hz: f64,
     /// Name of the driving-point response (mass-normalised shapes).

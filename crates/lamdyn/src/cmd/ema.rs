@@ -152,6 +152,7 @@ fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
             args.order_step as usize,
         ),
         near_hz: args.near_hz.clone(),
+        reject_hz: args.reject_hz.clone().unwrap_or_default(),
         polymax: !args.single_reference,
         window_hz: args.window_hz,
         exp_tau_s: args.exp_tau_s,
@@ -343,6 +344,20 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
         peaks.row(vec![p.freq_hz.into(), p.value.into()]);
     }
     report.sections.push(corr);
+    if !r.rejected.is_empty() {
+        let mut rej = Section::new(
+            "rejected",
+            "Rejected poles (--reject-hz: kept in the modal model, not structural modes)",
+            vec![
+                Column::new("freq_hz", "f", "Hz", Fmt::Fixed(4)),
+                Column::new("damping_ratio", "zeta", "%", Fmt::Fixed(4)).scaled(0.01),
+            ],
+        );
+        for m in &r.rejected {
+            rej.row(vec![m.freq_hz.into(), m.damping_ratio.into()]);
+        }
+        report.sections.push(rej);
+    }
     report.sections.push(peaks);
     let low: Vec<&String> = r
         .curve_names
@@ -365,6 +380,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
     let cell = |v: f64| serde_json::json!(v);
     report.extra = Some(serde_json::json!({
         "modes": r.modes,
+        "rejected": r.rejected,
         "auto_mac": r.auto_mac,
         "diagram": r.diagram.iter().map(|p| serde_json::json!({"order": p.order, "freq_hz": cell(p.freq_hz), "damping_ratio": cell(p.damping), "stability": p.stability})).collect::<Vec<_>>(),
         "cmif_first": r.cmif.iter().map(|v| v[0]).collect::<Vec<_>>(),

@@ -68,6 +68,33 @@ fn beam_modes_and_correlation() {
             .len(),
         3
     );
+    // Rejecting the 142 Hz mode (as a support resonance would be): five structural modes, the
+    // rejected one reported apart and still in the regenerated FRFs.
+    let (code, out, err) = lamdyn(&[
+        "ema",
+        "--channels",
+        &c,
+        "--frf",
+        &f,
+        "--band-hz",
+        "10,1000",
+        "--reject-hz",
+        "142.2",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(doc["rows"].as_array().unwrap().len(), 5);
+    let rej = doc["sections"]["rejected"].as_array().unwrap();
+    assert_eq!(rej.len(), 1);
+    assert!((rej[0]["freq_hz"].as_f64().unwrap() - 142.18).abs() < 0.05);
+    assert!(
+        doc["sections"]["correlation"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|r| r["frac"].as_f64().unwrap() > 0.95)
+    );
     let (code, text, _) = lamdyn(&["ema", "--channels", &c, "--frf", &f, "--band-hz", "10,1000"]);
     assert_eq!(code, 0);
     for needle in ["LSCF", "MPC", "FRAC", "CMIF peaks", "[Hz]"] {
