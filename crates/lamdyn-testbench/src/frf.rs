@@ -19,7 +19,8 @@
 use crate::error::BenchError;
 use crate::system::LayeredSystem;
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
 use faer::{Mat, Side, c64};
 use num_complex::Complex64;
 
@@ -214,42 +215,83 @@ fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
     Mat::from_fn(n, kept.len(), |i, j| kept[j][(i, 0)])
 }
 
-/// The direct route: u at `dofs` from the sparse complex solve of Z(ω) u = f.
-///
-/// # Errors
-/// [`BenchError::Solver`] if the sparse LU fails (Z singular).
-pub fn direct_response(
-    sys: &LayeredSystem,
-    core_layer: usize,
-    load: &[f64],
-    omega: f64,
-    core_scale: Complex64,
-    dofs: &[usize],
-) -> Result<Vec<Complex64>, BenchError> {
-    let (ke, kc) = split_stiffness(sys, core_layer);
-    let n = sys.n_dofs;
-    let mut t: Vec<Triplet<usize, usize, c64>> = Vec::new();
-    let mut add = |a: &SparseColMat<usize, f64>, w: Complex64| {
-        for j in 0..n {
-            let rows = a.row_idx_of_col_raw(j);
-            let vals = a.val_of_col(j);
-            for (&i, &x) in rows.iter().zip(vals) {
-                t.push(Triplet::new(i, j, c64::new(w.re * x, w.im * x)));
-            }
-        }
-    };
-    add(&ke, Complex64::new(1.0, 0.0));
-    add(&kc, core_scale);
-    add(&sys.m, Complex64::new(-omega * omega, 0.0));
-    let z = SparseColMat::<usize, c64>::try_new_from_triplets(n, n, &t)
-        .map_err(|e| BenchError::Solver(format!("sparse assembly: {e:?}")))?;
-    let lu = z
-        .sp_lu()
-        .map_err(|e| BenchError::Solver(format!("sparse LU of Z(omega): {e:?}")))?;
-    let mut rhs = Mat::from_fn(n, 1, |i, _| c64::new(load[i], 0.0));
-    lu.solve_in_place(rhs.as_mut());
-    Ok(dofs
-        .iter()
-        .map(|&d| Complex64::new(rhs[(d, 0)].re, rhs[(d, 0)].im))
-        .collect())
+/// The direct route: Z(ω) u = f by a sparse complex LU per line. K_e, K_c and M are laid on
+/// one common sparsity pattern, so the pattern and the symbolic LU (ordering, elimination tree)
+/// are built once and each line only sums the values and factors them numerically.
+pub struct DirectSolver {
+    pattern: SymbolicSparseColMat<usize>,
+    symbolic: SymbolicLu<usize>,
+    /// Values of K_e, K_c and M on `pattern`.
+    values: [Vec<f64>; 3],
+}
+
+impl DirectSolver {
+    /// The solver of `sys` with the core on layer `core_layer`.
+    ///
+    /// # Errors
+    /// [`BenchError::Solver`] if the pattern or its symbolic LU cannot be built.
+    pub fn new(sys: &LayeredSystem, core_layer: usize) -> Result<Self, BenchError> {
+        let (ke, kc) = split_stiffness(sys, core_layer);
+        let parts = [&ke, &kc, &sys.m];
+        let n = sys.n_dofs;
+        // Every matrix gets every coordinate of the three (zeros where it has none).
+        let on_pattern = |own: usize| {
+            let t: Vec<Triplet<usize, usize, f64>> = parts
+                .iter()
+                .enumerate()
+                .flat_map(|(p, a)| {
+                    (0..n).flat_map(move |j| {
+                        a.row_idx_of_col_raw(j)
+                            .iter()
+                            .zip(a.val_of_col(j))
+                            .map(move |(&i, &v)| Triplet::new(i, j, if p == own { v } else { 0.0 }))
+                    })
+                })
+                .collect();
+            SparseColMat::try_new_from_triplets(n, n, &t)
+                .map_err(|e| BenchError::Solver(format!("sparse assembly: {e:?}")))
+        };
+        let mats = [on_pattern(0)?, on_pattern(1)?, on_pattern(2)?];
+        let pattern = mats[0]
+            .symbolic()
+            .to_owned()
+            .map_err(|e| BenchError::Solver(format!("{e:?}")))?;
+        let symbolic = SymbolicLu::try_new(pattern.as_ref())
+            .map_err(|e| BenchError::Solver(format!("symbolic LU: {e:?}")))?;
+        let values = mats.map(|m| m.val().to_vec());
+        Ok(Self {
+            pattern,
+            symbolic,
+            values,
+        })
+    }
+
+    /// u at `dofs` from Z(ω) u = `load` with core scale s(ω), m/N.
+    ///
+    /// # Errors
+    /// [`BenchError::Solver`] if the numeric LU fails (Z singular).
+    pub fn response(
+        &self,
+        load: &[f64],
+        omega: f64,
+        core_scale: Complex64,
+        dofs: &[usize],
+    ) -> Result<Vec<Complex64>, BenchError> {
+        let [e, c, m] = &self.values;
+        let vals: Vec<c64> = (0..e.len())
+            .map(|k| {
+                let z = Complex64::new(e[k] - omega * omega * m[k], 0.0) + core_scale * c[k];
+                c64::new(z.re, z.im)
+            })
+            .collect();
+        let z = SparseColMatRef::new(self.pattern.as_ref(), &vals);
+        let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), z)
+            .map_err(|e| BenchError::Solver(format!("sparse LU of Z(omega): {e:?}")))?;
+        let mut rhs = Mat::from_fn(load.len(), 1, |i, _| c64::new(load[i], 0.0));
+        lu.solve_in_place(rhs.as_mut());
+        Ok(dofs
+            .iter()
+            .map(|&d| Complex64::new(rhs[(d, 0)].re, rhs[(d, 0)].im))
+            .collect())
+    }
 }

@@ -2,7 +2,7 @@
 
 use lamdyn_material::law::{FractionalZener, ViscoelasticLaw};
 use lamdyn_testbench::cases::{ELASTIC_CORE, ccx_check_laminate};
-use lamdyn_testbench::frf::{ReducedModel, direct_response};
+use lamdyn_testbench::frf::{DirectSolver, ReducedModel};
 use lamdyn_testbench::system::LayeredSystem;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -37,12 +37,13 @@ fn reduced_basis_matches_direct_solves() {
     let shift = -(2.0 * PI).powi(2);
     let rb = ReducedModel::new(&sys, 1, &ratios, 30, std::slice::from_ref(&load), shift).unwrap();
     let load_r = rb.project_load(&load);
+    let direct = DirectSolver::new(&sys, 1).unwrap();
     let mut worst: f64 = 0.0;
     for k in 0..20 {
         let omega = lo + (hi - lo) * k as f64 / 19.0;
         let s = law.modulus(omega) / g_a;
         let a = rb.response(&load_r, omega, s, &dofs);
-        let b = direct_response(&sys, 1, &load, omega, s, &dofs).unwrap();
+        let b = direct.response(&load, omega, s, &dofs).unwrap();
         let num: f64 = a
             .iter()
             .zip(&b)

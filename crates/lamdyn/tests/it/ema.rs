@@ -32,34 +32,42 @@ fn beam_csv(name: &str) -> (String, String) {
     (c.to_str().unwrap().into(), f.to_str().unwrap().into())
 }
 
+/// `lamdyn ema` on the beam CSV over 10–1000 Hz with `extra` arguments, as JSON (exit code 0).
+fn beam_json(c: &str, f: &str, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "ema",
+        "--channels",
+        c,
+        "--frf",
+        f,
+        "--band-hz",
+        "10,1000",
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    let (code, out, err) = lamdyn(&args);
+    assert_eq!(code, 0, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+/// Every regenerated FRF correlates above `min` with the measured one.
+fn all_frac_above(doc: &serde_json::Value, min: f64) -> bool {
+    doc["sections"]["correlation"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|r| r["frac"].as_f64().unwrap() > min)
+}
+
 #[test]
 fn beam_modes_and_correlation() {
     let (c, f) = beam_csv("ema-beam");
-    let (code, out, err) = lamdyn(&[
-        "ema",
-        "--channels",
-        &c,
-        "--frf",
-        &f,
-        "--band-hz",
-        "10,1000",
-        "--driving",
-        "1",
-        "--json",
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let doc = beam_json(&c, &f, &["--driving", "1"]);
     let rows = doc["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 6);
     let f1 = rows[0]["freq_hz"].as_f64().unwrap();
     assert!((f1 / 51.517 - 1.0).abs() < 1e-3, "{f1}");
-    assert!(
-        doc["sections"]["correlation"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .all(|r| r["frac"].as_f64().unwrap() > 0.95)
-    );
+    assert!(all_frac_above(&doc, 0.95));
     assert!(doc["details"]["diagram"].as_array().unwrap().len() > 100);
     assert_eq!(
         doc["details"]["modes"][0]["shape"]
@@ -70,31 +78,12 @@ fn beam_modes_and_correlation() {
     );
     // Rejecting the 142 Hz mode (as a support resonance would be): five structural modes, the
     // rejected one reported apart and still in the regenerated FRFs.
-    let (code, out, err) = lamdyn(&[
-        "ema",
-        "--channels",
-        &c,
-        "--frf",
-        &f,
-        "--band-hz",
-        "10,1000",
-        "--reject-hz",
-        "142.2",
-        "--json",
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let doc = beam_json(&c, &f, &["--reject-hz", "142.2"]);
     assert_eq!(doc["rows"].as_array().unwrap().len(), 5);
     let rej = doc["sections"]["rejected"].as_array().unwrap();
     assert_eq!(rej.len(), 1);
     assert!((rej[0]["freq_hz"].as_f64().unwrap() - 142.18).abs() < 0.05);
-    assert!(
-        doc["sections"]["correlation"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .all(|r| r["frac"].as_f64().unwrap() > 0.95)
-    );
+    assert!(all_frac_above(&doc, 0.95));
     let (code, text, _) = lamdyn(&["ema", "--channels", &c, "--frf", &f, "--band-hz", "10,1000"]);
     assert_eq!(code, 0);
     for needle in ["LSCF", "MPC", "FRAC", "CMIF peaks", "[Hz]"] {
