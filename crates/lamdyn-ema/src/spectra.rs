@@ -16,7 +16,8 @@
 //! [Fladung & Rost 1997]. (Windowing the force too keeps input and output consistent, so the
 //! correction is exact for the transfer function.)
 //!
-//! **Checks.** A double hit: after the force first falls below 10 % of the peak, it rises again
+//! **Checks.** Hits are numbered from 1 in messages. A double hit: after the force first falls
+//! below 10 % of the peak after the peak, it rises again
 //! above `double_hit` × the peak. An overload: three or more consecutive samples at the record's
 //! largest absolute value (a clipped converter), in force or response.
 
@@ -93,12 +94,19 @@ fn clipped(x: &[f64]) -> bool {
     false
 }
 
-fn double_hit(f: &[f64], start: usize, threshold: f64) -> bool {
-    let peak = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    let Some(fall) = f[start..].iter().position(|v| v.abs() < 0.1 * peak) else {
+/// Whether the force rises above `threshold` × its peak after first falling below 10 % of the
+/// peak *after* the peak (module docs; a trigger sample on the rising flank below 10 % is not
+/// a fall).
+fn double_hit(f: &[f64], threshold: f64) -> bool {
+    let (at, peak) =
+        f.iter().enumerate().fold(
+            (0, 0.0f64),
+            |(i, m), (k, v)| if v.abs() > m { (k, v.abs()) } else { (i, m) },
+        );
+    let Some(fall) = f[at..].iter().position(|v| v.abs() < 0.1 * peak) else {
         return false;
     };
-    f[start + fall..].iter().any(|v| v.abs() > threshold * peak)
+    f[at + fall..].iter().any(|v| v.abs() > threshold * peak)
 }
 
 /// The first sample whose |force| reaches `trigger` × the peak.
@@ -166,11 +174,12 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
     let mut warnings = Vec::new();
     let mut spectrum = fft.make_output_vec();
     for (h, hit) in hits.iter().enumerate() {
+        let hn = h + 1;
         if hit.responses.len() != n_resp {
             return Err(invalid(
                 "time data",
                 format!(
-                    "hit {h} has {} response channels, hit 0 has {n_resp}",
+                    "hit {hn} has {} response channels, hit 1 has {n_resp}",
                     hit.responses.len()
                 ),
             ));
@@ -180,7 +189,7 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
             return Err(invalid(
                 "time data",
                 format!(
-                    "hit {h}: response {c} has {} samples, the force {n}",
+                    "hit {hn}: response {c} has {} samples, the force {n}",
                     hit.responses[c].len()
                 ),
             ));
@@ -193,12 +202,12 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
         {
             return Err(invalid(
                 "time data",
-                format!("hit {h} holds a sample that is not finite"),
+                format!("hit {hn} holds a sample that is not finite"),
             ));
         }
         let peak = hit.force.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         if peak == 0.0 {
-            return Err(invalid("time data", format!("hit {h}: the force is zero")));
+            return Err(invalid("time data", format!("hit {hn}: the force is zero")));
         }
         let trig = trigger_index(&hit.force, s.trigger);
         let start = trig.saturating_sub(s.pretrigger);
@@ -206,20 +215,20 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
             return Err(invalid(
                 "time data",
                 format!(
-                    "hit {h}: {n} samples, but the record needs {} from sample {start}",
+                    "hit {hn}: {n} samples, but the record needs {} from sample {start}",
                     length
                 ),
             ));
         }
-        if double_hit(&hit.force, trig, s.double_hit) {
-            warnings.push(format!("hit {h}: double hit (the force rises above {:.0} % of its peak after the first impact)", 100.0 * s.double_hit));
+        if double_hit(&hit.force, s.double_hit) {
+            warnings.push(format!("hit {hn}: double hit (the force rises above {:.0} % of its peak after the first impact)", 100.0 * s.double_hit));
         }
         if clipped(&hit.force) {
-            warnings.push(format!("hit {h}: force overload (clipped samples)"));
+            warnings.push(format!("hit {hn}: force overload (clipped samples)"));
         }
         for (c, r) in hit.responses.iter().enumerate() {
             if clipped(r) {
-                warnings.push(format!("hit {h}: response {c} overload (clipped samples)"));
+                warnings.push(format!("hit {hn}: response {c} overload (clipped samples)"));
             }
         }
         let win: Vec<f64> = (0..length)

@@ -355,7 +355,23 @@ fn double_hits_and_bad_time_data_are_reported() {
         &settings,
     )
     .unwrap_err();
-    assert!(e.to_string().contains("response 0 has 2047 samples"), "{e}");
+    assert!(
+        e.to_string().contains("hit 1: response 0 has 2047 samples"),
+        "{e}"
+    );
+    // One clean pulse whose trigger sample sits on the rising flank between the trigger level
+    // (5 %) and the 10 % fall level: no double hit (the fall is searched after the peak).
+    let mut clean = vec![0.0; n];
+    clean[100..105].copy_from_slice(&[3.0, 30.0, 60.0, 25.0, 1.0]);
+    let sp = estimate(
+        &[Hit {
+            force: clean,
+            responses: vec![(0..n).map(|k| (0.01 * k as f64).sin()).collect()],
+        }],
+        &settings,
+    )
+    .unwrap();
+    assert!(sp.warnings.is_empty(), "{:?}", sp.warnings);
     let mut g = f.clone();
     g[7] = f64::NAN;
     assert!(

@@ -392,13 +392,55 @@ pub fn write_channels(set: &FrfSet) -> String {
     s
 }
 
-/// Writes the FRF file of a set (shortest round-trip numbers).
-pub fn write_frf(set: &FrfSet) -> String {
-    let q = match set.quantity() {
+/// Writes a time file (module docs) of one hit: the force under `reference`'s name and the
+/// responses under `responses`' names, t = k / rate.
+///
+/// # Errors
+/// [`FrfError::Inconsistent`] if the record's responses and `responses` differ in count or the
+/// signals differ in length.
+pub fn write_time(
+    record: &TimeRecord,
+    responses: &[Channel],
+    reference: &Channel,
+) -> Result<String, FrfError> {
+    let n = record.force.len();
+    if record.responses.len() != responses.len() || record.responses.iter().any(|r| r.len() != n) {
+        return Err(FrfError::Inconsistent {
+            context: "time record".into(),
+            reason: format!(
+                "{} response signals for {} channels, lengths must all be {n}",
+                record.responses.len(),
+                responses.len()
+            ),
+        });
+    }
+    let q = quantity_name(record.quantity);
+    let mut s = format!("# quantity = {q}\nt_s,{}", reference.name);
+    for c in responses {
+        let _ = write!(s, ",{}", c.name);
+    }
+    s.push('\n');
+    for k in 0..n {
+        let _ = write!(s, "{:e},{:e}", k as f64 / record.rate_hz, record.force[k]);
+        for r in &record.responses {
+            let _ = write!(s, ",{:e}", r[k]);
+        }
+        s.push('\n');
+    }
+    Ok(s)
+}
+
+fn quantity_name(q: Quantity) -> &'static str {
+    match q {
         Quantity::Receptance => "receptance",
         Quantity::Mobility => "mobility",
         Quantity::Accelerance => "accelerance",
-    };
+    }
+}
+
+/// Writes the FRF file of a set (shortest round-trip numbers).
+pub fn write_frf(set: &FrfSet) -> String {
+    let q = quantity_name(set.quantity());
     let mut s = format!("# quantity = {q}\nf_hz");
     for r in set.responses() {
         for f in set.references() {

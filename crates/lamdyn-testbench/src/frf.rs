@@ -3,9 +3,12 @@
 //!
 //! With the core layer's stiffness assembled at a modulus G_a, the dynamic stiffness at ω is
 //!
-//!   Z(ω) = K_e + s(ω) K_c − ω² M,  s(ω) = G*(ω)/G_a,
+//!   Z(ω) = (1 + iη_e) K_e + s(ω) K_c + K_s + iω C_s − ω² M,  s(ω) = G*(ω)/G_a,
 //!
-//! (K_e the elastic layers, K_c the core: scaling the whole core matrix by one complex factor
+//! (K_e the elastic layers with a constant loss factor η_e, zero unless set by
+//! [`ReducedModel::set_elastic_loss`] — a constant loss factor is not causal, keep it small for
+//! time signals; K_s the supports' springs and C_s their dashpots, [`ReducedModel::add_dampers`],
+//! causal viscous damping; K_c the core: scaling the whole core matrix by one complex factor
 //! assumes a constant Poisson's ratio of the core) and the receptance to a load f is
 //! u = Z(ω)⁻¹ f. The reduced basis V holds, at each reference core modulus G_j with
 //! K_j = K_e + (G_j/G_a) K_c: the real modes φ of (K_j, M), the static residual vectors
@@ -28,8 +31,14 @@ use num_complex::Complex64;
 pub struct ReducedModel {
     /// Basis V (n × m), M-orthonormal.
     pub basis: Mat<f64>,
-    /// Vᵀ K_e V.
+    /// Vᵀ K_e V (elastic layers, no springs).
     k_elastic: Mat<f64>,
+    /// Vᵀ K_s V (the springs; zero without).
+    k_springs: Mat<f64>,
+    /// Vᵀ C_s V (the dashpots; zero without).
+    c_dampers: Mat<f64>,
+    /// Loss factor of the elastic layers.
+    elastic_loss: f64,
     /// Vᵀ K_c V at the assembled core modulus.
     k_core: Mat<f64>,
     /// Vᵀ M V (≈ I).
@@ -108,28 +117,84 @@ impl ReducedModel {
             at += c.ncols();
         }
         let basis = m_orthonormal(&v, &sys.m);
-        let (ke, kc) = split_stiffness(sys, core_layer);
         let project = |a: &SparseColMat<usize, f64>| {
             let av = a * &basis;
             basis.transpose() * &av
         };
+        let mut k_elastic = Mat::<f64>::zeros(basis.ncols(), basis.ncols());
+        for (l, k) in sys.k_layers.iter().enumerate() {
+            if l != core_layer {
+                k_elastic += project(k);
+            }
+        }
+        let k_springs = match &sys.springs {
+            Some(k) => project(k),
+            None => Mat::zeros(basis.ncols(), basis.ncols()),
+        };
         Ok(Self {
-            k_elastic: project(&ke),
-            k_core: project(&kc),
+            k_elastic,
+            c_dampers: Mat::zeros(k_springs.nrows(), k_springs.ncols()),
+            k_springs,
+            elastic_loss: 0.0,
+            k_core: project(&sys.k_layers[core_layer]),
             mass: project(&sys.m),
             basis,
         })
     }
 
+    /// Sets the constant loss factor η_e of the elastic layers.
+    ///
+    /// # Errors
+    /// [`BenchError::Invalid`] for a negative or non-finite loss factor.
+    pub fn set_elastic_loss(&mut self, eta: f64) -> Result<(), BenchError> {
+        if !(eta.is_finite() && eta >= 0.0) {
+            return Err(BenchError::Invalid(format!(
+                "loss factor of the elastic layers: {eta} must be finite and non-negative"
+            )));
+        }
+        self.elastic_loss = eta;
+        Ok(())
+    }
+
+    /// Adds grounded dashpots (dof, N·s/m): C_s += Σ c e_d e_dᵀ, projected on the basis.
+    ///
+    /// # Errors
+    /// [`BenchError::Invalid`] for a dof out of range or a negative or non-finite coefficient.
+    pub fn add_dampers(&mut self, dampers: &[(usize, f64)]) -> Result<(), BenchError> {
+        let n = self.basis.nrows();
+        for &(d, c) in dampers {
+            if d >= n || !(c.is_finite() && c >= 0.0) {
+                return Err(BenchError::Invalid(format!(
+                    "dashpot on dof {d} of {n} with {c} N s/m"
+                )));
+            }
+            let m = self.size();
+            for i in 0..m {
+                for j in 0..m {
+                    self.c_dampers[(i, j)] += c * self.basis[(d, i)] * self.basis[(d, j)];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Entry (i, j) of the reduced dynamic stiffness Vᵀ Z(ω) V (module docs).
+    fn dynamic_stiffness(&self, i: usize, j: usize, omega: f64, core_scale: Complex64) -> c64 {
+        let v = Complex64::new(1.0, self.elastic_loss) * self.k_elastic[(i, j)]
+            + core_scale * self.k_core[(i, j)]
+            + Complex64::new(
+                self.k_springs[(i, j)] - omega * omega * self.mass[(i, j)],
+                omega * self.c_dampers[(i, j)],
+            );
+        c64::new(v.re, v.im)
+    }
+
     /// Complex eigenvalues λ = ω²(1 + iη) of the reduced model with a frequency-independent core
-    /// scale s (Vᵀ M V = I, so the eigenvalues of Vᵀ(K_e + s K_c)V), increasing real part: the
-    /// natural frequencies √Re λ/2π and modal loss factors Im λ/Re λ.
+    /// scale s (Vᵀ M V = I, so the eigenvalues of Vᵀ Z(0) V: the dashpots left out), increasing
+    /// real part: the natural frequencies √Re λ/2π and modal loss factors Im λ/Re λ.
     pub fn complex_eigenvalues(&self, core_scale: Complex64) -> Vec<Complex64> {
         let m = self.size();
-        let z = Mat::from_fn(m, m, |i, j| {
-            let v = Complex64::new(self.k_elastic[(i, j)], 0.0) + core_scale * self.k_core[(i, j)];
-            c64::new(v.re, v.im)
-        });
+        let z = Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, 0.0, core_scale));
         let mut out: Vec<Complex64> = z
             .eigenvalues()
             .map(|v| v.iter().map(|e| Complex64::new(e.re, e.im)).collect())
@@ -159,13 +224,7 @@ impl ReducedModel {
         dofs: &[usize],
     ) -> Vec<Complex64> {
         let m = self.size();
-        let z = Mat::from_fn(m, m, |i, j| {
-            let v = Complex64::new(
-                self.k_elastic[(i, j)] - omega * omega * self.mass[(i, j)],
-                0.0,
-            ) + core_scale * self.k_core[(i, j)];
-            c64::new(v.re, v.im)
-        });
+        let z = Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, omega, core_scale));
         let rhs = Mat::from_fn(m, 1, |i, _| c64::new(load_r[i], 0.0));
         let q = z.partial_piv_lu().solve(&rhs);
         dofs.iter()
@@ -215,7 +274,8 @@ fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
     Mat::from_fn(n, kept.len(), |i, j| kept[j][(i, 0)])
 }
 
-/// The direct route: Z(ω) u = f by a sparse complex LU per line. K_e, K_c and M are laid on
+/// The direct route: Z(ω) u = f by a sparse complex LU per line (without loss in the elastic
+/// layers and springs: the check of the reduction). K_e, K_c and M are laid on
 /// one common sparsity pattern, so the pattern and the symbolic LU (ordering, elimination tree)
 /// are built once and each line only sums the values and factors them numerically.
 pub struct DirectSolver {

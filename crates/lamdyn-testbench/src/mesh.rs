@@ -1,10 +1,13 @@
 //! Structured meshes of 20-node hexahedra for a layered plate or shallow shell: every layer
 //! gets its own elements through the thickness.
 //!
-//! The reference surface is the laminate's mid-thickness surface z₀(x, y) = (x − a/2)²/(2R_x) +
-//! (y − b/2)²/(2R_y) over [0, a] × [0, b] (a shallow doubly curved cap; flat when both radii are
-//! infinite). A point at height s through the thickness lies at (x, y, z₀) + s n(x, y), n the
-//! unit normal of the surface, so every layer keeps its thickness on the curved part.
+//! The reference surface is the laminate's mid-thickness surface z₀(x, y) = −x²/(2R_x) −
+//! y²/(2R_y) over [−a/2, a/2] × [−b/2, b/2]: a shallow dome, convex towards +z as a roof is (flat
+//! when both radii are infinite) — the same surface and frame as lamdyn-fem's structured shell
+//! meshes, so a shell model of the part has its mid-surface nodes under the bench's. A point at
+//! height s through the thickness lies at (x, y, z₀) + s n(x, y), n ∝ (x/R_x, y/R_y, 1) the unit
+//! normal, so every layer keeps its thickness on the curved part; the top surface is the outer
+//! (convex) one.
 //!
 //! Nodes sit on a fine grid of (2n_x + 1) × (2n_y + 1) × (2n_z + 1) points; the serendipity
 //! element uses those with at most one odd index (corners and mid-edges).
@@ -51,6 +54,8 @@ pub struct HexMesh {
     pub layer: Vec<usize>,
     /// Nodes of the top surface with its outward unit normal there.
     pub top: Vec<(usize, [f64; 3])>,
+    /// Nodes of the bottom surface with its outward unit normal there (−n).
+    pub bottom: Vec<(usize, [f64; 3])>,
 }
 
 impl LayeredPlateSpec {
@@ -95,11 +100,10 @@ impl LayeredPlateSpec {
 
     /// Mid-surface height and unit normal at (x, y).
     fn surface(&self, x: f64, y: f64) -> (f64, [f64; 3]) {
-        let (dx, dy) = (x - 0.5 * self.length_m, y - 0.5 * self.width_m);
-        let z = dx * dx / (2.0 * self.radius_x_m) + dy * dy / (2.0 * self.radius_y_m);
-        let (gx, gy) = (dx / self.radius_x_m, dy / self.radius_y_m);
+        let z = -x * x / (2.0 * self.radius_x_m) - y * y / (2.0 * self.radius_y_m);
+        let (gx, gy) = (x / self.radius_x_m, y / self.radius_y_m);
         let norm = (1.0 + gx * gx + gy * gy).sqrt();
-        (z, [-gx / norm, -gy / norm, 1.0 / norm])
+        (z, [gx / norm, gy / norm, 1.0 / norm])
     }
 
     /// Builds the mesh.
@@ -122,19 +126,21 @@ impl LayeredPlateSpec {
         let (fx, fy, fz) = (2 * self.nx + 1, 2 * self.ny + 1, s.len());
         let mut id = vec![usize::MAX; fx * fy * fz];
         let mut nodes = Vec::new();
-        let mut top = Vec::new();
+        let (mut top, mut bottom) = (Vec::new(), Vec::new());
         for k in 0..fz {
             for j in 0..fy {
                 for i in 0..fx {
                     if (i % 2) + (j % 2) + (k % 2) > 1 {
                         continue;
                     }
-                    let x = self.length_m * i as f64 / (fx - 1) as f64;
-                    let y = self.width_m * j as f64 / (fy - 1) as f64;
+                    let x = self.length_m * (i as f64 / (fx - 1) as f64 - 0.5);
+                    let y = self.width_m * (j as f64 / (fy - 1) as f64 - 0.5);
                     let (z, n) = self.surface(x, y);
                     id[(k * fy + j) * fx + i] = nodes.len();
                     if k == fz - 1 {
                         top.push((nodes.len(), n));
+                    } else if k == 0 {
+                        bottom.push((nodes.len(), [-n[0], -n[1], -n[2]]));
                     }
                     nodes.push([x + s[k] * n[0], y + s[k] * n[1], z + s[k] * n[2]]);
                 }
@@ -163,6 +169,7 @@ impl LayeredPlateSpec {
             elements,
             layer,
             top,
+            bottom,
         })
     }
 }

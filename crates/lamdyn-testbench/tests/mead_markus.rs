@@ -57,10 +57,11 @@ fn simply_supported_sandwich_beam_matches_mead_markus() {
     let mut mid = None;
     for (i, p) in mesh.nodes.iter().enumerate() {
         springs.push((3 * i + 1, pen));
-        if p[0].abs() < 1e-12 || (p[0] - l).abs() < 1e-12 {
+        // Ends at x = ±l/2 (the mesh is centred on the origin).
+        if (p[0].abs() - 0.5 * l).abs() < 1e-12 {
             springs.push((3 * i + 2, pen));
         }
-        if (p[0] - 0.5 * l).abs() < 1e-12 && p[2].abs() < 1e-12 && mid.is_none() {
+        if p[0].abs() < 1e-12 && p[2].abs() < 1e-12 && mid.is_none() {
             mid = Some(i);
         }
     }

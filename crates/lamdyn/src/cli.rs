@@ -35,6 +35,38 @@ pub enum Command {
     /// Experimental modal analysis of measured FRFs or hammer-test time data: poles (LSCF or
     /// PolyMAX), stabilization diagram, modes, CMIF; charts with --out.
     Ema(EmaArgs),
+    /// Virtual impact test on a layered 20-node-hexahedron model with a frequency-dependent core
+    /// (a TOML description, or the built-in roof): FRFs, hammer-hit time signals, the true core.
+    Simulate(SimulateArgs),
+}
+
+/// `lamdyn simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// The test's description (TOML; see `lamdyn simulate --example roof --print-description`).
+    #[arg(
+        value_name = "FILE",
+        required_unless_present = "example",
+        conflicts_with = "example"
+    )]
+    pub description: Option<PathBuf>,
+    /// A built-in description: `roof` (the paper's roof, doubly curved, PVB-like core).
+    #[arg(long, value_name = "NAME")]
+    pub example: Option<String>,
+    /// Print the description (TOML) and stop.
+    #[arg(long)]
+    pub print_description: bool,
+    /// Folder for the results: frf.csv + channels.csv (sensor frames), frf_global.uff (global
+    /// frame, UFF 58), hit1.csv... (time signals), truth.csv (the core's law at each line),
+    /// description.toml, summary.json; replaced as a whole, only when everything worked.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Skip the time signals even if the description has a `[hits]` section.
+    #[arg(long)]
+    pub no_hits: bool,
+    /// Output format of the summary.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// `lamdyn ema`.

@@ -11,6 +11,7 @@
 //! | `lamdyn modes` | shell model → natural frequencies, shapes, Sturm check | [`cmd::modes`] |
 //! | `lamdyn fit` | measured FRFs + FE model → E*(f) law with intervals, Table 3 | [`cmd::fit`] |
 //! | `lamdyn ema` | measured FRFs → stabilization diagram, modes, damping, shapes | [`cmd::ema`] |
+//! | `lamdyn simulate` | virtual impact test on the layered model → FRFs, hits, true core | [`cmd::simulate`] |
 //! | `lamdyn uff info\|convert` | list a UFF file; convert to CSV/JSON or ASCII ↔ binary | [`cmd::uff`] |
 //!
 //! Exit codes: 0 done; 1 done but a check failed (lines without a solution); 2 error. Errors

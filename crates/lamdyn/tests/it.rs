@@ -10,5 +10,6 @@ mod it {
     mod laminate;
     mod modes;
     mod robustness;
+    mod simulate;
     mod uff;
 }

@@ -8,6 +8,7 @@ pub mod ema;
 pub mod fit;
 pub mod laminate;
 pub mod modes;
+pub mod simulate;
 pub mod uff;
 
 use crate::Outcome;
@@ -25,6 +26,7 @@ pub fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::R
         Command::Fit(args) => fit::run(&args, out, err),
         Command::Uff(cmd) => uff::run(&cmd, out, err),
         Command::Ema(args) => ema::run(&args, out, err),
+        Command::Simulate(args) => simulate::run(&args, out, err),
     }
 }
 
