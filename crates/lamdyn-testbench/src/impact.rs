@@ -170,9 +170,8 @@ fn layout(mesh: &HexMesh, test: &ImpactTest) -> Result<Layout, BenchError> {
             test.sensors.len()
         )));
     }
-    let (hammer, hn) = on_surface(mesh, test.hammer, test.tolerance_m, "the hammer")?;
-    let dir = hammer_direction(test, hn)?;
-    let load = hammer_load(mesh, test)?;
+    let (hammer, dir) = hammer(mesh, test)?;
+    let load = point_load(mesh, hammer, dir);
     let (mut responses, mut axes, mut dofs) = (Vec::new(), Vec::new(), Vec::new());
     for (p, name) in test.sensors.iter().zip(&test.sensor_names) {
         let (node, n) = on_surface(mesh, *p, test.tolerance_m, &format!("sensor {name}"))?;
@@ -211,11 +210,21 @@ pub fn check_layout(mesh: &HexMesh, test: &ImpactTest) -> Result<(), BenchError>
 /// # Errors
 /// [`BenchError::Invalid`] for a hammer off the surface or pointing out of it.
 pub fn hammer_load(mesh: &HexMesh, test: &ImpactTest) -> Result<Vec<f64>, BenchError> {
-    let (hammer, hn) = on_surface(mesh, test.hammer, test.tolerance_m, "the hammer")?;
-    let dir = hammer_direction(test, hn)?;
+    let (hammer, dir) = hammer(mesh, test)?;
+    Ok(point_load(mesh, hammer, dir))
+}
+
+/// A unit force along `dir` at `node`, as a load vector over the mesh's dofs.
+fn point_load(mesh: &HexMesh, node: usize, dir: [f64; 3]) -> Vec<f64> {
     let mut load = vec![0.0; 3 * mesh.nodes.len()];
-    load[3 * hammer..3 * hammer + 3].copy_from_slice(&dir);
-    Ok(load)
+    load[3 * node..3 * node + 3].copy_from_slice(&dir);
+    load
+}
+
+/// The hammer's top node and unit force direction.
+fn hammer(mesh: &HexMesh, test: &ImpactTest) -> Result<(usize, [f64; 3]), BenchError> {
+    let (node, n) = on_surface(mesh, test.hammer, test.tolerance_m, "the hammer")?;
+    Ok((node, hammer_direction(test, n)?))
 }
 
 /// The unit force direction of the hammer: `test.hammer_direction` normalised, or −n; a

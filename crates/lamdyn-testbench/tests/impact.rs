@@ -3,7 +3,7 @@
 use lamdyn_material::law::{FractionalZener, ViscoelasticLaw};
 use lamdyn_testbench::cases::{ELASTIC_CORE, ccx_check_laminate};
 use lamdyn_testbench::frf::ReducedModel;
-use lamdyn_testbench::impact::{ImpactTest, simulate, surface_frame};
+use lamdyn_testbench::impact::{ImpactTest, hammer_load, simulate, surface_frame};
 use lamdyn_testbench::mesh::HexMesh;
 use lamdyn_testbench::system::LayeredSystem;
 use std::f64::consts::PI;
@@ -32,18 +32,7 @@ fn bench(hammers: &[[f64; 2]]) -> (Bench, Vec<ImpactTest>) {
     // Loads of every hammer position in the basis.
     let loads: Vec<Vec<f64>> = tests
         .iter()
-        .map(|t| {
-            let (n, normal) = *mesh
-                .top
-                .iter()
-                .find(|(n, _)| mesh.nodes[*n] == t.hammer)
-                .unwrap();
-            let mut f = vec![0.0; sys.n_dofs];
-            for c in 0..3 {
-                f[3 * n + c] = -normal[c];
-            }
-            f
-        })
+        .map(|t| hammer_load(&mesh, t).unwrap())
         .collect();
     let ratios = [1.0, 80.0].map(|f: f64| law.modulus(2.0 * PI * f).norm() / g_a);
     let model = ReducedModel::new(&sys, 1, &ratios, 30, &loads, -(2.0 * PI).powi(2)).unwrap();

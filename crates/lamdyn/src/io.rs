@@ -133,7 +133,7 @@ impl CsvTable {
 /// Writes `files` into the folder `dir` so that `dir` is either untouched or complete: the files
 /// go to a sibling temporary folder, which then replaces `dir` (an old `dir` is moved aside first
 /// and removed last).
-pub fn write_dir_atomically(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<()> {
+pub fn write_dir_atomically<S: AsRef<str>>(dir: &Path, files: &[(S, Vec<u8>)]) -> Result<()> {
     let name = dir
         .file_name()
         .ok_or_else(|| anyhow!("'{}' is not a folder name", dir.display()))?
@@ -151,7 +151,7 @@ pub fn write_dir_atomically(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<()>
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).with_context(|| format!("cannot create '{}'", tmp.display()))?;
     for (file, bytes) in files {
-        let path = tmp.join(file);
+        let path = tmp.join(file.as_ref());
         if let Err(e) = std::fs::write(&path, bytes) {
             let _ = std::fs::remove_dir_all(&tmp);
             return Err(e).with_context(|| format!("cannot write '{}'", path.display()));

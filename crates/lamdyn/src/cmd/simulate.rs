@@ -68,9 +68,7 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Res
     if let Some(dir) = &args.out {
         let t = Instant::now();
         let files = output_files(&bench, &frfs, hits.as_ref(), &text, &report)?;
-        let named: Vec<(&str, Vec<u8>)> =
-            files.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
-        write_dir_atomically(dir, &named)?;
+        write_dir_atomically(dir, &files)?;
         report.notes.push(format!(
             "{} files written to '{}' in {:.2} s",
             files.len(),
