@@ -405,36 +405,24 @@ impl Description {
         } else {
             m_a
         };
-        let mut elastic: Vec<Elastic> = Vec::with_capacity(materials.len() + 1);
-        let mut eta_e = None;
-        for (i, m) in materials.iter().enumerate() {
-            if i == core_layer {
-                elastic.push(Elastic {
-                    young_pa: young_a,
-                    poisson,
-                    density_kg_m3: density,
-                });
-            }
-            elastic.push(m.0);
-            match eta_e {
-                None => eta_e = Some(m.1),
-                Some(e) if e != m.1 => {
-                    return Err(invalid(
-                        "layers",
-                        "the elastic layers must share one loss_factor (the bench scales them together)"
-                            .into(),
-                    ));
-                }
-                _ => {}
-            }
+        let eta_e = materials.first().map_or(0.0, |m| m.1);
+        if materials.iter().any(|m| m.1 != eta_e) {
+            return Err(invalid(
+                "layers",
+                "the elastic layers must share one loss_factor (the bench scales them together)"
+                    .into(),
+            ));
         }
-        if core_layer == materials.len() {
-            elastic.push(Elastic {
+        // Every layer's material, bottom to top: the core assembled at its reference modulus.
+        let mut elastic: Vec<Elastic> = materials.iter().map(|m| m.0).collect();
+        elastic.insert(
+            core_layer,
+            Elastic {
                 young_pa: young_a,
                 poisson,
                 density_kg_m3: density,
-            });
-        }
+            },
+        );
         progress("mesh");
         let mesh = self.mesh_spec()?.build()?;
         progress("assembly");
@@ -477,7 +465,7 @@ impl Description {
             &[load],
             shift,
         )?;
-        model.set_elastic_loss(eta_e.unwrap_or(0.0))?;
+        model.set_elastic_loss(eta_e)?;
         model.add_dampers(&dampers)?;
         Ok(Bench {
             mesh,
