@@ -13,7 +13,7 @@ use crate::stabilization::{
 };
 use lamdyn_frf::FrfSet;
 use num_complex::Complex64;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// Settings of [`identify`].
@@ -68,7 +68,7 @@ impl Default for EmaSettings {
 }
 
 /// One identified mode.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Mode {
     /// Natural frequency |λ|/2π, Hz.
     pub freq_hz: f64,
@@ -94,7 +94,7 @@ pub struct Mode {
 }
 
 /// Everything [`identify`] found.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct EmaResult {
     /// Band used, Hz.
     pub band_hz: [f64; 2],

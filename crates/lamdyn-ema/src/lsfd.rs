@@ -26,11 +26,11 @@ use faer::Mat;
 use faer::linalg::solvers::{Solve, SolveLstsq};
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// The identified modal model of a set of curves.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModalFit {
     /// Poles λ_r, rad/s.
     pub poles: Vec<Complex64>,

@@ -12,7 +12,7 @@
 //!   first [Shih et al. 1988]; with one reference, the 2-norm of the FRF column.
 
 use num_complex::Complex64;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Modal assurance criterion.
 pub fn mac(a: &[Complex64], b: &[Complex64]) -> f64 {
@@ -92,7 +92,7 @@ pub fn cmif_line(h: &[Complex64], n_ref: usize) -> Vec<f64> {
 }
 
 /// A CMIF peak.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CmifPeak {
     /// Frequency, Hz.
     pub freq_hz: f64,

@@ -21,10 +21,10 @@
 use crate::lscf::{OrderPoles, pole_damping, pole_freq_hz};
 use crate::shapes::mac;
 use num_complex::Complex64;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Stability of a pole in the diagram.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Stability {
     /// No matching pole at the previous order.
     New,
@@ -37,7 +37,7 @@ pub enum Stability {
 }
 
 /// A pole in the diagram.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DiagramPole {
     /// Model order.
     pub order: usize,
@@ -135,7 +135,7 @@ pub fn diagram(orders: &[OrderPoles], c: &StabilityCriteria) -> Vec<DiagramPole>
 }
 
 /// A selected physical mode.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SelectedPole {
     /// Pole λ, rad/s.
     pub pole: Complex64,

@@ -161,6 +161,29 @@ impl FitResult {
         self.law.modulus(&self.values(), omega_rad_s)
     }
 
+    /// Natural parameters drawn from the fit's sampling distribution: u + L z in the
+    /// unconstrained parameters, with L L^T the covariance of u (Cholesky) and `z` standard
+    /// normal deviates (one per parameter). `None` without a covariance or with a covariance
+    /// that is not positive definite, or for a wrong number of deviates.
+    pub fn draw_parameters(&self, z: &[f64]) -> Option<Vec<f64>> {
+        let cov = self.cov_u.as_ref()?;
+        let p = self.u.len();
+        if z.len() != p {
+            return None;
+        }
+        let l = cov.llt(Side::Lower).ok()?.L().to_owned();
+        let u: Vec<f64> = (0..p)
+            .map(|i| self.u[i] + (0..=i).map(|k| l[(i, k)] * z[k]).sum::<f64>())
+            .collect();
+        let n = self.law.natural(&u);
+        n.iter().all(|v| v.is_finite()).then_some(n)
+    }
+
+    /// Whether the fit has a parameter covariance (for [`FitResult::draw_parameters`]).
+    pub fn has_covariance(&self) -> bool {
+        self.cov_u.is_some()
+    }
+
     /// E'(ω), η(ω) and their standard deviations (delta method through the parameter
     /// covariance), if available.
     pub fn modulus_uncertainty(&self, omega_rad_s: f64) -> (f64, f64, Option<(f64, f64)>) {

@@ -33,6 +33,9 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
+/// First bytes of a cached [`ModalModel`] (format version 1).
+const CACHE_MAGIC: &[u8] = b"lamdyn modal model v1\n";
+
 /// The residual flexibility of the omitted modes.
 #[derive(Debug, Clone)]
 struct Residual {
@@ -116,6 +119,85 @@ impl ModalModel {
                 references,
             )?),
         };
+        Ok(Self {
+            lambda,
+            c,
+            f,
+            residual,
+            e_ref_pa,
+        })
+    }
+
+    /// The model as bytes for a cache file: a magic line, then little-endian u64 sizes and f64
+    /// values (λ, C, F, E_ref and the residual terms). [`ModalModel::from_cache_bytes`] reads
+    /// it back exactly (bit for bit).
+    pub fn to_cache_bytes(&self) -> Vec<u8> {
+        let (nr, nf) = self.shape();
+        let m = self.lambda.len();
+        let mut out = CACHE_MAGIC.to_vec();
+        for v in [m, nr, nf, usize::from(self.residual.is_some())] {
+            out.extend_from_slice(&(v as u64).to_le_bytes());
+        }
+        let mut put = |x: f64| out.extend_from_slice(&x.to_le_bytes());
+        put(self.e_ref_pa);
+        self.lambda.iter().for_each(|&l| put(l));
+        let mat = |a: &Mat<f64>, put: &mut dyn FnMut(f64)| {
+            (0..a.ncols()).for_each(|j| (0..a.nrows()).for_each(|i| put(a[(i, j)])))
+        };
+        mat(&self.c, &mut put);
+        mat(&self.f, &mut put);
+        if let Some(r) = &self.residual {
+            put(r.sigma);
+            mat(&r.r1, &mut put);
+            mat(&r.r2, &mut put);
+        }
+        out
+    }
+
+    /// Reads bytes written by [`ModalModel::to_cache_bytes`].
+    ///
+    /// # Errors
+    /// [`FitError::Inconsistent`] for another format, a truncated file or non-finite values.
+    pub fn from_cache_bytes(bytes: &[u8]) -> Result<Self, FitError> {
+        let bad = |why: &str| inconsistent("modal model cache", why.into());
+        let body = bytes
+            .strip_prefix(CACHE_MAGIC)
+            .ok_or_else(|| bad("not a lamdyn modal model cache (version 1)"))?;
+        let mut words = body
+            .chunks_exact(8)
+            .map(|c| <[u8; 8]>::try_from(c).unwrap_or_default());
+        let mut size = || -> Result<usize, FitError> {
+            let w = words.next().ok_or_else(|| bad("truncated header"))?;
+            usize::try_from(u64::from_le_bytes(w)).map_err(|_| bad("size too large"))
+        };
+        let (m, nr, nf, has_residual) = (size()?, size()?, size()?, size()?);
+        let n_values = 1 + m + nr * m + m * nf + has_residual * (1 + 2 * nr * nf);
+        if body.len() != 8 * (4 + n_values) || has_residual > 1 {
+            return Err(bad("size does not match its header"));
+        }
+        let values: Vec<f64> = body[32..]
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(<[u8; 8]>::try_from(c).unwrap_or_default()))
+            .collect();
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(bad("non-finite value"));
+        }
+        let mut at = 0;
+        let mut take = |n: usize| {
+            at += n;
+            &values[at - n..at]
+        };
+        let e_ref_pa = take(1)[0];
+        let lambda = take(m).to_vec();
+        let mat =
+            |v: &[f64], rows: usize, cols: usize| Mat::from_fn(rows, cols, |i, j| v[j * rows + i]);
+        let c = mat(take(nr * m), nr, m);
+        let f = mat(take(m * nf), m, nf);
+        let residual = (has_residual == 1).then(|| Residual {
+            sigma: take(1)[0],
+            r1: mat(take(nr * nf), nr, nf),
+            r2: mat(take(nr * nf), nr, nf),
+        });
         Ok(Self {
             lambda,
             c,

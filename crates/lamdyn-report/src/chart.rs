@@ -107,7 +107,7 @@ impl Axis {
 }
 
 /// How a series is drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Mark {
     /// Points joined by a line.
     Line,
@@ -119,6 +119,17 @@ pub enum Mark {
     Circle,
     /// Large filled circles.
     Disc,
+    /// A filled, translucent polygon through the points (an uncertainty band: the upper curve
+    /// forwards, then the lower curve backwards).
+    Band,
+    /// Filled rectangles of `width` × `height` (axis units, linear axes) centred on the points:
+    /// a colour map drawn one colour class per series.
+    Tile {
+        /// Width along x, in x units.
+        width: f64,
+        /// Height along y, in y units.
+        height: f64,
+    },
 }
 
 /// One series.
@@ -322,6 +333,14 @@ impl Chart {
                         .map(|p| Circle::new(*p, 4, color.stroke_width(1)))
                 ),
                 Mark::Cross => put!(pts.iter().map(|p| Cross::new(*p, 4, color.stroke_width(1)))),
+                Mark::Band => put!(std::iter::once(Polygon::new(
+                    pts.clone(),
+                    color.mix(0.25).filled()
+                ))),
+                Mark::Tile { width, height } => put!(pts.iter().map(|&(x, y)| {
+                    let (hw, hh) = (width / 2.0, height / 2.0);
+                    Rectangle::new([(x - hw, y - hh), (x + hw, y + hh)], color.filled())
+                })),
             };
         }
         if self.series.iter().any(|s| !s.name.is_empty()) {

@@ -10,6 +10,7 @@
 //! | [`description`] | the TOML description of a virtual test, the built-in `roof` |
 //! | [`frf`] | FRFs with a frequency-dependent core: reduced basis, and the direct check |
 //! | [`hex20`] | the C3D20 element: shape functions, stiffness, consistent mass |
+//! | [`inverse`] | the layered inverse: G* of the core per measured mode through this model |
 //! | [`impact`] | a simulated impact test: sensor grid, hammer, supports, accelerance FRFs, hammer hits as time signals, noise |
 //! | [`mesh`] | layered plates and shallow shells of hexahedra |
 //! | [`system`] | sparse K per layer and M; lowest modes by shift-invert Lanczos |
@@ -25,6 +26,7 @@ mod error;
 pub mod frf;
 pub mod hex20;
 pub mod impact;
+pub mod inverse;
 pub mod mesh;
 pub mod system;
 

@@ -38,6 +38,59 @@ pub enum Command {
     /// Virtual impact test on a layered 20-node-hexahedron model with a frequency-dependent core
     /// (a TOML description, or the built-in roof): FRFs, hammer-hit time signals, the true core.
     Simulate(SimulateArgs),
+    /// The whole chain from a job file: measurement -> EMA -> fit of E*(f) -> G*(f) of the core
+    /// by both inverses, Monte Carlo bands -> an HTML report with figures and CSV/JSON tables.
+    Run(RunArgs),
+    /// The demo: simulate the virtual roof's impact test, run the whole chain on it, and compare
+    /// the recovered core with the truth (report in DIR/report/report.html).
+    Demo(DemoArgs),
+}
+
+/// `lamdyn run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The job file (TOML; `lamdyn demo` writes one in DIR/input/job.toml).
+    #[arg(value_name = "JOB")]
+    pub job: PathBuf,
+    /// Folder of the report [default: `report` beside the job file]; replaced as a whole, only
+    /// when every stage worked.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Cache folder for the FE model and the EMA [default: `.lamdyn-cache` beside the job].
+    #[arg(long, value_name = "DIR", conflicts_with = "no_cache")]
+    pub cache: Option<PathBuf>,
+    /// Compute everything again and store nothing.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Monte Carlo samples [default: the job's uncertainty.samples].
+    #[arg(long, value_name = "N")]
+    pub samples: Option<usize>,
+    /// Monte Carlo seed [default: the job's uncertainty.seed].
+    #[arg(long, value_name = "SEED")]
+    pub seed: Option<u64>,
+    /// Output format of the summary.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `lamdyn demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Results folder: DIR/input (the simulated test and its job) and DIR/report.
+    #[arg(long, value_name = "DIR", default_value = "lamdyn-demo")]
+    pub out: PathBuf,
+    /// A test-bench description (TOML, as `lamdyn simulate`) instead of the built-in roof.
+    #[arg(long, value_name = "FILE")]
+    pub description: Option<PathBuf>,
+    /// Monte Carlo samples [default: 400].
+    #[arg(long, value_name = "N")]
+    pub samples: Option<usize>,
+    /// Monte Carlo seed [default: 1].
+    #[arg(long, value_name = "SEED")]
+    pub seed: Option<u64>,
+    /// Output format of the summary.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// `lamdyn simulate`.

@@ -130,7 +130,7 @@ impl CsvTable {
     }
 }
 
-/// Writes `files` into the folder `dir` so that `dir` is either untouched or complete: the files
+/// Writes `files` (names relative to `dir`, subfolders allowed) into the folder `dir` so that `dir` is either untouched or complete: the files
 /// go to a sibling temporary folder, which then replaces `dir` (an old `dir` is moved aside first
 /// and removed last).
 pub fn write_dir_atomically<S: AsRef<str>>(dir: &Path, files: &[(S, Vec<u8>)]) -> Result<()> {
@@ -152,7 +152,12 @@ pub fn write_dir_atomically<S: AsRef<str>>(dir: &Path, files: &[(S, Vec<u8>)]) -
     std::fs::create_dir_all(&tmp).with_context(|| format!("cannot create '{}'", tmp.display()))?;
     for (file, bytes) in files {
         let path = tmp.join(file.as_ref());
-        if let Err(e) = std::fs::write(&path, bytes) {
+        let written = match path.parent() {
+            Some(sub) if sub != tmp => std::fs::create_dir_all(sub),
+            _ => Ok(()),
+        }
+        .and_then(|()| std::fs::write(&path, bytes));
+        if let Err(e) = written {
             let _ = std::fs::remove_dir_all(&tmp);
             return Err(e).with_context(|| format!("cannot write '{}'", path.display()));
         }

@@ -10,6 +10,7 @@ mod it {
     mod laminate;
     mod modes;
     mod robustness;
+    mod run;
     mod simulate;
     mod uff;
 }

@@ -133,3 +133,24 @@ fn rms_evaluator_equals_rms_of_the_frfs() {
         assert!((ev.rms(w, s) / direct - 1.0).abs() < 1e-12, "{f} Hz");
     }
 }
+
+/// A cached model reads back bit for bit; a truncated or foreign file is refused.
+#[test]
+fn cache_bytes_round_trip_exactly() {
+    let mesh = plate(6);
+    let responses = triaxial_grid(&mesh, 3, 3);
+    let refs = hammer(&mesh);
+    let (asm, sol) = solve(&mesh, 12);
+    for residual in [ResidualTerm::Static, ResidualTerm::None] {
+        let m = model(&asm, &sol, &mesh, &responses, &refs, residual);
+        let bytes = m.to_cache_bytes();
+        let back = ModalModel::from_cache_bytes(&bytes).unwrap();
+        assert_eq!(back.eigenvalues(), m.eigenvalues());
+        for f in [2.0, 30.0, 95.0] {
+            let (w, s) = (2.0 * PI * f, Complex64::new(0.9, 0.02));
+            assert_eq!(back.receptance(w, s), m.receptance(w, s));
+        }
+        assert!(ModalModel::from_cache_bytes(&bytes[..bytes.len() - 8]).is_err());
+    }
+    assert!(ModalModel::from_cache_bytes(b"something else").is_err());
+}

@@ -24,12 +24,41 @@ fn read_text(p: &Path) -> Result<String> {
     std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
 }
 
+/// How time data become FRFs: the estimator and the record settings (rate from the files).
+pub(crate) struct TimeOptions {
+    pub estimator: Estimator,
+    pub trigger: f64,
+    pub pretrigger_s: f64,
+    pub force_window_s: f64,
+    pub record_s: Option<f64>,
+    pub exp_tau_s: Option<f64>,
+}
+
 /// FRFs estimated from hammer-test time files (one per hit) and the channels table.
 fn frfs_from_time(
     channels: &Path,
     files: &[PathBuf],
     args: &EmaArgs,
 ) -> Result<(FrfSet, TimeInfo)> {
+    let options = TimeOptions {
+        estimator: args.estimator,
+        trigger: args.trigger,
+        pretrigger_s: args.pretrigger_s,
+        force_window_s: args.force_window_s,
+        record_s: args.record_s,
+        exp_tau_s: args.exp_tau_s,
+    };
+    let (set, spectra, hits) = time_frfs(channels, files, &options)?;
+    Ok((set, TimeInfo { hits, spectra }))
+}
+
+/// FRFs (the chosen estimator) from hit files and the channels table, with the spectra
+/// (coherence, warnings) and the number of hits.
+pub(crate) fn time_frfs(
+    channels: &Path,
+    files: &[PathBuf],
+    options: &TimeOptions,
+) -> Result<(FrfSet, Spectra, usize)> {
     let (responses, references) =
         lamdyn_frf::csv::parse_channels(&channels.display().to_string(), &read_text(channels)?)?;
     let [hammer] = &references[..] else {
@@ -69,30 +98,32 @@ fn frfs_from_time(
             responses: rec.responses,
         });
     }
-    let rate_hz = rate.ok_or_else(|| anyhow!("no --time file given"))?;
+    let rate_hz = rate.ok_or_else(|| anyhow!("no time file given"))?;
     for (name, v) in [
-        ("--trigger", args.trigger),
-        ("--pretrigger-s", args.pretrigger_s),
-        ("--force-window-s", args.force_window_s),
+        ("trigger", options.trigger),
+        ("pretrigger", options.pretrigger_s),
+        ("force window", options.force_window_s),
     ] {
         if v < 0.0 {
-            bail!("{name} {v} must not be negative");
+            bail!("the {name} {v} must not be negative");
         }
     }
     let settings = SpectraSettings {
         rate_hz,
-        trigger: args.trigger,
-        pretrigger: (args.pretrigger_s * rate_hz).round() as usize,
-        length: args.record_s.map_or(0, |t| (t * rate_hz).round() as usize),
-        force_window_s: args.force_window_s,
-        exp_tau_s: args.exp_tau_s,
+        trigger: options.trigger,
+        pretrigger: (options.pretrigger_s * rate_hz).round() as usize,
+        length: options
+            .record_s
+            .map_or(0, |t| (t * rate_hz).round() as usize),
+        force_window_s: options.force_window_s,
+        exp_tau_s: options.exp_tau_s,
         double_hit: 0.2,
     };
     let spectra = estimate(&hits, &settings).context("FRF estimation from the time data failed")?;
     let data = spectra
         .channels
         .iter()
-        .flat_map(|c| match args.estimator {
+        .flat_map(|c| match options.estimator {
             Estimator::H1 => c.h1.clone(),
             Estimator::H2 => c.h2.clone(),
             Estimator::Hv => c.hv.clone(),
@@ -105,13 +136,7 @@ fn frfs_from_time(
         quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
         data,
     )?;
-    Ok((
-        set,
-        TimeInfo {
-            hits: hits.len(),
-            spectra,
-        },
-    ))
+    Ok((set, spectra, hits.len()))
 }
 
 /// The FRF set named by the arguments.

@@ -3,11 +3,13 @@
 //! [`crate::table::Report`].
 
 pub mod core;
+pub mod demo;
 pub mod e756;
 pub mod ema;
 pub mod fit;
 pub mod laminate;
 pub mod modes;
+pub mod run;
 pub mod simulate;
 pub mod uff;
 
@@ -27,6 +29,8 @@ pub fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::R
         Command::Uff(cmd) => uff::run(&cmd, out, err),
         Command::Ema(args) => ema::run(&args, out, err),
         Command::Simulate(args) => simulate::run(&args, out, err),
+        Command::Run(args) => run::run(&args, out, err),
+        Command::Demo(args) => demo::run(&args, out, err),
     }
 }
 

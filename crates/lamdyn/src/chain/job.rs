@@ -1,0 +1,519 @@
+//! The job file of `lamdyn run` (TOML): the measurement, the FE model, the layer stack, and the
+//! options of each stage. Paths are relative to the job file. Every key is checked: unknown
+//! keys and missing required ones are errors naming the key (serde + toml, with line and
+//! column), and [`Job::check`] catches values in the wrong unit (a thickness in mm, a modulus
+//! in GPa) or outside their physical range, naming the field.
+
+use anyhow::{Result, anyhow};
+use lamdyn_fem::model::ModelSpec;
+use lamdyn_fit::fit::{Covariance, LawKind};
+use lamdyn_fit::misfit::{MisfitKind, MisfitSpec};
+use lamdyn_material::laminate::StackSpec;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A `lamdyn run` job.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Job {
+    /// Title of the report.
+    #[serde(default = "default_title")]
+    pub title: String,
+    /// The measured data and the sensor geometry.
+    pub measurement: Measurement,
+    /// The FE model of the part.
+    pub model: ModelSource,
+    /// The layer stack (faces with `young_pa`, the core's modulus is the unknown).
+    pub stack: StackSpec,
+    /// Modal identification.
+    #[serde(default)]
+    pub ema: EmaOptions,
+    /// The fit of the effective modulus law.
+    #[serde(default)]
+    pub fit: FitOptions,
+    /// The inverse homogenization.
+    #[serde(default)]
+    pub inverse: InverseOptions,
+    /// Monte Carlo uncertainty.
+    #[serde(default)]
+    pub uncertainty: UncertaintyOptions,
+    /// The core's known law for a virtual test (`lamdyn demo`): a CSV with f_hz, storage_pa,
+    /// loss_pa (as `lamdyn simulate` writes truth.csv); the report then states the errors.
+    #[serde(default)]
+    pub truth: Option<PathBuf>,
+}
+
+fn default_title() -> String {
+    "lamdyn: the core's shear modulus from an impact test".into()
+}
+
+/// The measured data: FRFs (CSV or UFF) or hammer-hit time files (CSV), with the channels
+/// table (positions and directions of the sensors and the hammer).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Measurement {
+    /// Channels table (CSV: name,role,x_m,y_m,z_m,dx,dy,dz), with `frf` or `time`.
+    #[serde(default)]
+    pub channels: Option<PathBuf>,
+    /// FRF table (CSV: f_hz, then re/im per channel pair).
+    #[serde(default)]
+    pub frf: Option<PathBuf>,
+    /// Hammer hits, one CSV per hit (t_s, force, responses); H1 is estimated and averaged.
+    #[serde(default)]
+    pub time: Vec<PathBuf>,
+    /// A UFF file with FRFs (58) and nodes (15/2411) instead of the CSV files.
+    #[serde(default)]
+    pub uff: Option<PathBuf>,
+    /// Largest distance from a channel to its model node, m.
+    #[serde(default = "default_tolerance")]
+    pub tolerance_m: f64,
+    /// Number of response channels the test had; a file with another count is an error.
+    #[serde(default)]
+    pub responses: Option<usize>,
+    /// Time data: trigger level, fraction of each hit's peak force.
+    #[serde(default = "default_trigger")]
+    pub trigger: f64,
+    /// Time data: kept before the trigger, s.
+    #[serde(default = "default_pretrigger")]
+    pub pretrigger_s: f64,
+    /// Time data: force window, s.
+    #[serde(default = "default_force_window")]
+    pub force_window_s: f64,
+    /// Coherence below which a response is flagged (time data), in the fit band.
+    #[serde(default = "default_coherence")]
+    pub min_coherence: f64,
+}
+
+fn default_tolerance() -> f64 {
+    1e-3
+}
+fn default_trigger() -> f64 {
+    0.05
+}
+fn default_pretrigger() -> f64 {
+    0.001
+}
+fn default_force_window() -> f64 {
+    0.05
+}
+fn default_coherence() -> f64 {
+    0.9
+}
+
+/// The FE model: a `lamdyn modes` model file, or the same spec inline.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSource {
+    /// A model file (TOML, `lamdyn modes` format), relative to the job.
+    #[serde(default)]
+    pub file: Option<PathBuf>,
+    /// The model spec inline (mesh, material, solver).
+    #[serde(default)]
+    pub spec: Option<ModelSpec>,
+    /// Modes kept, rigid-body modes included [default: the spec's solver.modes].
+    #[serde(default)]
+    pub modes: Option<usize>,
+    /// Static correction for the modes left out.
+    #[serde(default = "yes")]
+    pub residual: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Options of the modal identification.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmaOptions {
+    /// Band, Hz [default: the fit's band, else every line].
+    #[serde(default)]
+    pub band_hz: Option<[f64; 2]>,
+    /// Highest model order of the stabilization diagram.
+    #[serde(default = "default_max_order")]
+    pub max_order: usize,
+    /// Modes near these frequencies (support resonances) are reported as rejected, Hz.
+    #[serde(default)]
+    pub reject_hz: Vec<f64>,
+}
+
+fn default_max_order() -> usize {
+    60
+}
+
+impl Default for EmaOptions {
+    fn default() -> Self {
+        Self {
+            band_hz: None,
+            max_order: default_max_order(),
+            reject_hz: vec![],
+        }
+    }
+}
+
+/// Options of the fit.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FitOptions {
+    /// The law: `paper_eq7`, `fractional_zener` or `per_mode`.
+    #[serde(default = "default_law")]
+    pub law: LawKind,
+    /// Covariance of the parameters: `robust_hc3` or `classical`.
+    #[serde(default)]
+    pub covariance: Covariance,
+    /// Peak prominence for the starts (ratio over the neighbouring valleys).
+    #[serde(default = "default_prominence")]
+    pub prominence: f64,
+    /// The misfit (kind, band_hz, exclude_hz, reference, weights).
+    #[serde(default = "default_misfit")]
+    pub misfit: MisfitSpec,
+}
+
+fn default_law() -> LawKind {
+    LawKind::PerMode
+}
+fn default_prominence() -> f64 {
+    1.5
+}
+fn default_misfit() -> MisfitSpec {
+    MisfitSpec::new(MisfitKind::LogRms)
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            law: default_law(),
+            covariance: Covariance::default(),
+            prominence: default_prominence(),
+            misfit: default_misfit(),
+        }
+    }
+}
+
+/// Beam or plate kinematics of the inverse.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KinematicsChoice {
+    /// The paper's formulas as written (per unit width).
+    Beam,
+    /// Plate in cylindrical bending (E_eff with the faces' Poisson ratio).
+    Plate,
+}
+
+/// Options of the inverse homogenization.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InverseOptions {
+    /// Beam or plate kinematics.
+    #[serde(default = "default_kinematics")]
+    pub kinematics: KinematicsChoice,
+    /// Lines of the G*(f) curves, Hz [default: 40 lines over the fit band].
+    #[serde(default)]
+    pub freq_hz: Option<Vec<f64>>,
+    /// The layered inverse (G* per mode through a layered solid model of the part; needs a
+    /// rectangle model): on by default.
+    #[serde(default = "yes")]
+    pub layered: bool,
+    /// In-plane elements of the layered model (20-node hexahedra, one per layer through the
+    /// thickness).
+    #[serde(default = "default_layered_elements")]
+    pub layered_elements: [usize; 2],
+    /// Modes per reference modulus in the layered model's reduced basis.
+    #[serde(default = "default_layered_modes")]
+    pub layered_modes: usize,
+}
+
+fn default_layered_elements() -> [usize; 2] {
+    [18, 18]
+}
+fn default_layered_modes() -> usize {
+    30
+}
+
+fn default_kinematics() -> KinematicsChoice {
+    KinematicsChoice::Plate
+}
+
+impl Default for InverseOptions {
+    fn default() -> Self {
+        Self {
+            kinematics: default_kinematics(),
+            freq_hz: None,
+            layered: true,
+            layered_elements: default_layered_elements(),
+            layered_modes: default_layered_modes(),
+        }
+    }
+}
+
+/// Monte Carlo uncertainty: standard deviations of the inputs.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UncertaintyOptions {
+    /// Number of samples (0: no Monte Carlo).
+    #[serde(default = "default_samples")]
+    pub samples: usize,
+    /// Seed of the random draws (sample k uses seed + k: the same bands on any core count).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Relative standard deviation of the faces' Young's modulus.
+    #[serde(default = "default_modulus_sd")]
+    pub face_modulus_rel_sd: f64,
+    /// Standard deviation of each layer's thickness, m.
+    #[serde(default = "default_thickness_sd")]
+    pub thickness_sd_m: f64,
+    /// Relative standard deviation of each layer's density.
+    #[serde(default = "default_density_sd")]
+    pub density_rel_sd: f64,
+    /// Draw the law's parameters from the fit's covariance.
+    #[serde(default = "yes")]
+    pub fit_covariance: bool,
+}
+
+fn default_samples() -> usize {
+    400
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_modulus_sd() -> f64 {
+    0.01
+}
+fn default_thickness_sd() -> f64 {
+    0.01e-3
+}
+fn default_density_sd() -> f64 {
+    0.005
+}
+
+impl Default for UncertaintyOptions {
+    fn default() -> Self {
+        Self {
+            samples: default_samples(),
+            seed: default_seed(),
+            face_modulus_rel_sd: default_modulus_sd(),
+            thickness_sd_m: default_thickness_sd(),
+            density_rel_sd: default_density_sd(),
+            fit_covariance: true,
+        }
+    }
+}
+
+impl Job {
+    /// Reads and checks a job file.
+    ///
+    /// # Errors
+    /// The file cannot be read or parsed (line, column, key), or a value is out of range or in
+    /// the wrong unit (the field named).
+    pub fn read(path: &Path) -> Result<Self> {
+        let job: Job = crate::io::read_toml(path)?;
+        job.check()
+            .map_err(|e| anyhow!("error in '{}': {e}", path.display()))?;
+        Ok(job)
+    }
+
+    /// Range and unit checks; the error names the field.
+    pub fn check(&self) -> Result<()> {
+        let m = &self.measurement;
+        positive("measurement.tolerance_m", m.tolerance_m)?;
+        if m.tolerance_m > 0.1 {
+            return Err(anyhow!(
+                "measurement.tolerance_m: {} m is larger than a sensor; lengths are in m",
+                m.tolerance_m
+            ));
+        }
+        fraction("measurement.trigger", m.trigger)?;
+        fraction("measurement.min_coherence", m.min_coherence)?;
+        non_negative("measurement.pretrigger_s", m.pretrigger_s)?;
+        positive("measurement.force_window_s", m.force_window_s)?;
+        match (&m.channels, &m.frf, m.time.is_empty(), &m.uff) {
+            (Some(_), Some(_), true, None) | (Some(_), None, false, None) => {}
+            (None, None, true, Some(_)) => {}
+            _ => {
+                return Err(anyhow!(
+                    "measurement: give channels with frf (CSV) or with time (hit files), or uff alone"
+                ));
+            }
+        }
+        match (&self.model.file, &self.model.spec) {
+            (Some(_), None) | (None, Some(_)) => {}
+            _ => {
+                return Err(anyhow!(
+                    "model: give either file (a model TOML) or [model.spec], not both or neither"
+                ));
+            }
+        }
+        if let Some(spec) = &self.model.spec {
+            check_shell("model.spec.material", spec)?;
+        }
+        if self.model.modes.is_some_and(|n| n < 7) {
+            return Err(anyhow!(
+                "model.modes: keep at least the 6 rigid-body modes and one elastic mode"
+            ));
+        }
+        self.check_stack()?;
+        if let Some([lo, hi]) = self.ema.band_hz {
+            band("ema.band_hz", lo, hi)?;
+        }
+        if !(4..=400).contains(&self.ema.max_order) {
+            return Err(anyhow!(
+                "ema.max_order: {} must lie in 4..=400",
+                self.ema.max_order
+            ));
+        }
+        if let Some([lo, hi]) = self.fit.misfit.band_hz {
+            band("fit.misfit.band_hz", lo, hi)?;
+        }
+        if !(self.fit.prominence.is_finite() && self.fit.prominence > 1.0) {
+            return Err(anyhow!(
+                "fit.prominence: {} must be a ratio above 1",
+                self.fit.prominence
+            ));
+        }
+        if let Some(f) = &self.inverse.freq_hz {
+            if f.is_empty() || f.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(anyhow!("inverse.freq_hz: give positive frequencies in Hz"));
+            }
+        }
+        let inv = &self.inverse;
+        if inv.layered_elements.iter().any(|n| !(2..=60).contains(n)) {
+            return Err(anyhow!(
+                "inverse.layered_elements: {:?} must lie in 2..=60 per side",
+                inv.layered_elements
+            ));
+        }
+        if !(6..=200).contains(&inv.layered_modes) {
+            return Err(anyhow!(
+                "inverse.layered_modes: {} must lie in 6..=200",
+                inv.layered_modes
+            ));
+        }
+        let u = &self.uncertainty;
+        for (name, v) in [
+            ("uncertainty.face_modulus_rel_sd", u.face_modulus_rel_sd),
+            ("uncertainty.density_rel_sd", u.density_rel_sd),
+        ] {
+            if !(v.is_finite() && (0.0..0.5).contains(&v)) {
+                return Err(anyhow!(
+                    "{name}: {v} must be a relative standard deviation in [0, 0.5) (0.02 is 2 %)"
+                ));
+            }
+        }
+        if !(u.thickness_sd_m.is_finite() && (0.0..1e-3).contains(&u.thickness_sd_m)) {
+            return Err(anyhow!(
+                "uncertainty.thickness_sd_m: {} must be in m, below 1e-3 (a standard deviation of 0.01 mm is 1e-5)",
+                u.thickness_sd_m
+            ));
+        }
+        if u.samples > 100_000 {
+            return Err(anyhow!(
+                "uncertainty.samples: {} is more than 100000",
+                u.samples
+            ));
+        }
+        Ok(())
+    }
+
+    /// The stack's layers in SI units: catches mm for m, GPa for Pa, g/cm³ for kg/m³.
+    fn check_stack(&self) -> Result<()> {
+        if self.stack.layers.len() != 3 {
+            return Err(anyhow!(
+                "stack.layers: the inverse needs three layers (face, core, face), got {}",
+                self.stack.layers.len()
+            ));
+        }
+        for (k, l) in self.stack.layers.iter().enumerate() {
+            let at = |f: &str| format!("stack.layers[{k}].{f}");
+            positive(&at("thickness_m"), l.thickness_m)?;
+            if l.thickness_m > 0.05 {
+                return Err(anyhow!(
+                    "{}: {} m is thicker than a laminate layer: thicknesses are in m (1.715 mm is 1.715e-3)",
+                    at("thickness_m"),
+                    l.thickness_m
+                ));
+            }
+            positive(&at("density_kg_m3"), l.density_kg_m3)?;
+            if l.density_kg_m3 < 100.0 {
+                return Err(anyhow!(
+                    "{}: {} is not a solid's density in kg/m^3 (glass is 2500; g/cm^3 x 1000)",
+                    at("density_kg_m3"),
+                    l.density_kg_m3
+                ));
+            }
+            if k != 1 {
+                let e = l.young_pa.ok_or_else(|| {
+                    anyhow!("{}: a face needs its Young's modulus in Pa", at("young_pa"))
+                })?;
+                positive(&at("young_pa"), e)?;
+                if e < 1e8 {
+                    return Err(anyhow!(
+                        "{}: {e} Pa is far below any face material: moduli are in Pa (70 GPa is 70e9)",
+                        at("young_pa")
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Misfit kind label for the report.
+    pub fn misfit_label(&self) -> &'static str {
+        match self.fit.misfit.kind {
+            MisfitKind::Rms => "RMS (paper eqs. 2, 10)",
+            MisfitKind::LogRms => "log-RMS",
+            MisfitKind::Complex => "complex FRF",
+        }
+    }
+}
+
+/// The shell material of an inline model spec, in SI units.
+fn check_shell(at: &str, spec: &ModelSpec) -> Result<()> {
+    let m = &spec.material;
+    if m.young_pa < 1e8 {
+        return Err(anyhow!(
+            "{at}.young_pa: {} Pa is far below glass or steel: moduli are in Pa",
+            m.young_pa
+        ));
+    }
+    if m.thickness_m > 0.1 {
+        return Err(anyhow!(
+            "{at}.thickness_m: {} m: thicknesses are in m",
+            m.thickness_m
+        ));
+    }
+    Ok(())
+}
+
+fn positive(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(anyhow!("{name}: {v} must be positive"))
+    }
+}
+
+fn non_negative(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(anyhow!("{name}: {v} must not be negative"))
+    }
+}
+
+fn fraction(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && (0.0..1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(anyhow!("{name}: {v} must be a fraction in [0, 1)"))
+    }
+}
+
+fn band(name: &str, lo: f64, hi: f64) -> Result<()> {
+    if lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo {
+        Ok(())
+    } else {
+        Err(anyhow!(
+            "{name}: [{lo}, {hi}] must be an increasing band in Hz"
+        ))
+    }
+}

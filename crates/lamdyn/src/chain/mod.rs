@@ -1,0 +1,799 @@
+//! The whole chain of `lamdyn run` and `lamdyn demo`, one stage after the other:
+//!
+//! | stage | what | crate |
+//! |---|---|---|
+//! | measurement | FRFs from CSV/UFF, or H1 from hammer-hit time files (coherence) | lamdyn-frf, lamdyn-ema |
+//! | ema | stabilization diagram, poles, damping, shapes, CMIF (paper §2.1) | lamdyn-ema |
+//! | model | the FE model's real modes projected on the channels (paper eqs. 3–4) | lamdyn-fem, lamdyn-fit |
+//! | fit | the laminate's E*(ω) so that synthesized FRFs match (eqs. 2–10) | lamdyn-fit |
+//! | inverse | G*(f) of the core by the paper's inverse (eqs. 33–45) and the exact one (Mead–Markus) | lamdyn-material |
+//! | uncertainty | Monte Carlo over the stack and the fit's covariance ([`uncertainty`]) | here |
+//! | report | HTML with figures, CSV/JSON tables, written atomically ([`report`]) | lamdyn-report |
+//!
+//! The slow results (model, EMA) are cached keyed by their inputs ([`cache`]). Every stage's
+//! error is reported as "stage 'NAME' failed: why".
+
+pub mod cache;
+pub mod demo;
+pub mod job;
+pub mod layered;
+pub mod report;
+pub mod uncertainty;
+
+use crate::cmd::ema::{TimeOptions, time_frfs};
+use crate::progress::Spinner;
+use anyhow::{Context, Result, anyhow, bail};
+use cache::{Cache, Key};
+use job::{Job, KinematicsChoice};
+use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
+use lamdyn_fem::assembly::Assembly;
+use lamdyn_fem::eigen::Progress;
+use lamdyn_fem::eigen::{ModalParams, solve_modes};
+use lamdyn_fem::model::{MeshSpec, ModelSpec};
+use lamdyn_fit::fit::{FitResult, FitSettings, fit};
+use lamdyn_fit::misfit::Objective;
+use lamdyn_fit::modes::{PeakComparison, compare_peaks};
+use lamdyn_fit::probe::probes;
+use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
+use lamdyn_frf::{Channel, FrfSet};
+use lamdyn_material::causality::{CausalityParams, CausalityVerdict, kramers_kronig_check};
+use lamdyn_material::laminate::paper_inverse;
+use lamdyn_material::laminate::{
+    CoreEstimate, CoreShearFormula, FaceBending, FaceShear, Kinematics, PaperInverseOptions,
+    SandwichStack,
+};
+use lamdyn_material::sandwich::{ExactCoreEstimate, exact_inverse};
+use num_complex::Complex64;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of a run beside the job file.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Cache folder (absent: no cache).
+    pub cache_dir: Option<PathBuf>,
+    /// Overrides `uncertainty.samples`.
+    pub samples: Option<usize>,
+    /// Overrides `uncertainty.seed`.
+    pub seed: Option<u64>,
+}
+
+/// The measured data as the chain uses it.
+pub struct Measured {
+    /// The FRFs.
+    pub set: FrfSet,
+    /// Where they came from.
+    pub source: String,
+    /// Time data: the lowest coherence of each response in the fit band.
+    pub min_coherence: Option<Vec<f64>>,
+    /// Time data: the estimator's warnings (double hits, overloads).
+    pub warnings: Vec<String>,
+}
+
+/// The inverse at one frequency, both ways.
+#[derive(Debug, Clone)]
+pub struct CorePoint {
+    /// Frequency, Hz.
+    pub freq_hz: f64,
+    /// The fitted laminate modulus E*, Pa.
+    pub e_eff_pa: Complex64,
+    /// Delta-method standard deviations of E' (Pa) and η from the fit.
+    pub e_sd: Option<(f64, f64)>,
+    /// Paper eqs. 33–45.
+    pub paper: Result<CoreEstimate, String>,
+    /// Exact Mead–Markus inverse.
+    pub exact: Result<ExactCoreEstimate, String>,
+    /// The layered inverse at a modal frequency (None: not run here).
+    pub layered: Option<Result<Complex64, String>>,
+}
+
+impl CorePoint {
+    /// G* by the paper's inverse, if it has one.
+    pub fn paper_g(&self) -> Option<Complex64> {
+        self.paper.as_ref().ok().map(|c| c.core_shear_pa)
+    }
+    /// G* by the exact inverse, if it has one.
+    pub fn exact_g(&self) -> Option<Complex64> {
+        self.exact.as_ref().ok().map(|c| c.core_shear_pa)
+    }
+    /// G* by the layered inverse, if it has one.
+    pub fn layered_g(&self) -> Option<Complex64> {
+        self.layered.as_ref().and_then(|r| r.as_ref().ok()).copied()
+    }
+    /// |φ| of the paper's inverse (eq. 37).
+    pub fn phi(&self) -> Option<f64> {
+        self.paper.as_ref().ok().map(|c| c.phi.norm())
+    }
+}
+
+/// The core's known law of a virtual test, per line.
+#[derive(Debug, Clone)]
+pub struct Truth {
+    /// Where it came from.
+    pub source: String,
+    /// (f in Hz, G* in Pa), increasing.
+    pub lines: Vec<(f64, Complex64)>,
+}
+
+impl Truth {
+    /// G* at `f` Hz by linear interpolation (None outside the table).
+    pub fn at(&self, f: f64) -> Option<Complex64> {
+        let k = self.lines.partition_point(|(x, _)| *x < f);
+        if k == 0 {
+            return (self.lines.first()?.0 == f).then(|| self.lines[0].1);
+        }
+        let (x1, g1) = *self.lines.get(k)?;
+        let (x0, g0) = self.lines[k - 1];
+        Some(g0 + (g1 - g0) * ((f - x0) / (x1 - x0)))
+    }
+}
+
+/// One timed stage.
+#[derive(Debug, Clone)]
+pub struct StageTime {
+    /// Stage name.
+    pub name: &'static str,
+    /// Wall time, s.
+    pub seconds: f64,
+    /// Taken from the cache.
+    pub cached: bool,
+}
+
+/// Everything the chain found.
+pub struct ChainResult {
+    /// The job.
+    pub job: Job,
+    /// Its file.
+    pub job_path: PathBuf,
+    /// The measurement.
+    pub measured: Measured,
+    /// The modal identification.
+    pub ema: EmaResult,
+    /// A line describing the FE model.
+    pub model_line: String,
+    /// A line describing the layered inverse's model (None: not run).
+    pub layered_line: Option<String>,
+    /// The fit.
+    pub fit: FitResult,
+    /// Lines of the misfit.
+    pub fit_lines: Vec<usize>,
+    /// RMS FRF over the responses, measured and fitted, per line (paper Fig. 5).
+    pub measured_rms: Vec<f64>,
+    /// As `measured_rms`, from the fitted law.
+    pub fitted_rms: Vec<f64>,
+    /// Table 3: peaks of the RMS curves.
+    pub table3: Vec<PeakComparison>,
+    /// The stack of the inverse.
+    pub stack: SandwichStack,
+    /// The inverse's kinematics.
+    pub kinematics: Kinematics,
+    /// The paper inverse's options.
+    pub paper_options: PaperInverseOptions,
+    /// The inverse at the modal frequencies (the fit's peaks).
+    pub modal: Vec<CorePoint>,
+    /// The inverse on the curve grid.
+    pub curve: Vec<CorePoint>,
+    /// Kramers–Kronig verdicts on the curve grid: paper, exact.
+    pub causality: [Vec<Option<CausalityVerdict>>; 2],
+    /// Monte Carlo bands at the modal frequencies and on the curve grid.
+    pub uncertainty: Option<uncertainty::McResult>,
+    /// The truth of a virtual test.
+    pub truth: Option<Truth>,
+    /// Warnings for the report.
+    pub warnings: Vec<String>,
+    /// Stage timings.
+    pub timings: Vec<StageTime>,
+}
+
+/// Runs `f` as stage `name`: progress, timing, and "stage 'NAME' failed" on error.
+fn stage<T>(
+    name: &'static str,
+    spinner: &Spinner,
+    timings: &mut Vec<StageTime>,
+    f: impl FnOnce() -> Result<(T, bool)>,
+) -> Result<T> {
+    spinner.stage(&format!("stage '{name}'"));
+    let t = Instant::now();
+    let (value, cached) = f().with_context(|| format!("stage '{name}' failed"))?;
+    timings.push(StageTime {
+        name,
+        seconds: t.elapsed().as_secs_f64(),
+        cached,
+    });
+    Ok(value)
+}
+
+fn relative(base: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base.join(p)
+    }
+}
+
+/// Runs the chain on the job file at `path`.
+///
+/// # Errors
+/// The job file's errors (field named), then the first stage that fails (stage named).
+pub fn run_job(path: &Path, options: &RunOptions, spinner: &Spinner) -> Result<ChainResult> {
+    let mut job = Job::read(path)?;
+    if let Some(n) = options.samples {
+        job.uncertainty.samples = n;
+    }
+    if let Some(s) = options.seed {
+        job.uncertainty.seed = s;
+    }
+    let base = path
+        .parent()
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let cache = Cache::new(options.cache_dir.clone());
+    let mut timings = Vec::new();
+    let mut warnings = Vec::new();
+    let measured = stage("measurement", spinner, &mut timings, || {
+        Ok((read_measurement(&job, &base, path)?, false))
+    })?;
+    warnings.extend(measured.warnings.iter().cloned());
+    let ema = stage("ema", spinner, &mut timings, || {
+        run_ema(&job, &measured.set, &cache)
+    })?;
+    let (model, model_line) = stage("model", spinner, &mut timings, || {
+        build_model(&job, &base, &measured.set, &cache, spinner)
+    })?;
+    let (fit_result, objective_parts) = stage("fit", spinner, &mut timings, || {
+        Ok((run_fit(&job, &model, &measured.set)?, false))
+    })?;
+    let (fit_lines, measured_rms, fitted_rms, table3) = objective_parts;
+    let (stack, kinematics, paper_options) = stage("inverse setup", spinner, &mut timings, || {
+        let stack = job.stack.to_sandwich().context("the job's [stack]")?;
+        let kin = match job.inverse.kinematics {
+            KinematicsChoice::Beam => Kinematics::Beam,
+            KinematicsChoice::Plate => Kinematics::Plate {
+                poisson: stack.bottom().poisson,
+            },
+        };
+        let opts = PaperInverseOptions::new(
+            CoreShearFormula::Eq41,
+            FaceShear::Neglected,
+            FaceBending::CoreNeglected,
+            kin,
+        );
+        Ok(((stack, kin, opts), false))
+    })?;
+    let modal_hz: Vec<f64> = fit_result.peaks.iter().map(|p| p.freq_hz).collect();
+    let curve_hz = curve_grid(&job, &fit_result, &measured.set);
+    let (modal, curve, causality) = stage("inverse", spinner, &mut timings, || {
+        let at = |f: &[f64]| {
+            f.iter()
+                .map(|&f| core_point(&stack, &paper_options, &fit_result, f))
+                .collect::<Vec<_>>()
+        };
+        let (modal, curve) = (at(&modal_hz), at(&curve_hz));
+        let kk = [
+            causality(&curve, CorePoint::paper_g)?,
+            causality(&curve, CorePoint::exact_g)?,
+        ];
+        Ok(((modal, curve, kk), false))
+    })?;
+    let mut modal = modal;
+    let mut layered_line = None;
+    if job.inverse.layered {
+        layered_line = stage("layered inverse", spinner, &mut timings, || {
+            Ok((layered::run(&job, &base, &ema, &mut modal, spinner)?, false))
+        })?;
+    }
+    let mc = if job.uncertainty.samples > 0 {
+        Some(stage("uncertainty", spinner, &mut timings, || {
+            let input = uncertainty::McInput {
+                stack: &job.stack,
+                fit: &fit_result,
+                options: &job.uncertainty,
+                kinematics: job.inverse.kinematics,
+                paper: paper_options,
+                freqs_hz: [modal_hz.as_slice(), curve_hz.as_slice()].concat(),
+            };
+            Ok((uncertainty::monte_carlo(&input, spinner)?, false))
+        })?)
+    } else {
+        None
+    };
+    let truth = match &job.truth {
+        Some(t) => Some(stage("truth", spinner, &mut timings, || {
+            Ok((read_truth(&relative(&base, t))?, false))
+        })?),
+        None => None,
+    };
+    collect_warnings(
+        &job,
+        &measured,
+        &ema,
+        &fit_result,
+        &modal,
+        &causality,
+        &mut warnings,
+    );
+    Ok(ChainResult {
+        job,
+        job_path: path.to_path_buf(),
+        measured,
+        ema,
+        model_line,
+        layered_line,
+        fit: fit_result,
+        fit_lines,
+        measured_rms,
+        fitted_rms,
+        table3,
+        stack,
+        kinematics,
+        paper_options,
+        modal,
+        curve,
+        causality,
+        uncertainty: mc,
+        truth,
+        warnings,
+        timings,
+    })
+}
+
+fn read_text(p: &Path) -> Result<String> {
+    std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
+}
+
+/// The measured FRF set of the job, with the expected channel count checked.
+fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured> {
+    let m = &job.measurement;
+    let mut out = match (&m.channels, &m.frf, &m.uff) {
+        (Some(c), Some(f), None) => {
+            let (c, f) = (relative(base, c), relative(base, f));
+            let (responses, references) =
+                lamdyn_frf::csv::parse_channels(&c.display().to_string(), &read_text(&c)?)
+                    .context("measurement.channels")?;
+            let set = lamdyn_frf::csv::parse_frf(
+                &f.display().to_string(),
+                &read_text(&f)?,
+                responses,
+                references,
+            )
+            .with_context(|| {
+                format!(
+                    "measurement.frf does not match the geometry in measurement.channels ('{}')",
+                    c.display()
+                )
+            })?;
+            Measured {
+                set,
+                source: format!("FRFs '{}', channels '{}'", f.display(), c.display()),
+                min_coherence: None,
+                warnings: vec![],
+            }
+        }
+        (Some(c), None, None) => {
+            let c = relative(base, c);
+            let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
+            let options = TimeOptions {
+                estimator: crate::cli::Estimator::H1,
+                trigger: m.trigger,
+                pretrigger_s: m.pretrigger_s,
+                force_window_s: m.force_window_s,
+                record_s: None,
+                exp_tau_s: None,
+            };
+            let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
+                format!(
+                    "measurement.time does not match the geometry in measurement.channels ('{}')",
+                    c.display()
+                )
+            })?;
+            let band = job.fit.misfit.band_hz.unwrap_or([0.0, f64::INFINITY]);
+            let min_coherence = spectra
+                .channels
+                .iter()
+                .map(|ch| {
+                    spectra
+                        .freqs_hz
+                        .iter()
+                        .zip(&ch.coherence)
+                        .filter(|(f, _)| **f >= band[0] && **f <= band[1])
+                        .map(|(_, g)| *g)
+                        .fold(1.0, f64::min)
+                })
+                .collect();
+            Measured {
+                set,
+                source: format!(
+                    "H1 from {hits} hammer hits ('{}'...), channels '{}'",
+                    files
+                        .first()
+                        .map_or(String::new(), |f| f.display().to_string()),
+                    c.display()
+                ),
+                min_coherence: Some(min_coherence),
+                warnings: spectra.warnings.clone(),
+            }
+        }
+        (None, None, Some(u)) => {
+            let (set, source) = crate::cmd::ema::read_frfs(Some(&relative(base, u)), None, None)
+                .context("measurement.uff")?;
+            Measured {
+                set,
+                source,
+                min_coherence: None,
+                warnings: vec![],
+            }
+        }
+        _ => bail!(
+            "error in '{}': measurement: give channels with frf or time, or uff",
+            path.display()
+        ),
+    };
+    if let Some(n) = m.responses {
+        let got = out.set.responses().len();
+        if got != n {
+            bail!("measurement.responses = {n}, but the geometry has {got} response channels",);
+        }
+    }
+    if out.set.references().is_empty() {
+        bail!("measurement: no reference (hammer) channel in the geometry");
+    }
+    out.source = format!(
+        "{} ({} responses x {} references, {} lines {:.3}-{:.3} Hz, {})",
+        out.source,
+        out.set.responses().len(),
+        out.set.references().len(),
+        out.set.n_lines(),
+        out.set.freqs_hz()[0],
+        out.set.freqs_hz()[out.set.n_lines() - 1],
+        out.set.quantity().unit()
+    );
+    Ok(out)
+}
+
+/// The EMA band: the job's, else the fit's, else every line.
+fn ema_band(job: &Job) -> Option<[f64; 2]> {
+    job.ema.band_hz.or(job.fit.misfit.band_hz)
+}
+
+fn channels_key(key: Key, channels: &[Channel]) -> Key {
+    channels.iter().fold(key, |k, c| {
+        let k = k.bytes(c.name.as_bytes());
+        c.point_m
+            .iter()
+            .chain(&c.direction)
+            .fold(k, |k, v| k.f64(*v))
+    })
+}
+
+/// Modal identification, from the cache when the FRFs and settings are unchanged.
+fn run_ema(job: &Job, set: &FrfSet, cache: &Cache) -> Result<(EmaResult, bool)> {
+    let settings = EmaSettings {
+        band_hz: ema_band(job),
+        orders: (2, job.ema.max_order, 2),
+        reject_hz: job.ema.reject_hz.clone(),
+        ..Default::default()
+    };
+    let mut key = Key::new(concat!("ema ", env!("CARGO_PKG_VERSION")))
+        .bytes(format!("{settings:?}").as_bytes());
+    key = channels_key(key, set.responses());
+    key = channels_key(key, set.references());
+    for f in set.freqs_hz() {
+        key = key.f64(*f);
+    }
+    for h in set.data() {
+        key = key.f64(h.re).f64(h.im);
+    }
+    if let Some(bytes) = cache.get("ema", key) {
+        if let Ok(r) = serde_json::from_slice::<EmaResult>(&bytes) {
+            return Ok((r, true));
+        }
+    }
+    let r = identify(set, &settings).context("modal identification")?;
+    cache.put("ema", key, &serde_json::to_vec(&r)?)?;
+    Ok((r, false))
+}
+
+/// The modal model of the FE model on the measured channels, cached.
+fn build_model(
+    job: &Job,
+    base: &Path,
+    set: &FrfSet,
+    cache: &Cache,
+    spinner: &Spinner,
+) -> Result<((ModalModel, String), bool)> {
+    let (spec, spec_dir, label) = match (&job.model.file, &job.model.spec) {
+        (Some(f), None) => {
+            let p = relative(base, f);
+            let spec: ModelSpec = crate::io::read_toml(&p).context("model.file")?;
+            let dir = p
+                .parent()
+                .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+            (spec, dir, format!("'{}'", p.display()))
+        }
+        (None, Some(s)) => (s.clone(), base.to_path_buf(), "[model.spec]".to_string()),
+        _ => bail!("model: give file or spec"),
+    };
+    if !spec.supports.is_empty() {
+        bail!(
+            "model: {label} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and keep the support resonances out of the fit band",
+            spec.supports.len()
+        );
+    }
+    let modes = job.model.modes.unwrap_or(spec.solver.modes);
+    if modes < 7 {
+        bail!("model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode");
+    }
+    let tol = job.measurement.tolerance_m;
+    let mut key = Key::new(concat!("model ", env!("CARGO_PKG_VERSION")))
+        .bytes(format!("{spec:?}").as_bytes())
+        .bytes(&(modes as u64).to_le_bytes())
+        .bytes(&[u8::from(job.model.residual)])
+        .f64(tol);
+    if let MeshSpec::Gmsh { file, .. } = &spec.mesh {
+        let p = relative(&spec_dir, Path::new(file));
+        key = key
+            .bytes(&std::fs::read(&p).with_context(|| format!("cannot read '{}'", p.display()))?);
+    }
+    key = channels_key(key, set.responses());
+    key = channels_key(key, set.references());
+    let line = |n_nodes: String, n_el: String| {
+        format!(
+            "{label}: {n_nodes} nodes, {n_el} MITC4, {modes} modes{}, E_ref = {:.4e} Pa, h = {:.4} mm, rho = {:.1} kg/m^3",
+            if job.model.residual {
+                " + residual term"
+            } else {
+                ""
+            },
+            spec.material.young_pa,
+            spec.material.thickness_m * 1e3,
+            spec.material.density_kg_m3
+        )
+    };
+    if let Some(bytes) = cache.get("model", key) {
+        if let Ok(m) = ModalModel::from_cache_bytes(&bytes) {
+            return Ok(((m, line("-".into(), "-".into()) + " (cached)"), true));
+        }
+    }
+    let (mesh, _) = spec
+        .build(&spec_dir)
+        .with_context(|| format!("invalid model {label}"))?;
+    let asm = Assembly::new(&mesh, &spec.material, &[])
+        .with_context(|| format!("invalid model {label}"))?;
+    let resp = probes(&mesh, set.responses(), tol)
+        .context("the response channels do not lie on the model (measurement.channels vs model; see measurement.tolerance_m)")?;
+    let refs = probes(&mesh, set.references(), tol).context(
+        "the reference channels do not lie on the model (measurement.channels vs model)",
+    )?;
+    let sol = solve_modes(&asm, &ModalParams::lowest(modes), spinner)?;
+    let residual = if job.model.residual {
+        ResidualTerm::Static
+    } else {
+        ResidualTerm::None
+    };
+    let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, residual)?;
+    cache.put("model", key, &model.to_cache_bytes())?;
+    let text = line(
+        mesh.nodes().len().to_string(),
+        mesh.elements().len().to_string(),
+    );
+    Ok(((model, text), false))
+}
+
+type FitParts = (Vec<usize>, Vec<f64>, Vec<f64>, Vec<PeakComparison>);
+
+/// The fit and its RMS curves and Table 3.
+fn run_fit(job: &Job, model: &ModalModel, set: &FrfSet) -> Result<(FitResult, FitParts)> {
+    let mut settings = FitSettings::new(job.fit.law, job.fit.misfit.clone());
+    settings.covariance = job.fit.covariance;
+    settings.prominence = job.fit.prominence;
+    if job.fit.misfit.reference >= set.references().len() {
+        bail!(
+            "fit.misfit.reference = {} but the measurement has {} reference(s), counted from 0",
+            job.fit.misfit.reference,
+            set.references().len()
+        );
+    }
+    let r = fit(model, set, &settings)?;
+    if r.peaks.is_empty() {
+        bail!("no resonance peak in the fit band: check fit.misfit.band_hz");
+    }
+    let objective = Objective::new(model, set, settings.misfit.clone())?;
+    let fitted = objective.model_rms(&|w| r.modulus(w));
+    let table3 = compare_peaks(
+        set.freqs_hz(),
+        objective.measured_rms(),
+        &fitted,
+        objective.lines(),
+        settings.prominence,
+    );
+    Ok((
+        r,
+        (
+            objective.lines().to_vec(),
+            objective.measured_rms().to_vec(),
+            fitted,
+            table3,
+        ),
+    ))
+}
+
+/// Lines of the curves: the job's, else 40 log-spaced lines over the modal frequencies
+/// (per-mode law: only there is it identified) or the fit band.
+fn curve_grid(job: &Job, r: &FitResult, set: &FrfSet) -> Vec<f64> {
+    if let Some(f) = &job.inverse.freq_hz {
+        return f.clone();
+    }
+    let peaks: Vec<f64> = r.peaks.iter().map(|p| p.freq_hz).collect();
+    let (lo, hi) = match (job.fit.law, job.fit.misfit.band_hz) {
+        (lamdyn_fit::fit::LawKind::PerMode, _) | (_, None) => (
+            peaks.first().copied().unwrap_or(set.freqs_hz()[0].max(1.0)),
+            peaks
+                .last()
+                .copied()
+                .unwrap_or(set.freqs_hz()[set.n_lines() - 1]),
+        ),
+        (_, Some([a, b])) => (a.max(set.freqs_hz()[1]), b),
+    };
+    if hi <= lo {
+        return vec![lo];
+    }
+    let n = 40;
+    (0..n)
+        .map(|k| lo * (hi / lo).powf(k as f64 / (n - 1) as f64))
+        .collect()
+}
+
+/// Both inverses at `f` Hz for the fitted law.
+fn core_point(
+    stack: &SandwichStack,
+    options: &PaperInverseOptions,
+    r: &FitResult,
+    f: f64,
+) -> CorePoint {
+    let w = 2.0 * PI * f;
+    let e = r.modulus(w);
+    let (_, _, sd) = r.modulus_uncertainty(w);
+    CorePoint {
+        freq_hz: f,
+        e_eff_pa: e,
+        e_sd: sd,
+        paper: paper_inverse(stack, w, e, options).map_err(|e| e.to_string()),
+        exact: exact_inverse(stack, w, e, options.kinematics).map_err(|e| e.to_string()),
+        layered: None,
+    }
+}
+
+/// Kramers–Kronig verdicts of one inverse's G*(f) on the curve (where it exists).
+fn causality(
+    points: &[CorePoint],
+    g: fn(&CorePoint) -> Option<Complex64>,
+) -> Result<Vec<Option<CausalityVerdict>>> {
+    let idx: Vec<usize> = (0..points.len())
+        .filter(|&i| g(&points[i]).is_some())
+        .collect();
+    let mut verdicts = vec![None; points.len()];
+    if idx.len() < 3 {
+        return Ok(verdicts);
+    }
+    let omega: Vec<f64> = idx.iter().map(|&i| 2.0 * PI * points[i].freq_hz).collect();
+    let modulus: Vec<Complex64> = idx.iter().filter_map(|&i| g(&points[i])).collect();
+    let report = kramers_kronig_check(&omega, &modulus, CausalityParams::default())?;
+    for (k, &i) in idx.iter().enumerate() {
+        verdicts[i] = Some(report.lines[k].verdict);
+    }
+    Ok(verdicts)
+}
+
+/// The truth table: f_hz, storage_pa, loss_pa (as `lamdyn simulate` writes truth.csv).
+fn read_truth(path: &Path) -> Result<Truth> {
+    let t = crate::io::CsvTable::read(path).context("truth")?;
+    let (f, s, l) = (
+        t.require_any(&["f_hz"])?,
+        t.require_any(&["storage_pa"])?,
+        t.require_any(&["loss_pa"])?,
+    );
+    t.require_increasing_positive(f)?;
+    Ok(Truth {
+        source: format!("'{}'", path.display()),
+        lines: t
+            .rows()
+            .iter()
+            .map(|(_, v)| (v[f], Complex64::new(v[s], v[l])))
+            .collect(),
+    })
+}
+
+fn collect_warnings(
+    job: &Job,
+    measured: &Measured,
+    ema: &EmaResult,
+    r: &FitResult,
+    modal: &[CorePoint],
+    causality: &[Vec<Option<CausalityVerdict>>; 2],
+    out: &mut Vec<String>,
+) {
+    use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
+    if let Some(c) = &measured.min_coherence {
+        let names = measured.set.responses();
+        let poor: Vec<String> = c
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| **g < job.measurement.min_coherence)
+            .map(|(i, g)| format!("{} ({g:.2})", names[i].name))
+            .collect();
+        if !poor.is_empty() {
+            out.push(format!(
+                "poor coherence (below {}) in the fit band at {} of {} responses: {}{}",
+                job.measurement.min_coherence,
+                poor.len(),
+                c.len(),
+                poor.iter().take(6).cloned().collect::<Vec<_>>().join(", "),
+                if poor.len() > 6 { ", ..." } else { "" }
+            ));
+        }
+    }
+    for m in &ema.rejected {
+        out.push(format!(
+            "EMA: pole at {:.3} Hz (zeta {:.2} %) rejected as a support resonance (ema.reject_hz)",
+            m.freq_hz,
+            100.0 * m.damping_ratio
+        ));
+    }
+    for f in &ema.missing_hz {
+        out.push(format!("EMA: no stable pole near {f:.3} Hz"));
+    }
+    let fe: Vec<f64> = r.peaks.iter().map(|p| p.freq_hz).collect();
+    for m in &ema.modes {
+        if !fe.iter().any(|f| (f / m.freq_hz - 1.0).abs() < 0.02) {
+            out.push(format!(
+                "EMA mode at {:.3} Hz has no RMS peak in the fit (weakly excited or a close pair): not used for the core",
+                m.freq_hz
+            ));
+        }
+    }
+    if !r.converged {
+        out.push(format!(
+            "fit: the best start did not converge ({})",
+            r.reason
+        ));
+    }
+    for p in modal {
+        if let Some(phi) = p.phi() {
+            if phi > PHI_ACCURACY_LIMIT {
+                out.push(format!(
+                    "{:.2} Hz: |phi| = {phi:.3} > {PHI_ACCURACY_LIMIT}: the paper's inverse is beyond its ~1 % validity; prefer the exact inverse",
+                    p.freq_hz
+                ));
+            }
+        }
+        for (name, e) in [
+            ("paper", p.paper.as_ref().err()),
+            ("exact", p.exact.as_ref().err()),
+            ("layered", p.layered.as_ref().and_then(|l| l.as_ref().err())),
+        ] {
+            if let Some(e) = e {
+                out.push(format!("{:.2} Hz: no {name} inverse: {e}", p.freq_hz));
+            }
+        }
+    }
+    for (name, v) in ["paper", "exact"].iter().zip(causality) {
+        let bad = v
+            .iter()
+            .filter(|x| x.is_some_and(|x| !x.is_consistent()))
+            .count();
+        if bad > 0 {
+            out.push(format!(
+                "the {name} inverse's G*(f) fails the Kramers-Kronig check at {bad} of {} lines",
+                v.len()
+            ));
+        }
+    }
+}
+
+/// A helpful error when a job path is missing.
+pub fn check_job_path(p: &Path) -> Result<()> {
+    if !p.exists() {
+        return Err(anyhow!("job file '{}' does not exist", p.display()));
+    }
+    Ok(())
+}

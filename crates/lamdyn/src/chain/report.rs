@@ -1,0 +1,818 @@
+//! The report of a chain run: one self-contained HTML file (figures inline as SVG), the figures
+//! again as SVG and PNG files, the tables as CSV and everything as JSON, written into the
+//! results folder at once (`write_dir_atomically`: a failed run leaves the old
+//! report as it was).
+//!
+//! Figures: the RMS FRF measured vs fitted (paper Fig. 5), the stabilization diagram and the
+//! CMIF, the identified mode shapes as contour maps, E'(f) and η(f) of the laminate (Fig. 4),
+//! G'(f) and η(f) of the core by both inverses with the Monte Carlo bands (Fig. 7). Tables: the
+//! modes, the law's parameters, Table 3, the core at each modal frequency (with the errors
+//! against the truth of a virtual test, and |φ| against the paper model's validity limit), the
+//! Kramers–Kronig verdict, the warnings and the stage timings.
+
+use super::uncertainty::{Band, Bands};
+use super::{ChainResult, CorePoint};
+use anyhow::{Result, anyhow};
+use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
+use lamdyn_report::chart::{Axis, Chart, Mark, Series};
+use lamdyn_report::{HtmlReport, shape_map};
+use num_complex::Complex64;
+use std::fmt::Write as _;
+
+const BLUE: [u8; 3] = [31, 119, 180];
+const ORANGE: [u8; 3] = [230, 110, 0];
+const GREEN: [u8; 3] = [44, 160, 44];
+const BLACK: [u8; 3] = [0, 0, 0];
+const PURPLE: [u8; 3] = [148, 60, 189];
+
+/// Most mode-shape maps drawn.
+const MAX_SHAPES: usize = 8;
+
+/// Picks one quantity's band from a frequency's bands.
+type BandPick = fn(&Bands) -> Option<Band>;
+
+/// The report's files: (relative path, bytes).
+pub type Files = Vec<(String, Vec<u8>)>;
+
+fn fmt(v: Option<f64>, scale: f64, digits: usize) -> String {
+    v.map_or("-".into(), |x| format!("{:.*}", digits, x / scale))
+}
+
+fn band_text(b: Option<Band>, scale: f64, digits: usize) -> String {
+    b.map_or("-".into(), |[lo, hi]| {
+        format!("{:.*} - {:.*}", digits, lo / scale, digits, hi / scale)
+    })
+}
+
+fn rel_err(got: Option<f64>, truth: Option<f64>) -> Option<f64> {
+    Some(got? / truth? - 1.0)
+}
+
+fn pct(v: Option<f64>) -> String {
+    v.map_or("-".into(), |x| format!("{:+.1}", 100.0 * x))
+}
+
+fn storage(g: Option<Complex64>) -> Option<f64> {
+    g.map(|g| g.re)
+}
+fn loss(g: Option<Complex64>) -> Option<f64> {
+    g.map(|g| g.im / g.re)
+}
+
+/// A band polygon (upper forwards, lower backwards) from per-point bands.
+fn band_series(
+    name: &str,
+    color: [u8; 3],
+    xs: &[f64],
+    bands: &[Option<Band>],
+    scale: f64,
+) -> Series {
+    let pts: Vec<(f64, Band)> = xs
+        .iter()
+        .zip(bands)
+        .filter_map(|(x, b)| b.map(|b| (*x, b)))
+        .collect();
+    let mut poly: Vec<[f64; 2]> = pts.iter().map(|(x, b)| [*x, b[1] / scale]).collect();
+    poly.extend(pts.iter().rev().map(|(x, b)| [*x, b[0] / scale]));
+    Series::new(name, color, Mark::Band, poly)
+}
+
+/// Renders each chart to SVG and PNG, adds it to the report and the files.
+fn add_figure(
+    html: &mut HtmlReport,
+    files: &mut Files,
+    name: &str,
+    caption: &str,
+    chart: &Chart,
+) -> Result<()> {
+    let svg = chart
+        .render_svg()
+        .map_err(|e| anyhow!("figure '{name}': {e}"))?;
+    let png = chart
+        .render_png()
+        .map_err(|e| anyhow!("figure '{name}': {e}"))?;
+    files.push((format!("figures/{name}.svg"), svg.clone().into_bytes()));
+    files.push((format!("figures/{name}.png"), png));
+    html.figure(name, caption, svg);
+    Ok(())
+}
+
+/// The curve's bands for one quantity.
+fn curve_bands(r: &ChainResult, pick: fn(&Bands) -> Option<Band>) -> Vec<Option<Band>> {
+    r.curve
+        .iter()
+        .map(|p| {
+            r.uncertainty
+                .as_ref()
+                .and_then(|m| m.at(p.freq_hz))
+                .and_then(pick)
+        })
+        .collect()
+}
+
+fn modal_bands(r: &ChainResult, p: &CorePoint) -> Bands {
+    r.uncertainty
+        .as_ref()
+        .and_then(|m| m.at(p.freq_hz))
+        .copied()
+        .unwrap_or_default()
+}
+
+fn rms_chart(r: &ChainResult) -> Chart {
+    let f = r.measured.set.freqs_hz();
+    let unit = r.measured.set.quantity().unit();
+    let mut c = Chart::new(
+        "RMS FRF over the responses: measured vs fitted (paper Fig. 5)",
+        Axis::linear("frequency (Hz)"),
+        Axis::log(&format!("RMS FRF ({unit})")),
+    );
+    let pts = |v: &[f64]| {
+        r.fit_lines
+            .iter()
+            .map(|&k| [f[k], v[k]])
+            .collect::<Vec<_>>()
+    };
+    c.series.push(Series::new(
+        "measured",
+        BLACK,
+        Mark::Line,
+        pts(&r.measured_rms),
+    ));
+    c.series.push(Series::new(
+        "fitted",
+        ORANGE,
+        Mark::Line,
+        pts(&r.fitted_rms),
+    ));
+    c
+}
+
+fn laminate_charts(r: &ChainResult) -> (Chart, Chart) {
+    let xs: Vec<f64> = r.curve.iter().map(|p| p.freq_hz).collect();
+    let mut e = Chart::new(
+        "Laminate: effective storage modulus E'(f) (paper Fig. 4)",
+        Axis::linear("frequency (Hz)"),
+        Axis::linear("E' (GPa)"),
+    );
+    let mut eta = Chart::new(
+        "Laminate: loss factor of E*(f) (paper Fig. 4)",
+        Axis::linear("frequency (Hz)"),
+        Axis::linear("loss factor"),
+    );
+    if r.uncertainty.is_some() {
+        e.series.push(band_series(
+            "95 % band",
+            BLUE,
+            &xs,
+            &curve_bands(r, |b| b.e_storage),
+            1e9,
+        ));
+        eta.series.push(band_series(
+            "95 % band",
+            BLUE,
+            &xs,
+            &curve_bands(r, |b| b.e_loss_factor),
+            1.0,
+        ));
+    }
+    e.series.push(Series::new(
+        "fitted law",
+        BLUE,
+        Mark::Line,
+        r.curve
+            .iter()
+            .map(|p| [p.freq_hz, p.e_eff_pa.re / 1e9])
+            .collect(),
+    ));
+    eta.series.push(Series::new(
+        "fitted law",
+        BLUE,
+        Mark::Line,
+        r.curve
+            .iter()
+            .map(|p| [p.freq_hz, p.e_eff_pa.im / p.e_eff_pa.re])
+            .collect(),
+    ));
+    e.series.push(Series::new(
+        "modal frequencies",
+        BLACK,
+        Mark::Disc,
+        r.modal
+            .iter()
+            .map(|p| [p.freq_hz, p.e_eff_pa.re / 1e9])
+            .collect(),
+    ));
+    eta.series.push(Series::new(
+        "modal frequencies",
+        BLACK,
+        Mark::Disc,
+        r.modal
+            .iter()
+            .map(|p| [p.freq_hz, p.e_eff_pa.im / p.e_eff_pa.re])
+            .collect(),
+    ));
+    (e, eta)
+}
+
+fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
+    let (title, label, scale) = if loss_factor {
+        (
+            "Core: loss factor eta(f) (paper Fig. 7)",
+            "loss factor",
+            1.0,
+        )
+    } else {
+        (
+            "Core: shear storage modulus G'(f) (paper Fig. 7)",
+            "G' (MPa)",
+            1e6,
+        )
+    };
+    let value = |g: Option<Complex64>| if loss_factor { loss(g) } else { storage(g) };
+    let mut c = Chart::new(title, Axis::linear("frequency (Hz)"), Axis::linear(label));
+    let xs: Vec<f64> = r.curve.iter().map(|p| p.freq_hz).collect();
+    if r.uncertainty.is_some() {
+        let (pb, eb): (BandPick, BandPick) = if loss_factor {
+            (|b| b.paper_loss_factor, |b| b.exact_loss_factor)
+        } else {
+            (|b| b.paper_storage, |b| b.exact_storage)
+        };
+        c.series.push(band_series(
+            "paper: 95 % band",
+            BLUE,
+            &xs,
+            &curve_bands(r, pb),
+            scale,
+        ));
+        c.series.push(band_series(
+            "exact: 95 % band",
+            ORANGE,
+            &xs,
+            &curve_bands(r, eb),
+            scale,
+        ));
+    }
+    let line = |name: &str, color, g: fn(&CorePoint) -> Option<Complex64>, mark| {
+        Series::new(
+            name,
+            color,
+            mark,
+            r.curve
+                .iter()
+                .filter_map(|p| value(g(p)).map(|v| [p.freq_hz, v / scale]))
+                .collect(),
+        )
+    };
+    c.series.push(line(
+        "paper inverse (eqs. 33-45)",
+        BLUE,
+        CorePoint::paper_g,
+        Mark::Line,
+    ));
+    c.series.push(line(
+        "exact inverse (Mead-Markus)",
+        ORANGE,
+        CorePoint::exact_g,
+        Mark::Line,
+    ));
+    let modal = |name: &str, color, g: fn(&CorePoint) -> Option<Complex64>| {
+        Series::new(
+            name,
+            color,
+            Mark::Disc,
+            r.modal
+                .iter()
+                .filter_map(|p| value(g(p)).map(|v| [p.freq_hz, v / scale]))
+                .collect(),
+        )
+    };
+    c.series.push(modal("", BLUE, CorePoint::paper_g));
+    c.series.push(modal("", ORANGE, CorePoint::exact_g));
+    if r.modal.iter().any(|p| p.layered_g().is_some()) {
+        c.series.push(modal(
+            "layered inverse (per mode)",
+            PURPLE,
+            CorePoint::layered_g,
+        ));
+    }
+    let beyond: Vec<[f64; 2]> = r
+        .modal
+        .iter()
+        .filter(|p| p.phi().is_some_and(|phi| phi > PHI_ACCURACY_LIMIT))
+        .filter_map(|p| value(p.paper_g()).map(|v| [p.freq_hz, v / scale]))
+        .collect();
+    if !beyond.is_empty() {
+        c.series.push(Series::new(
+            "paper: |phi| beyond validity",
+            [200, 0, 0],
+            Mark::Cross,
+            beyond,
+        ));
+    }
+    if let Some(t) = &r.truth {
+        let (lo, hi) = (
+            xs.first().copied().unwrap_or(0.0),
+            xs.last().copied().unwrap_or(0.0),
+        );
+        c.series.push(Series::new(
+            "truth (virtual test)",
+            GREEN,
+            Mark::Line,
+            t.lines
+                .iter()
+                .filter(|(f, _)| *f >= lo * 0.9 && *f <= hi * 1.1)
+                .filter_map(|(f, g)| value(Some(*g)).map(|v| [*f, v / scale]))
+                .collect(),
+        ));
+    }
+    c
+}
+
+/// The mode shape maps: normal-ish channels (|d_z| > 0.7), value signed along +z.
+fn shape_charts(r: &ChainResult) -> Vec<(String, String, Chart)> {
+    let resp = r.measured.set.responses();
+    let normal: Vec<usize> = (0..resp.len())
+        .filter(|&i| resp[i].direction[2].abs() > 0.7)
+        .collect();
+    if normal.len() < 4 {
+        return vec![];
+    }
+    let pts: Vec<[f64; 2]> = normal
+        .iter()
+        .map(|&i| [resp[i].point_m[0], resp[i].point_m[1]])
+        .collect();
+    r.ema
+        .modes
+        .iter()
+        .take(MAX_SHAPES)
+        .enumerate()
+        .filter(|(_, m)| m.real_shape.len() == resp.len())
+        .map(|(k, m)| {
+            let v: Vec<f64> = normal
+                .iter()
+                .map(|&i| m.real_shape[i] * resp[i].direction[2].signum())
+                .collect();
+            let title = format!("Mode {}: {:.2} Hz, zeta {:.2} %", k + 1, m.freq_hz, 100.0 * m.damping_ratio);
+            (
+                format!("mode{}", k + 1),
+                format!(
+                    "Mode {} shape (EMA, real part, normal channels) at {:.3} Hz, contour map interpolated between the sensors (dots)",
+                    k + 1,
+                    m.freq_hz
+                ),
+                shape_map(&title, &pts, &v, 11),
+            )
+        })
+        .collect()
+}
+
+fn csv_line(cells: &[String]) -> String {
+    let mut s = cells.join(",");
+    s.push('\n');
+    s
+}
+
+/// Table of the core at the modal frequencies: (header, rows) for HTML, and the CSV.
+fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String) {
+    let truth = r.truth.is_some();
+    let mut header = vec![
+        "f [Hz]",
+        "E' [GPa]",
+        "eta_E",
+        "|phi|",
+        "valid (|phi|<=0.1)",
+        "G'_paper [MPa]",
+        "95% band",
+        "eta_paper",
+        "95% band",
+        "G'_exact [MPa]",
+        "95% band",
+        "eta_exact",
+        "95% band",
+        "G'_layered [MPa]",
+        "eta_layered",
+    ];
+    if truth {
+        header.extend([
+            "G'_true [MPa]",
+            "eta_true",
+            "err G'_paper [%]",
+            "err eta_paper [%]",
+            "err G'_exact [%]",
+            "err eta_exact [%]",
+            "err G'_layered [%]",
+            "err eta_layered [%]",
+        ]);
+    }
+    let mut csv = String::from(
+        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_loss_factor",
+    );
+    if truth {
+        csv.push_str(",g_true_storage_pa,g_true_loss_factor,err_g_paper_storage,err_g_paper_loss_factor,err_g_exact_storage,err_g_exact_loss_factor,err_g_layered_storage,err_g_layered_loss_factor");
+    }
+    csv.push('\n');
+    let mut rows = vec![];
+    for p in &r.modal {
+        let b = modal_bands(r, p);
+        let phi = p.phi();
+        let valid = phi.map_or("-", |x| if x <= PHI_ACCURACY_LIMIT { "yes" } else { "NO" });
+        let (gp, ge, gl) = (p.paper_g(), p.exact_g(), p.layered_g());
+        let mut row = vec![
+            format!("{:.3}", p.freq_hz),
+            format!("{:.4}", p.e_eff_pa.re / 1e9),
+            format!("{:.3e}", p.e_eff_pa.im / p.e_eff_pa.re),
+            fmt(phi, 1.0, 4),
+            valid.to_string(),
+            fmt(storage(gp), 1e6, 3),
+            band_text(b.paper_storage, 1e6, 3),
+            fmt(loss(gp), 1.0, 3),
+            band_text(b.paper_loss_factor, 1.0, 3),
+            fmt(storage(ge), 1e6, 3),
+            band_text(b.exact_storage, 1e6, 3),
+            fmt(loss(ge), 1.0, 3),
+            band_text(b.exact_loss_factor, 1.0, 3),
+            fmt(storage(gl), 1e6, 3),
+            fmt(loss(gl), 1.0, 3),
+        ];
+        let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
+        let lo = |b: Option<Band>| opt(b.map(|b| b[0]));
+        let hi = |b: Option<Band>| opt(b.map(|b| b[1]));
+        let mut c = vec![
+            format!("{}", p.freq_hz),
+            format!("{:e}", p.e_eff_pa.re),
+            format!("{:e}", p.e_eff_pa.im / p.e_eff_pa.re),
+            opt(phi),
+            valid.to_lowercase(),
+            opt(storage(gp)),
+            lo(b.paper_storage),
+            hi(b.paper_storage),
+            opt(loss(gp)),
+            lo(b.paper_loss_factor),
+            hi(b.paper_loss_factor),
+            opt(storage(ge)),
+            lo(b.exact_storage),
+            hi(b.exact_storage),
+            opt(loss(ge)),
+            lo(b.exact_loss_factor),
+            hi(b.exact_loss_factor),
+            opt(storage(gl)),
+            opt(loss(gl)),
+        ];
+        if let Some(t) = &r.truth {
+            let g = t.at(p.freq_hz);
+            let errs = [
+                rel_err(storage(gp), storage(g)),
+                rel_err(loss(gp), loss(g)),
+                rel_err(storage(ge), storage(g)),
+                rel_err(loss(ge), loss(g)),
+                rel_err(storage(gl), storage(g)),
+                rel_err(loss(gl), loss(g)),
+            ];
+            row.push(fmt(storage(g), 1e6, 3));
+            row.push(fmt(loss(g), 1.0, 3));
+            row.extend(errs.iter().map(|e| pct(*e)));
+            c.push(opt(storage(g)));
+            c.push(opt(loss(g)));
+            c.extend(errs.iter().map(|e| opt(*e)));
+        }
+        rows.push(row);
+        csv.push_str(&csv_line(&c));
+    }
+    (header, rows, csv)
+}
+
+fn curve_csv(r: &ChainResult) -> String {
+    let mut s = String::from(
+        "f_hz,e_storage_pa,e_loss_factor,phi_abs,g_paper_storage_pa,g_paper_loss_factor,g_exact_storage_pa,g_exact_loss_factor,causality_paper,causality_exact\n",
+    );
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
+    for (k, p) in r.curve.iter().enumerate() {
+        let kk = |i: usize| r.causality[i][k].map_or("n/a", |v| v.label());
+        s.push_str(&csv_line(&[
+            format!("{}", p.freq_hz),
+            format!("{:e}", p.e_eff_pa.re),
+            format!("{:e}", p.e_eff_pa.im / p.e_eff_pa.re),
+            opt(p.phi()),
+            opt(storage(p.paper_g())),
+            opt(loss(p.paper_g())),
+            opt(storage(p.exact_g())),
+            opt(loss(p.exact_g())),
+            kk(0).into(),
+            kk(1).into(),
+        ]));
+    }
+    s
+}
+
+fn causality_verdict(r: &ChainResult) -> String {
+    let count = |i: usize| {
+        let v = &r.causality[i];
+        let checked = v.iter().flatten().count();
+        let bad = v.iter().flatten().filter(|x| !x.is_consistent()).count();
+        (checked, bad)
+    };
+    let text = |name: &str, (checked, bad): (usize, usize)| {
+        if checked == 0 {
+            format!("{name} inverse: not checked (fewer than 3 lines with a solution)")
+        } else if bad == 0 {
+            format!(
+                "{name} inverse: consistent with causality (Kramers-Kronig) at all {checked} lines"
+            )
+        } else {
+            format!(
+                "{name} inverse: fails the Kramers-Kronig check at {bad} of {checked} lines: no causal material has exactly this G*(f)"
+            )
+        }
+    };
+    format!("{}. {}.", text("Paper", count(0)), text("Exact", count(1)))
+}
+
+/// Builds the HTML report and all files of the results folder.
+pub fn build(r: &ChainResult) -> Result<Files> {
+    let mut files: Files = vec![];
+    let mut html = HtmlReport::new(&r.job.title);
+    html.paragraph(&format!(
+        "Job '{}'. Measurement: {}. Model: {}. Layered inverse: {}. lamdyn {}.",
+        r.job_path.display(),
+        r.measured.source,
+        r.model_line,
+        r.layered_line.as_deref().unwrap_or("not run"),
+        env!("CARGO_PKG_VERSION")
+    ));
+    html.heading("Warnings");
+    if r.warnings.is_empty() {
+        html.paragraph("None.");
+    } else {
+        html.warnings(&r.warnings);
+    }
+
+    html.heading("Core shear modulus at the modal frequencies");
+    let (header, rows, modal_csv) = modal_table(r);
+    html.table(
+        "G*(f) of the core by the paper's inverse (eqs. 33-45, eq. 41), the exact Mead-Markus inverse (95 % Monte Carlo bands) and the layered inverse (each EMA pole matched by a layered solid model; no band); |phi| > 0.1 marks the paper model's validity limit (NO: beyond it)",
+        &header,
+        rows,
+    );
+    files.push(("core_modal.csv".into(), modal_csv.into_bytes()));
+    if let Some(t) = &r.truth {
+        html.paragraph(&format!(
+            "Truth: {}. Errors are recovered/true - 1 at each modal frequency.",
+            t.source
+        ));
+    }
+    add_figure(
+        &mut html,
+        &mut files,
+        "core_storage",
+        "Core G'(f), both inverses, 95 % bands (paper Fig. 7)",
+        &core_chart(r, false),
+    )?;
+    add_figure(
+        &mut html,
+        &mut files,
+        "core_loss",
+        "Core loss factor eta(f), both inverses, 95 % bands (paper Fig. 7)",
+        &core_chart(r, true),
+    )?;
+    html.heading("Causality");
+    html.paragraph(&causality_verdict(r));
+    files.push(("core_curve.csv".into(), curve_csv(r).into_bytes()));
+
+    html.heading("Laminate effective modulus");
+    let (e, eta) = laminate_charts(r);
+    add_figure(
+        &mut html,
+        &mut files,
+        "laminate_storage",
+        "Laminate E'(f) of the fitted law (paper Fig. 4)",
+        &e,
+    )?;
+    add_figure(
+        &mut html,
+        &mut files,
+        "laminate_loss",
+        "Laminate loss factor (paper Fig. 4)",
+        &eta,
+    )?;
+    let (params, params_csv) = parameter_table(r);
+    html.table(
+        "Fitted law parameters (SI: Pa, s, Pa s); 95 % intervals +-1.96 sd",
+        &["parameter", "value", "sd", "95% low", "95% high"],
+        params,
+    );
+    files.push(("parameters.csv".into(), params_csv.into_bytes()));
+
+    html.heading("Fit: measured vs fitted FRFs");
+    add_figure(
+        &mut html,
+        &mut files,
+        "rms_frf",
+        "RMS FRF over the responses, measured and fitted (paper Fig. 5)",
+        &rms_chart(r),
+    )?;
+    let (t3, t3_csv) = table3(r);
+    html.table(
+        "Table 3: RMS FRF peaks, measured vs fitted",
+        &[
+            "f meas [Hz]",
+            "f fit [Hz]",
+            "err [%]",
+            "amp meas",
+            "amp fit",
+            "err [%]",
+            "zeta meas",
+            "zeta fit",
+            "err [%]",
+        ],
+        t3,
+    );
+    files.push(("table3.csv".into(), t3_csv.into_bytes()));
+    let mut rms = format!(
+        "# RMS FRF over the responses ({})\nf_hz,measured,fitted\n",
+        r.measured.set.quantity().unit()
+    );
+    for &k in &r.fit_lines {
+        let _ = writeln!(
+            rms,
+            "{},{:e},{:e}",
+            r.measured.set.freqs_hz()[k],
+            r.measured_rms[k],
+            r.fitted_rms[k]
+        );
+    }
+    files.push(("rms.csv".into(), rms.into_bytes()));
+
+    html.heading("Modal identification");
+    let f = r.measured.set.freqs_hz();
+    add_figure(
+        &mut html,
+        &mut files,
+        "stabilization",
+        "Stabilization diagram with the first CMIF behind it",
+        &lamdyn_report::ema::stabilization_chart(&r.ema, f),
+    )?;
+    add_figure(
+        &mut html,
+        &mut files,
+        "cmif",
+        "Complex mode indicator function",
+        &lamdyn_report::ema::cmif_chart(&r.ema, f),
+    )?;
+    let (modes, modes_csv) = ema_table(r);
+    html.table(
+        "Identified modes",
+        &[
+            "mode",
+            "f [Hz]",
+            "zeta [%]",
+            "eta",
+            "MPC",
+            "MPD [deg]",
+            "stable",
+        ],
+        modes,
+    );
+    files.push(("ema_modes.csv".into(), modes_csv.into_bytes()));
+    for (name, caption, chart) in shape_charts(r) {
+        add_figure(&mut html, &mut files, &name, &caption, &chart)?;
+    }
+
+    html.heading("Uncertainty");
+    html.paragraph(&match &r.uncertainty {
+        Some(m) => format!(
+            "Monte Carlo: {} samples, seed {}, {} threads, {:.2} s. Drawn: faces' Young's modulus (relative sd {}), each layer's thickness (sd {} m) and density (relative sd {}){}. Bands: 2.5 % and 97.5 % quantiles of the samples with a solution.",
+            m.samples,
+            m.seed,
+            m.threads,
+            m.seconds,
+            r.job.uncertainty.face_modulus_rel_sd,
+            r.job.uncertainty.thickness_sd_m,
+            r.job.uncertainty.density_rel_sd,
+            if m.fit_covariance { ", and the law's parameters from the fit's covariance" } else { "; the fit's covariance was not used (none, or switched off)" }
+        ),
+        None => "No Monte Carlo (uncertainty.samples = 0).".into(),
+    });
+    html.heading("Run");
+    html.table(
+        "Stages",
+        &["stage", "time [s]", "cached"],
+        r.timings
+            .iter()
+            .map(|t| {
+                vec![
+                    t.name.to_string(),
+                    format!("{:.3}", t.seconds),
+                    if t.cached { "yes" } else { "" }.into(),
+                ]
+            })
+            .collect(),
+    );
+    let json = serde_json::json!({
+        "job": r.job_path.display().to_string(),
+        "measurement": r.measured.source,
+        "model": r.model_line,
+        "fit": r.fit,
+        "ema_modes": r.ema.modes.iter().map(|m| serde_json::json!({"freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "mpc": m.mpc})).collect::<Vec<_>>(),
+        "uncertainty": r.uncertainty,
+        "warnings": r.warnings,
+        "timings": r.timings.iter().map(|t| serde_json::json!({"stage": t.name, "seconds": t.seconds, "cached": t.cached})).collect::<Vec<_>>(),
+    });
+    files.push(("result.json".into(), serde_json::to_vec_pretty(&json)?));
+    files.push(("report.html".into(), html.render().into_bytes()));
+    Ok(files)
+}
+
+fn parameter_table(r: &ChainResult) -> (Vec<Vec<String>>, String) {
+    let mut csv = String::from("name,value,std_dev,ci95_low,ci95_high\n");
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
+    let rows = r
+        .fit
+        .parameters
+        .iter()
+        .map(|p| {
+            csv.push_str(&csv_line(&[
+                p.name.clone(),
+                format!("{:e}", p.value),
+                opt(p.std_dev),
+                opt(p.ci95.map(|c| c[0])),
+                opt(p.ci95.map(|c| c[1])),
+            ]));
+            let s = |v: Option<f64>| v.map_or("-".into(), |x| format!("{x:.4e}"));
+            vec![
+                p.name.clone(),
+                format!("{:.6e}", p.value),
+                s(p.std_dev),
+                s(p.ci95.map(|c| c[0])),
+                s(p.ci95.map(|c| c[1])),
+            ]
+        })
+        .collect();
+    (rows, csv)
+}
+
+fn table3(r: &ChainResult) -> (Vec<Vec<String>>, String) {
+    let mut csv = String::from(
+        "f_measured_hz,f_fitted_hz,f_error,amplitude_measured,amplitude_fitted,amplitude_error,damping_ratio_measured,damping_ratio_fitted,damping_ratio_error\n",
+    );
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
+    let rows = r
+        .table3
+        .iter()
+        .map(|c| {
+            csv.push_str(&csv_line(&[
+                format!("{}", c.measured.freq_hz),
+                format!("{}", c.fitted.freq_hz),
+                format!("{:e}", c.freq_error),
+                format!("{:e}", c.measured.amplitude),
+                format!("{:e}", c.fitted.amplitude),
+                format!("{:e}", c.amplitude_error),
+                opt(c.measured.damping_ratio),
+                opt(c.fitted.damping_ratio),
+                opt(c.damping_error),
+            ]));
+            vec![
+                format!("{:.3}", c.measured.freq_hz),
+                format!("{:.3}", c.fitted.freq_hz),
+                format!("{:+.3}", 100.0 * c.freq_error),
+                format!("{:.4e}", c.measured.amplitude),
+                format!("{:.4e}", c.fitted.amplitude),
+                format!("{:+.2}", 100.0 * c.amplitude_error),
+                fmt(c.measured.damping_ratio, 1.0, 4),
+                fmt(c.fitted.damping_ratio, 1.0, 4),
+                pct(c.damping_error),
+            ]
+        })
+        .collect();
+    (rows, csv)
+}
+
+fn ema_table(r: &ChainResult) -> (Vec<Vec<String>>, String) {
+    let mut csv = String::from("mode,f_hz,damping_ratio,loss_factor,mpc,mpd_deg,stable_count\n");
+    let rows = r
+        .ema
+        .modes
+        .iter()
+        .enumerate()
+        .map(|(k, m)| {
+            csv.push_str(&csv_line(&[
+                (k + 1).to_string(),
+                format!("{}", m.freq_hz),
+                format!("{:e}", m.damping_ratio),
+                format!("{:e}", m.loss_factor),
+                format!("{}", m.mpc),
+                format!("{}", m.mpd_deg),
+                m.stable_count.to_string(),
+            ]));
+            vec![
+                (k + 1).to_string(),
+                format!("{:.4}", m.freq_hz),
+                format!("{:.3}", 100.0 * m.damping_ratio),
+                format!("{:.3e}", m.loss_factor),
+                format!("{:.4}", m.mpc),
+                format!("{:.2}", m.mpd_deg),
+                m.stable_count.to_string(),
+            ]
+        })
+        .collect();
+    (rows, csv)
+}
