@@ -680,7 +680,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     html.heading("Uncertainty");
     html.paragraph(&match &r.uncertainty {
         Some(m) => format!(
-            "Monte Carlo: {} samples, seed {}, {} threads, {:.2} s. Drawn: faces' Young's modulus (relative sd {}), each layer's thickness (sd {} m) and density (relative sd {}){}. Bands: 2.5 % and 97.5 % quantiles of the samples with a solution.",
+            "Monte Carlo: {} samples, seed {}, {} threads, {:.2} s. Drawn: the faces' Young's modulus (relative sd {}), thickness (sd {} m) and density (relative sd {}), one draw for both faces and one for the core{}. Bands: 2.5 % and 97.5 % quantiles of the samples with a solution.",
             m.samples,
             m.seed,
             m.threads,

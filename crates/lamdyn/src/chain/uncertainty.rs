@@ -1,6 +1,7 @@
 //! Monte Carlo uncertainty of the recovered core (issue 8): the inputs the inverse cannot know
 //! exactly are drawn from normal distributions — the faces' Young's modulus (one draw for both
-//! faces: one glass), each layer's thickness and density, and the law's parameters from the
+//! faces: one glass), the thickness and density of the faces (one draw for both: the paper's
+//! eq. 41 needs identical faces) and of the core, and the law's parameters from the
 //! fit's covariance (u + L z in the fit's unconstrained parameters, L L^T = cov) — and both
 //! inverses are run for each sample at each frequency. The bands are the 2.5 % and 97.5 %
 //! quantiles of the samples that have a solution (a 95 % interval); samples without one (a
@@ -99,12 +100,19 @@ type Point = (Complex64, Option<Complex64>, Option<Complex64>);
 fn draw_stack(nominal: &StackSpec, o: &UncertaintyOptions, g: &mut Normal) -> StackSpec {
     let mut s = nominal.clone();
     let e_scale = 1.0 + o.face_modulus_rel_sd * g.sample();
+    // One draw for the faces, one for the core: the paper's eq. 41 needs identical faces.
+    let dt = [o.thickness_sd_m * g.sample(), o.thickness_sd_m * g.sample()];
+    let rho = [
+        1.0 + o.density_rel_sd * g.sample(),
+        1.0 + o.density_rel_sd * g.sample(),
+    ];
     for layer in &mut s.layers {
+        let face = usize::from(layer.young_pa.is_none());
         if let Some(e) = &mut layer.young_pa {
             *e *= e_scale;
         }
-        layer.thickness_m += o.thickness_sd_m * g.sample();
-        layer.density_kg_m3 *= 1.0 + o.density_rel_sd * g.sample();
+        layer.thickness_m += dt[face];
+        layer.density_kg_m3 *= rho[face];
     }
     s
 }
