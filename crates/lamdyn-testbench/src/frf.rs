@@ -203,6 +203,16 @@ impl ReducedModel {
         out
     }
 
+    /// The free model's reduced eigenproblem: Vᵀ K_e V, Vᵀ K_c V and η_e (supports and
+    /// dashpots left out; Vᵀ M V = I).
+    pub fn free_eigenproblem(&self) -> ReducedEigen {
+        ReducedEigen {
+            k_elastic: self.k_elastic.clone(),
+            k_core: self.k_core.clone(),
+            elastic_loss: self.elastic_loss,
+        }
+    }
+
     /// Basis size m.
     pub fn size(&self) -> usize {
         self.basis.ncols()
@@ -236,6 +246,79 @@ impl ReducedModel {
                 acc
             })
             .collect()
+    }
+}
+
+/// The reduced eigenproblem of a free layered model, ((1 + iη_e) K_e + s K_c) x = λ x in the
+/// M-orthonormal basis: small (basis size), dense, and cacheable as bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReducedEigen {
+    /// Vᵀ K_e V.
+    pub k_elastic: Mat<f64>,
+    /// Vᵀ K_c V at the assembled core modulus.
+    pub k_core: Mat<f64>,
+    /// Loss factor of the elastic layers.
+    pub elastic_loss: f64,
+}
+
+/// First bytes of [`ReducedEigen::to_bytes`] (format version 1).
+const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v1\n";
+
+impl ReducedEigen {
+    /// Complex eigenvalues λ = ω²(1 + iη) at core scale s, increasing real part.
+    pub fn eigenvalues(&self, core_scale: Complex64) -> Vec<Complex64> {
+        let m = self.k_elastic.nrows();
+        let e = Complex64::new(1.0, self.elastic_loss);
+        let z = Mat::from_fn(m, m, |i, j| {
+            let v = e * self.k_elastic[(i, j)] + core_scale * self.k_core[(i, j)];
+            c64::new(v.re, v.im)
+        });
+        let mut out: Vec<Complex64> = z
+            .eigenvalues()
+            .map(|v| v.iter().map(|e| Complex64::new(e.re, e.im)).collect())
+            .unwrap_or_default();
+        out.sort_by(|a, b| a.re.total_cmp(&b.re));
+        out
+    }
+
+    /// The matrices as bytes: a magic line, the size (u64) and η_e, K_e, K_c (f64,
+    /// little-endian, column-major).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let m = self.k_elastic.nrows();
+        let mut out = EIGEN_MAGIC.to_vec();
+        out.extend_from_slice(&(m as u64).to_le_bytes());
+        out.extend_from_slice(&self.elastic_loss.to_le_bytes());
+        for a in [&self.k_elastic, &self.k_core] {
+            for j in 0..m {
+                for i in 0..m {
+                    out.extend_from_slice(&a[(i, j)].to_le_bytes());
+                }
+            }
+        }
+        out
+    }
+
+    /// Reads [`ReducedEigen::to_bytes`]; `None` for anything else (a truncated or foreign file,
+    /// non-finite values).
+    pub fn from_bytes(bytes: &[u8]) -> Option<Self> {
+        let body = bytes.strip_prefix(EIGEN_MAGIC)?;
+        let word = |k: usize| -> Option<[u8; 8]> { body.get(8 * k..8 * k + 8)?.try_into().ok() };
+        let m = usize::try_from(u64::from_le_bytes(word(0)?)).ok()?;
+        if body.len() != 8 * (2 + 2 * m.checked_mul(m)?) {
+            return None;
+        }
+        let v = |k: usize| word(k).map(f64::from_le_bytes).filter(|x| x.is_finite());
+        let elastic_loss = v(1)?;
+        let read = |at: usize| -> Option<Mat<f64>> {
+            let vals: Option<Vec<f64>> = (0..m * m).map(|k| v(at + k)).collect();
+            let vals = vals?;
+            Some(Mat::from_fn(m, m, |i, j| vals[j * m + i]))
+        };
+        Some(Self {
+            k_elastic: read(2)?,
+            k_core: read(2 + m * m)?,
+            elastic_loss,
+        })
     }
 }
 

@@ -20,7 +20,7 @@
 //! iteration moves in.
 
 use crate::error::BenchError;
-use crate::frf::ReducedModel;
+use crate::frf::{ReducedEigen, ReducedModel};
 use crate::hex20::Elastic;
 use crate::mesh::{LayerMesh, LayeredPlateSpec};
 use crate::system::LayeredSystem;
@@ -43,7 +43,7 @@ pub struct InverseLayer {
 
 /// The layered model of the inverse.
 pub struct LayeredInverse {
-    model: ReducedModel,
+    model: ReducedEigen,
     g_assembled_pa: f64,
     dofs: usize,
 }
@@ -137,26 +137,47 @@ impl LayeredInverse {
         let mut model = ReducedModel::new(&system, core, &[0.25, 1.0, 4.0], modes, &[load], shift)?;
         model.set_elastic_loss(eta_e.unwrap_or(0.0))?;
         Ok(Self {
-            model,
+            model: model.free_eigenproblem(),
             g_assembled_pa: g_ref_pa,
             dofs: system.n_dofs,
         })
     }
 
+    /// The model as bytes for a cache: G_ref and the full model's size (f64, u64) followed by
+    /// [`ReducedEigen::to_bytes`].
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = self.g_assembled_pa.to_le_bytes().to_vec();
+        out.extend_from_slice(&(self.dofs as u64).to_le_bytes());
+        out.extend_from_slice(&self.model.to_bytes());
+        out
+    }
+
+    /// Reads [`LayeredInverse::to_bytes`]; `None` for anything else.
+    pub fn from_bytes(bytes: &[u8]) -> Option<Self> {
+        let g = f64::from_le_bytes(bytes.get(..8)?.try_into().ok()?);
+        let dofs = usize::try_from(u64::from_le_bytes(bytes.get(8..16)?.try_into().ok()?)).ok()?;
+        (g.is_finite() && g > 0.0).then_some(())?;
+        Some(Self {
+            model: ReducedEigen::from_bytes(&bytes[16..])?,
+            g_assembled_pa: g,
+            dofs,
+        })
+    }
+
     /// Degrees of freedom of the full model and size of the basis.
     pub fn size(&self) -> (usize, usize) {
-        (self.dofs, self.model.size())
+        (self.dofs, self.model.k_elastic.nrows())
     }
 
     /// The model's complex eigenvalues (rad²/s², increasing real part) at core modulus `g`.
     pub fn eigenvalues(&self, g_pa: Complex64) -> Vec<Complex64> {
-        self.model.complex_eigenvalues(g_pa / self.g_assembled_pa)
+        self.model.eigenvalues(g_pa / self.g_assembled_pa)
     }
 
     /// The elastic eigenvalues (Re λ above 1e-6 of the target's) at scale `s`, increasing.
     fn elastic(&self, s: Complex64, target: Complex64) -> Vec<Complex64> {
         self.model
-            .complex_eigenvalues(s)
+            .eigenvalues(s)
             .into_iter()
             .filter(|l| l.re > 1e-6 * target.re)
             .collect()
@@ -266,5 +287,10 @@ mod tests {
             let err = (est.core_shear_pa / truth - 1.0).norm();
             assert!(err < 1e-6, "{err:e} after {} steps", est.iterations);
         }
+        // The cached form gives the same eigenvalues, bit for bit.
+        let back = LayeredInverse::from_bytes(&inv.to_bytes()).unwrap();
+        assert_eq!(back.eigenvalues(truth), inv.eigenvalues(truth));
+        assert_eq!(back.size(), inv.size());
+        assert!(LayeredInverse::from_bytes(&inv.to_bytes()[..100]).is_none());
     }
 }

@@ -279,7 +279,7 @@ pub fn run_job(path: &Path, options: &RunOptions, spinner: &Spinner) -> Result<C
     let mut layered_line = None;
     if job.inverse.layered {
         layered_line = stage("layered inverse", spinner, &mut timings, || {
-            Ok((layered::run(&job, &base, &ema, &mut modal, spinner)?, false))
+            layered::run(&job, &base, &ema, &mut modal, &cache, spinner)
         })?;
     }
     let mc = if job.uncertainty.samples > 0 {

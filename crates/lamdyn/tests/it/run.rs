@@ -147,13 +147,14 @@ fn rerun_uses_the_cache_and_a_failed_run_keeps_the_report() {
             "--json",
         ])
     };
-    // The demo filled the cache beside its job: a run of the same job takes model and EMA from it.
+    // The demo filled the cache beside its job: a run of the same job takes the model, the EMA
+    // and the layered model from it.
     let (code, text, err) = run(&job);
     assert_eq!(code, 0, "{err}");
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
     let stages = doc["inputs"]["stages"].as_str().unwrap();
     assert!(
-        stages.contains("ema") && stages.matches("(cached)").count() == 2,
+        stages.contains("ema") && stages.matches("(cached)").count() == 3,
         "{stages}"
     );
     let before = std::fs::read(report.join("report.html")).unwrap();
