@@ -27,7 +27,6 @@ use lamdyn_fem::element::ShellMaterial;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_frf::FrfSet;
 use lamdyn_testbench::description::{Bench, Description};
-use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 /// The built-in roof hanging free (module docs).
@@ -152,7 +151,10 @@ fn input_files(
             "channels.csv".to_string(),
             lamdyn_frf::csv::write_channels(frfs).into_bytes(),
         ),
-        ("truth.csv".to_string(), truth_csv(bench, frfs).into_bytes()),
+        (
+            "truth.csv".to_string(),
+            crate::cmd::simulate::truth_table(bench, frfs).into_bytes(),
+        ),
     ];
     match hits {
         Some(h) => {
@@ -172,20 +174,6 @@ fn input_files(
         job_text(d, n_hits, samples, seed)?.into_bytes(),
     ));
     Ok(files)
-}
-
-/// The core's true G* at every line of the test (as `lamdyn simulate`'s truth.csv).
-fn truth_csv(bench: &Bench, frfs: &FrfSet) -> String {
-    let mut s = format!(
-        "# the core's true law, layer {}: {}\nf_hz,storage_pa,loss_pa,loss_factor\n",
-        bench.core_layer,
-        bench.core_law.describe()
-    );
-    for f in frfs.freqs_hz() {
-        let m = bench.core_law.modulus(2.0 * PI * f);
-        s += &format!("{f},{:e},{:e},{:e}\n", m.re, m.im, m.im / m.re);
-    }
-    s
 }
 
 /// Simulates the test of `d` into `dir/input`, then runs the chain; returns the result and the

@@ -199,7 +199,7 @@ fn output_files(
 }
 
 /// The core's true modulus at every line: f_hz, storage_pa, loss_pa, loss_factor.
-fn truth_table(bench: &Bench, frfs: &FrfSet) -> String {
+pub(crate) fn truth_table(bench: &Bench, frfs: &FrfSet) -> String {
     let which = if bench.core_law_is_shear { "G" } else { "E" };
     let mut s = format!(
         "# the core's law ({which}*), layer {}: {}\nf_hz,storage_pa,loss_pa,loss_factor\n",
