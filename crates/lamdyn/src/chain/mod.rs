@@ -36,7 +36,7 @@ use lamdyn_fit::modes::{PeakComparison, compare_peaks};
 use lamdyn_fit::probe::probes;
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_frf::{Channel, FrfSet};
-use lamdyn_material::causality::{CausalityParams, CausalityVerdict, kramers_kronig_check};
+use lamdyn_material::causality::{CausalityParams, CausalityVerdict};
 use lamdyn_material::laminate::paper_inverse;
 use lamdyn_material::laminate::{
     CoreEstimate, CoreShearFormula, FaceBending, FaceShear, Kinematics, PaperInverseOptions,
@@ -668,20 +668,8 @@ fn causality(
     points: &[CorePoint],
     g: fn(&CorePoint) -> Option<Complex64>,
 ) -> Result<Vec<Option<CausalityVerdict>>> {
-    let idx: Vec<usize> = (0..points.len())
-        .filter(|&i| g(&points[i]).is_some())
-        .collect();
-    let mut verdicts = vec![None; points.len()];
-    if idx.len() < 3 {
-        return Ok(verdicts);
-    }
-    let omega: Vec<f64> = idx.iter().map(|&i| 2.0 * PI * points[i].freq_hz).collect();
-    let modulus: Vec<Complex64> = idx.iter().filter_map(|&i| g(&points[i])).collect();
-    let report = kramers_kronig_check(&omega, &modulus, CausalityParams::default())?;
-    for (k, &i) in idx.iter().enumerate() {
-        verdicts[i] = Some(report.lines[k].verdict);
-    }
-    Ok(verdicts)
+    let pts: Vec<(f64, Option<Complex64>)> = points.iter().map(|p| (p.freq_hz, g(p))).collect();
+    crate::cmd::core::kk_verdicts(&pts, CausalityParams::default())
 }
 
 /// The truth table: f_hz, storage_pa, loss_pa (as `lamdyn simulate` writes truth.csv).

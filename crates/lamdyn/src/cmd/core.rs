@@ -222,18 +222,30 @@ fn causality(
     g: impl Fn(&CoreLine) -> Option<Complex64>,
     params: CausalityParams,
 ) -> Result<Vec<Option<CausalityVerdict>>> {
-    let idx: Vec<usize> = (0..lines.len())
-        .filter(|&i| g(&lines[i]).is_some())
+    let points: Vec<(f64, Option<Complex64>)> = lines.iter().map(|l| (l.freq_hz, g(l))).collect();
+    kk_verdicts(&points, params)
+}
+
+/// Kramers–Kronig verdicts at the (f in Hz, G*) points that have a modulus; `None` elsewhere,
+/// and everywhere when fewer than three points have one.
+pub(crate) fn kk_verdicts(
+    points: &[(f64, Option<Complex64>)],
+    params: CausalityParams,
+) -> Result<Vec<Option<CausalityVerdict>>> {
+    let known: Vec<(usize, f64, Complex64)> = points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, (f, g))| g.map(|g| (i, 2.0 * PI * f, g)))
         .collect();
-    let mut verdicts = vec![None; lines.len()];
-    if idx.len() < 3 {
+    let mut verdicts = vec![None; points.len()];
+    if known.len() < 3 {
         return Ok(verdicts);
     }
-    let omega: Vec<f64> = idx.iter().map(|&i| 2.0 * PI * lines[i].freq_hz).collect();
-    let modulus: Vec<Complex64> = idx.iter().filter_map(|&i| g(&lines[i])).collect();
+    let omega: Vec<f64> = known.iter().map(|k| k.1).collect();
+    let modulus: Vec<Complex64> = known.iter().map(|k| k.2).collect();
     let report = kramers_kronig_check(&omega, &modulus, params)?;
-    for (k, &i) in idx.iter().enumerate() {
-        verdicts[i] = Some(report.lines[k].verdict);
+    for (k, (i, _, _)) in known.iter().enumerate() {
+        verdicts[*i] = Some(report.lines[k].verdict);
     }
     Ok(verdicts)
 }
