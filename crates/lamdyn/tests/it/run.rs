@@ -228,3 +228,36 @@ fn bad_job_files_name_the_field() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 19: `lamdyn demo` hung at stage 'uncertainty' when stderr was a terminal (the main
+/// thread held stderr's lock while rayon workers drew the spinner). The demo runs here under
+/// `script`, which gives it a pseudo-terminal, and must end; the spinner must have drawn.
+#[test]
+fn demo_finishes_with_stderr_on_a_terminal() {
+    let dir = temp_dir("pty");
+    let desc = small_description(&dir);
+    let out = dir.join("out");
+    let log = dir.join("terminal.log");
+    let command = format!(
+        "'{}' demo --description '{}' --out '{}' --samples 200",
+        env!("CARGO_BIN_EXE_lamdyn"),
+        desc.display(),
+        out.display()
+    );
+    // `timeout` ends a hang as a failure (124) instead of blocking the test suite.
+    let status = std::process::Command::new("timeout")
+        .args(["120", "script", "-q", "-e", "-c", &command])
+        .arg(&log)
+        .env("LAMDYN_PROGRESS", "")
+        .stdin(std::process::Stdio::null())
+        .status()
+        .expect("`timeout` and `script` (util-linux) are needed for this test");
+    let text = String::from_utf8_lossy(&std::fs::read(&log).unwrap_or_default()).to_string();
+    assert_eq!(status.code(), Some(0), "demo in a terminal: {text}");
+    assert!(out.join("report/report.html").is_file());
+    assert!(
+        text.contains("stage 'uncertainty'"),
+        "no spinner drawn on the terminal: {text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
