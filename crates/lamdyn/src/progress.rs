@@ -96,8 +96,8 @@ impl Spinner {
         match choice.as_str() {
             "off" | "0" | "none" => Self(Mode::Off),
             "lines" => Self::lines(),
-            "spinner" => Self::spinner(),
-            _ if std::io::stderr().is_terminal() => Self::spinner(),
+            "spinner" => Self::terminal(),
+            _ if std::io::stderr().is_terminal() => Self::terminal(),
             _ => Self::lines(),
         }
     }
@@ -107,7 +107,7 @@ impl Spinner {
         Self(Mode::Off)
     }
 
-    fn spinner() -> Self {
+    fn terminal() -> Self {
         let bar = indicatif::ProgressBar::new_spinner();
         bar.set_style(
             indicatif::ProgressStyle::with_template("{spinner} [{elapsed}] {msg}")
