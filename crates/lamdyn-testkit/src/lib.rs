@@ -84,3 +84,43 @@ pub fn python_complex_column(text: &str) -> Vec<Complex64> {
         })
         .collect()
 }
+
+/// A fresh folder for one test, removed with everything in it when dropped — also when the
+/// test fails (drops run while a panic unwinds), so test runs leave nothing in the system's
+/// temporary folder.
+#[derive(Debug)]
+pub struct TempDir(std::path::PathBuf);
+
+impl TempDir {
+    /// `lamdyn-test-PID-NAME` in the system's temporary folder, emptied if it exists.
+    pub fn new(name: &str) -> Self {
+        let d = std::env::temp_dir().join(format!("lamdyn-test-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).expect("cannot create a test folder");
+        Self(d)
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl std::ops::Deref for TempDir {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::path::Path> for TempDir {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}

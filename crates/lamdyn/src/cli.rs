@@ -52,10 +52,15 @@ pub struct RunArgs {
     /// The job file (TOML; `lamdyn demo` writes one in DIR/input/job.toml).
     #[arg(value_name = "JOB")]
     pub job: PathBuf,
-    /// Folder of the report [default: `report` beside the job file]; replaced as a whole, only
-    /// when every stage worked.
+    /// Folder of the report [default: `report` beside the job file]. lamdyn writes only its own
+    /// files there (listed in DIR/.lamdyn-manifest), only when every stage worked, and refuses
+    /// a folder holding the job's inputs or other files (see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
+    /// input of the run is never written over).
+    #[arg(long)]
+    pub force: bool,
     /// Cache folder for the FE model and the EMA [default: `.lamdyn-cache` beside the job].
     #[arg(long, value_name = "DIR", conflicts_with = "no_cache")]
     pub cache: Option<PathBuf>,
@@ -79,6 +84,10 @@ pub struct DemoArgs {
     /// Results folder: DIR/input (the simulated test and its job) and DIR/report.
     #[arg(long, value_name = "DIR", default_value = "lamdyn-demo")]
     pub out: PathBuf,
+    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
+    /// input of the run is never written over).
+    #[arg(long)]
+    pub force: bool,
     /// A test-bench description (TOML, as `lamdyn simulate`) instead of the built-in roof.
     #[arg(long, value_name = "FILE")]
     pub description: Option<PathBuf>,
@@ -111,9 +120,14 @@ pub struct SimulateArgs {
     pub print_description: bool,
     /// Folder for the results: frf.csv + channels.csv (sensor frames), frf_global.uff (global
     /// frame, UFF 58), hit1.csv... (time signals), truth.csv (the core's law at each line),
-    /// description.toml, summary.json; replaced as a whole, only when everything worked.
+    /// description.toml, summary.json; written only when everything worked, never over files
+    /// lamdyn did not write (see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
+    /// input of the run is never written over).
+    #[arg(long)]
+    pub force: bool,
     /// Skip the time signals even if the description has a `[hits]` section.
     #[arg(long)]
     pub no_hits: bool,
@@ -163,9 +177,14 @@ pub struct EmaArgs {
     #[arg(long)]
     pub single_reference: bool,
     /// Folder for the results: modes.csv, diagram.csv, result.json and the stabilization
-    /// diagram and CMIF charts (SVG and PNG); replaced as a whole, only when everything worked.
+    /// diagram and CMIF charts (SVG and PNG); written only when everything worked, never over
+    /// files lamdyn did not write (see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
+    /// input of the run is never written over).
+    #[arg(long)]
+    pub force: bool,
     /// Band LO,HI in Hz [default: all lines above 0 Hz].
     #[arg(long, value_name = "LO,HI", value_delimiter = ',', value_parser = finite)]
     pub band_hz: Option<Vec<f64>>,
@@ -266,6 +285,10 @@ pub struct UffConvertArgs {
     /// Accept datasets 58 whose data holds fewer points than announced (keeps those found).
     #[arg(long)]
     pub lenient: bool,
+    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
+    /// input of the run is never written over).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `lamdyn fit`.
@@ -293,10 +316,14 @@ pub struct FitArgs {
     /// Covariance estimator (overrides the job's fit.covariance).
     #[arg(long, value_enum)]
     pub covariance: Option<CovarianceArg>,
-    /// Write report.json, one CSV per table and the RMS curves into this folder (replaced whole
-    /// once everything is computed).
+    /// Write report.json, one CSV per table and the RMS curves into this folder once everything
+    /// is computed (never over files lamdyn did not write; see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
+    /// input of the run is never written over).
+    #[arg(long)]
+    pub force: bool,
     /// Write the example as a job folder (job.toml, model.toml, channels.csv, frf.csv).
     #[arg(long, value_name = "DIR", requires = "example")]
     pub write_example: Option<PathBuf>,

@@ -130,79 +130,9 @@ impl CsvTable {
     }
 }
 
-/// Writes `files` (names relative to `dir`, subfolders allowed) into the folder `dir` so that `dir` is either untouched or complete: the files
-/// go to a sibling temporary folder, which then replaces `dir` (an old `dir` is moved aside first
-/// and removed last).
-pub fn write_dir_atomically<S: AsRef<str>>(dir: &Path, files: &[(S, Vec<u8>)]) -> Result<()> {
-    let name = dir
-        .file_name()
-        .ok_or_else(|| anyhow!("'{}' is not a folder name", dir.display()))?
-        .to_string_lossy()
-        .to_string();
-    let parent = match dir.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    if dir.exists() && !dir.is_dir() {
-        bail!("'{}' exists and is not a folder", dir.display());
-    }
-    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
-    let old = parent.join(format!(".{name}.old-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).with_context(|| format!("cannot create '{}'", tmp.display()))?;
-    for (file, bytes) in files {
-        let path = tmp.join(file.as_ref());
-        let written = match path.parent() {
-            Some(sub) if sub != tmp => std::fs::create_dir_all(sub),
-            _ => Ok(()),
-        }
-        .and_then(|()| std::fs::write(&path, bytes));
-        if let Err(e) = written {
-            let _ = std::fs::remove_dir_all(&tmp);
-            return Err(e).with_context(|| format!("cannot write '{}'", path.display()));
-        }
-    }
-    let had_old = dir.exists();
-    if had_old {
-        std::fs::rename(dir, &old)
-            .with_context(|| format!("cannot replace '{}'", dir.display()))?;
-    }
-    if let Err(e) = std::fs::rename(&tmp, dir) {
-        if had_old {
-            let _ = std::fs::rename(&old, dir);
-        }
-        let _ = std::fs::remove_dir_all(&tmp);
-        return Err(e).with_context(|| format!("cannot write '{}'", dir.display()));
-    }
-    if had_old {
-        let _ = std::fs::remove_dir_all(&old);
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A second write replaces the folder whole (a file of the first run not in the second is
-    /// gone) and leaves no temporary folder beside it.
-    #[test]
-    fn folder_is_replaced_whole() {
-        let parent = std::env::temp_dir().join(format!("lamdyn-io-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&parent);
-        std::fs::create_dir_all(&parent).unwrap();
-        let dir = parent.join("out");
-        write_dir_atomically(&dir, &[("a.txt", b"1".to_vec()), ("b.txt", b"2".to_vec())]).unwrap();
-        write_dir_atomically(&dir, &[("a.txt", b"3".to_vec())]).unwrap();
-        assert_eq!(std::fs::read(dir.join("a.txt")).unwrap(), b"3");
-        assert!(!dir.join("b.txt").exists());
-        let names: Vec<_> = std::fs::read_dir(&parent)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names, vec![std::ffi::OsString::from("out")]);
-        let _ = std::fs::remove_dir_all(&parent);
-    }
 
     #[test]
     fn parses_with_comments_and_blank_lines() {

@@ -25,6 +25,7 @@ pub mod cmd;
 mod examples;
 mod grid;
 mod io;
+pub mod output;
 mod progress;
 pub mod table;
 

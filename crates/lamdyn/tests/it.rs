@@ -11,6 +11,7 @@ mod it {
     mod modes;
     mod robustness;
     mod run;
+    mod safety;
     mod simulate;
     mod uff;
 }

@@ -4,4 +4,4 @@ mod mac;
 mod vtu;
 
 pub use mac::{mac, mac_matrix};
-pub use vtu::write_vtu;
+pub use vtu::{vtu_text, write_vtu};

@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// Writes `mesh` with the mode shapes (columns of `shapes`, 6 dofs per node) to `path`,
-/// atomically (a temporary file renamed over the target).
+/// atomically (a temporary file renamed over the target); the text is [`vtu_text`].
 ///
 /// # Errors
 /// [`FemError::Write`] when the file cannot be written.
@@ -20,6 +20,11 @@ pub fn write_vtu(
     freqs_hz: &[f64],
     shapes: &[Vec<f64>],
 ) -> Result<(), FemError> {
+    write_atomic(path, vtu_text(mesh, freqs_hz, shapes).as_bytes())
+}
+
+/// The `.vtu` text of `mesh` with the mode shapes (columns of `shapes`, 6 dofs per node).
+pub fn vtu_text(mesh: &Mesh, freqs_hz: &[f64], shapes: &[Vec<f64>]) -> String {
     let mut s = String::new();
     let (nn, ne) = (mesh.nodes().len(), mesh.elements().len());
     let _ = writeln!(
@@ -84,7 +89,7 @@ pub fn write_vtu(
         }
     }
     let _ = writeln!(s, "</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>");
-    write_atomic(path, s.as_bytes())
+    s
 }
 
 /// Writes `bytes` to a temporary file next to `path`, then renames it over `path`.

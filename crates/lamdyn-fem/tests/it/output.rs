@@ -20,8 +20,7 @@ fn mac_identities() {
 #[test]
 fn vtu_file_lists_points_cells_and_modes() {
     let mesh = RectangleSpec::flat(1.0, 1.0, 3, 2).build().unwrap();
-    let dir = std::env::temp_dir().join(format!("lamdyn-fem-vtu-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = lamdyn_testkit::TempDir::new("fem-vtu");
     let path = dir.join("m.vtu");
     let shape: Vec<f64> = (0..mesh.n_dofs()).map(|i| i as f64).collect();
     write_vtu(&path, &mesh, &[12.5], &[shape]).unwrap();

@@ -4,10 +4,31 @@
 //! model spec and mesh file bytes, the channels, the options; the FRF values for the
 //! identification), so changing only the law, the stack or the uncertainty options re-uses
 //! both, and changing any input misses. Files are written to a temporary name and renamed: a
-//! crash leaves no half-written entry. A corrupt entry is ignored and rewritten.
+//! crash leaves no half-written entry.
+//!
+//! Every entry is checked before it is used: a header holds a magic word, the entry's key, the
+//! payload's length and its FNV-1a checksum (any change confined to one byte changes the
+//! checksum: each step of FNV-1a is a bijection of its state). An entry that fails (a bit
+//! flipped on disk, a truncated copy, a file renamed to another key) is removed, noted in
+//! [`Cache::notes`] for the report, and its stage recomputes.
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// First bytes of a cache entry (version 2: with the header; version-1 entries are refused
+/// and recomputed).
+const MAGIC: &[u8; 8] = b"LAMDYNC2";
+
+/// Header length: magic, key, payload length, checksum.
+const HEADER: usize = 32;
+
+/// FNV-1a 64 of `data` (no length prefix): the payload's checksum.
+fn checksum(data: &[u8]) -> u64 {
+    data.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
 
 /// FNV-1a, 64 bits (Fowler–Noll–Vo): a stable hash across runs, platforms and Rust versions.
 #[derive(Debug, Clone, Copy)]
@@ -40,15 +61,24 @@ impl Key {
 }
 
 /// A cache folder (absent: caching off).
-#[derive(Debug, Clone)]
+#[derive(Debug, Default)]
 pub struct Cache {
     dir: Option<PathBuf>,
+    notes: Mutex<Vec<String>>,
 }
 
 impl Cache {
     /// A cache in `dir`, or none.
     pub fn new(dir: Option<PathBuf>) -> Self {
-        Self { dir }
+        Self {
+            dir,
+            notes: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// What happened to entries that failed their check (for the report's warnings).
+    pub fn notes(&self) -> Vec<String> {
+        self.notes.lock().map(|n| n.clone()).unwrap_or_default()
     }
 
     fn path(&self, name: &str, key: Key) -> Option<PathBuf> {
@@ -57,12 +87,28 @@ impl Cache {
             .map(|d| d.join(format!("{name}-{}", key.hex())))
     }
 
-    /// The bytes stored under `name` and `key`, if any.
+    /// The bytes stored under `name` and `key`, if there is an entry and it passes its check
+    /// (module docs); a failing entry is removed and noted.
     pub fn get(&self, name: &str, key: Key) -> Option<Vec<u8>> {
-        std::fs::read(self.path(name, key)?).ok()
+        let path = self.path(name, key)?;
+        let bytes = std::fs::read(&path).ok()?;
+        match unwrap_entry(&bytes, key) {
+            Ok(payload) => Some(payload.to_vec()),
+            Err(why) => {
+                let _ = std::fs::remove_file(&path);
+                if let Ok(mut n) = self.notes.lock() {
+                    n.push(format!(
+                        "cache entry '{}' failed its check ({why}): removed and recomputed",
+                        path.display()
+                    ));
+                }
+                None
+            }
+        }
     }
 
-    /// Stores `bytes` under `name` and `key` (temporary file, then rename).
+    /// Stores `bytes` under `name` and `key` with the checked header (temporary file, then
+    /// rename).
     pub fn put(&self, name: &str, key: Key, bytes: &[u8]) -> Result<()> {
         let Some(path) = self.path(name, key) else {
             return Ok(());
@@ -71,7 +117,13 @@ impl Cache {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the cache folder '{}'", dir.display()))?;
         let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-        std::fs::write(&tmp, bytes).with_context(|| format!("cannot write '{}'", tmp.display()))?;
+        let mut entry = Vec::with_capacity(HEADER + bytes.len());
+        entry.extend_from_slice(MAGIC);
+        entry.extend_from_slice(&key.0.to_le_bytes());
+        entry.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
+        entry.extend_from_slice(&checksum(bytes).to_le_bytes());
+        entry.extend_from_slice(bytes);
+        std::fs::write(&tmp, entry).with_context(|| format!("cannot write '{}'", tmp.display()))?;
         std::fs::rename(&tmp, &path)
             .with_context(|| format!("cannot write '{}'", path.display()))?;
         Ok(())
@@ -81,6 +133,29 @@ impl Cache {
     pub fn enabled(&self) -> bool {
         self.dir.is_some()
     }
+}
+
+/// The payload of an entry whose header matches `key` and whose checksum holds.
+fn unwrap_entry(bytes: &[u8], key: Key) -> Result<&[u8], &'static str> {
+    if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+        return Err("not a lamdyn cache entry of this version");
+    }
+    let word = |k: usize| {
+        let mut w = [0u8; 8];
+        w.copy_from_slice(&bytes[8 * k..8 * k + 8]);
+        u64::from_le_bytes(w)
+    };
+    let payload = &bytes[HEADER..];
+    if word(1) != key.0 {
+        return Err("its key is another entry's");
+    }
+    if word(2) != payload.len() as u64 {
+        return Err("its length does not match its header");
+    }
+    if word(3) != checksum(payload) {
+        return Err("checksum mismatch");
+    }
+    Ok(payload)
 }
 
 #[cfg(test)]
@@ -105,8 +180,8 @@ mod tests {
 
     #[test]
     fn put_then_get_and_off_when_no_folder() {
-        let dir = std::env::temp_dir().join(format!("lamdyn-cache-{}", std::process::id()));
-        let c = Cache::new(Some(dir.clone()));
+        let dir = lamdyn_testkit::TempDir::new("cache");
+        let c = Cache::new(Some(dir.to_path_buf()));
         let k = Key::new("x").f64(1.5);
         assert!(c.get("m", k).is_none());
         c.put("m", k, b"hello").unwrap();
@@ -114,6 +189,36 @@ mod tests {
         let off = Cache::new(None);
         off.put("m", k, b"x").unwrap();
         assert!(off.get("m", k).is_none());
-        let _ = std::fs::remove_dir_all(dir);
+        assert!(c.notes().is_empty());
+    }
+
+    /// Every single-bit flip anywhere in an entry (header or payload), a truncation and an
+    /// entry copied under another key are caught: the entry is removed, noted, not returned.
+    #[test]
+    fn damaged_entries_are_refused_and_removed() {
+        let dir = lamdyn_testkit::TempDir::new("cache-damage");
+        let c = Cache::new(Some(dir.to_path_buf()));
+        let k = Key::new("x").f64(2.5);
+        let payload: Vec<u8> = (0..200u8).collect();
+        c.put("m", k, &payload).unwrap();
+        let path = c.path("m", k).unwrap();
+        let good = std::fs::read(&path).unwrap();
+        for byte in 0..good.len() {
+            for bit in 0..8 {
+                let mut bad = good.clone();
+                bad[byte] ^= 1 << bit;
+                std::fs::write(&path, &bad).unwrap();
+                assert!(c.get("m", k).is_none(), "flip of bit {bit} in byte {byte}");
+                assert!(!path.exists(), "damaged entry left in place");
+            }
+        }
+        std::fs::write(&path, &good[..good.len() - 1]).unwrap();
+        assert!(c.get("m", k).is_none());
+        let other = Key::new("x").f64(3.5);
+        std::fs::write(c.path("m", other).unwrap(), &good).unwrap();
+        assert!(c.get("m", other).is_none());
+        assert_eq!(c.notes().len(), good.len() * 8 + 2);
+        std::fs::write(&path, &good).unwrap();
+        assert_eq!(c.get("m", k).unwrap(), payload);
     }
 }

@@ -18,8 +18,9 @@
 //! factor 128 % high, the dashpots doubling that mode's tiny damping. Free, it recovers every
 //! mode within 1 % (G') and 2 % (η).
 
+use super::job::Job;
 use super::{ChainResult, RunOptions, run_job};
-use crate::io::write_dir_atomically;
+use crate::output::OutputDir;
 use crate::progress::Spinner;
 use anyhow::{Context, Result};
 use lamdyn_fem::eigen::Progress;
@@ -27,7 +28,7 @@ use lamdyn_fem::element::ShellMaterial;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_frf::FrfSet;
 use lamdyn_testbench::description::{Bench, Description};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The built-in roof hanging free (module docs).
 pub fn demo_roof() -> Description {
@@ -176,11 +177,31 @@ fn input_files(
     Ok(files)
 }
 
-/// Simulates the test of `d` into `dir/input`, then runs the chain; returns the result and the
-/// job's path.
+/// The demo's Monte Carlo: samples and seed of the job it writes.
+#[derive(Debug, Clone, Copy)]
+pub struct DemoSampling {
+    /// Monte Carlo samples.
+    pub samples: usize,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for DemoSampling {
+    fn default() -> Self {
+        Self {
+            samples: 400,
+            seed: 1,
+        }
+    }
+}
+
+/// Simulates the test of `d` into the folder `input` (prepared by the caller), then runs the
+/// chain on the job written there; returns the result, the job's path and the simulation's
+/// time in s.
 pub fn run_demo(
     d: &Description,
-    dir: &Path,
+    input: &OutputDir,
+    sampling: DemoSampling,
     options: &RunOptions,
     spinner: &Spinner,
 ) -> Result<(ChainResult, PathBuf, f64)> {
@@ -192,13 +213,18 @@ pub fn run_demo(
     spinner.stage("stage 'virtual test': FRFs and hammer hits");
     let frfs = bench.frfs().context("stage 'virtual test' failed")?;
     let hits = bench.hit_records().context("stage 'virtual test' failed")?;
-    let samples = options.samples.unwrap_or(400);
-    let seed = options.seed.unwrap_or(1);
-    let input = dir.join("input");
-    let files = input_files(&bench, d, &frfs, hits.as_ref(), samples, seed)?;
-    write_dir_atomically(&input, &files)?;
+    let files = input_files(
+        &bench,
+        d,
+        &frfs,
+        hits.as_ref(),
+        sampling.samples,
+        sampling.seed,
+    )?;
+    input.write(&files)?;
     let simulate_s = t.elapsed().as_secs_f64();
-    let job = input.join("job.toml");
-    let result = run_job(&job, options, spinner)?;
-    Ok((result, job, simulate_s))
+    let path = input.path().join("job.toml");
+    let job = Job::read(&path)?;
+    let result = run_job(job, &path, options, spinner)?;
+    Ok((result, path, simulate_s))
 }

@@ -300,16 +300,75 @@ impl Default for UncertaintyOptions {
 }
 
 impl Job {
-    /// Reads and checks a job file.
+    /// Reads and checks a job file: values (ranges, units) and that every file it names exists.
     ///
     /// # Errors
-    /// The file cannot be read or parsed (line, column, key), or a value is out of range or in
-    /// the wrong unit (the field named).
+    /// The file cannot be read or parsed (line, column, key), a value is out of range or in the
+    /// wrong unit, or a file it names is missing (the field named).
     pub fn read(path: &Path) -> Result<Self> {
         let job: Job = crate::io::read_toml(path)?;
         job.check()
+            .and_then(|()| job.check_files(&base_of(path)))
             .map_err(|e| anyhow!("error in '{}': {e}", path.display()))?;
         Ok(job)
+    }
+
+    /// The job with the command line's Monte Carlo sample count and seed, checked as the job
+    /// file's own values are.
+    ///
+    /// # Errors
+    /// A sample count beyond the job file's limit.
+    pub fn with_overrides(mut self, samples: Option<usize>, seed: Option<u64>) -> Result<Self> {
+        if let Some(n) = samples {
+            self.uncertainty.samples = n;
+        }
+        if let Some(s) = seed {
+            self.uncertainty.seed = s;
+        }
+        check_samples(self.uncertainty.samples).map_err(|e| anyhow!("--samples: {e}"))?;
+        Ok(self)
+    }
+
+    /// Every file the job reads, as (field, path resolved against `base`, the job file's
+    /// folder).
+    pub fn input_files(&self, base: &Path) -> Vec<(&'static str, PathBuf)> {
+        let m = &self.measurement;
+        let mut out: Vec<(&'static str, PathBuf)> = Vec::new();
+        let mut add = |field: &'static str, p: &Path| out.push((field, relative(base, p)));
+        for (field, p) in [
+            ("measurement.channels", &m.channels),
+            ("measurement.frf", &m.frf),
+            ("measurement.uff", &m.uff),
+            ("model.file", &self.model.file),
+            ("truth", &self.truth),
+        ] {
+            if let Some(p) = p {
+                add(field, p);
+            }
+        }
+        for t in &m.time {
+            add("measurement.time", t);
+        }
+        if let Some(ModelSpec {
+            mesh: lamdyn_fem::model::MeshSpec::Gmsh { file, .. },
+            ..
+        }) = &self.model.spec
+        {
+            add("model.spec.mesh.file", Path::new(file));
+        }
+        out
+    }
+
+    /// Every file the job names exists and is a file.
+    fn check_files(&self, base: &Path) -> Result<()> {
+        for (field, p) in self.input_files(base) {
+            match std::fs::metadata(&p) {
+                Ok(m) if m.is_file() => {}
+                Ok(_) => return Err(anyhow!("{field}: '{}' is not a file", p.display())),
+                Err(e) => return Err(anyhow!("{field}: cannot read '{}': {e}", p.display())),
+            }
+        }
+        Ok(())
     }
 
     /// Range and unit checks; the error names the field.
@@ -405,12 +464,7 @@ impl Job {
                 u.thickness_sd_m
             ));
         }
-        if u.samples > 100_000 {
-            return Err(anyhow!(
-                "uncertainty.samples: {} is more than 100000",
-                u.samples
-            ));
-        }
+        check_samples(u.samples).map_err(|e| anyhow!("uncertainty.samples: {e}"))?;
         Ok(())
     }
 
@@ -482,6 +536,32 @@ fn check_shell(at: &str, spec: &ModelSpec) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// Most Monte Carlo samples a run takes (400 give 95 % bands to about ±1 % of their width).
+pub const MAX_SAMPLES: usize = 100_000;
+
+fn check_samples(n: usize) -> Result<()> {
+    if n > MAX_SAMPLES {
+        return Err(anyhow!("{n} is more than {MAX_SAMPLES}"));
+    }
+    Ok(())
+}
+
+/// The folder of a file (`.` for a bare name).
+pub fn base_of(path: &Path) -> PathBuf {
+    path.parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}
+
+/// `p` resolved against `base` unless absolute.
+pub fn relative(base: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base.join(p)
+    }
 }
 
 fn positive(name: &str, v: f64) -> Result<()> {

@@ -24,7 +24,7 @@ use crate::cmd::ema::{TimeOptions, time_frfs};
 use crate::progress::Spinner;
 use anyhow::{Context, Result, anyhow, bail};
 use cache::{Cache, Key};
-use job::{Job, KinematicsChoice};
+use job::{Job, KinematicsChoice, relative};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
 use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::Progress;
@@ -53,10 +53,6 @@ use std::time::Instant;
 pub struct RunOptions {
     /// Cache folder (absent: no cache).
     pub cache_dir: Option<PathBuf>,
-    /// Overrides `uncertainty.samples`.
-    pub samples: Option<usize>,
-    /// Overrides `uncertainty.seed`.
-    pub seed: Option<u64>,
 }
 
 /// The measured data as the chain uses it.
@@ -204,29 +200,19 @@ fn stage<T>(
     Ok(value)
 }
 
-fn relative(base: &Path, p: &Path) -> PathBuf {
-    if p.is_absolute() {
-        p.to_path_buf()
-    } else {
-        base.join(p)
-    }
-}
-
-/// Runs the chain on the job file at `path`.
+/// Runs the chain on `job`, read from the file at `path` (paths in it are relative to its
+/// folder) with [`Job::read`] and the options' overrides applied
+/// ([`Job::with_overrides`]).
 ///
 /// # Errors
-/// The job file's errors (field named), then the first stage that fails (stage named).
-pub fn run_job(path: &Path, options: &RunOptions, spinner: &Spinner) -> Result<ChainResult> {
-    let mut job = Job::read(path)?;
-    if let Some(n) = options.samples {
-        job.uncertainty.samples = n;
-    }
-    if let Some(s) = options.seed {
-        job.uncertainty.seed = s;
-    }
-    let base = path
-        .parent()
-        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+/// The first stage that fails (stage named).
+pub fn run_job(
+    job: Job,
+    path: &Path,
+    options: &RunOptions,
+    spinner: &Spinner,
+) -> Result<ChainResult> {
+    let base = job::base_of(path);
     let cache = Cache::new(options.cache_dir.clone());
     let mut timings = Vec::new();
     let mut warnings = Vec::new();
@@ -303,6 +289,7 @@ pub fn run_job(path: &Path, options: &RunOptions, spinner: &Spinner) -> Result<C
         })?),
         None => None,
     };
+    warnings.extend(cache.notes());
     collect_warnings(
         &job,
         &measured,

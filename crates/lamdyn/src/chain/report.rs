@@ -1,7 +1,7 @@
 //! The report of a chain run: one self-contained HTML file (figures inline as SVG), the figures
 //! again as SVG and PNG files, the tables as CSV and everything as JSON, written into the
-//! results folder at once (`write_dir_atomically`: a failed run leaves the old
-//! report as it was).
+//! results folder only when everything is built (`crate::output::OutputDir`: a failed run
+//! leaves the old report as it was, and nothing lamdyn did not write is touched).
 //!
 //! Figures: the RMS FRF measured vs fitted (paper Fig. 5), the stabilization diagram and the
 //! CMIF, the identified mode shapes as contour maps, E'(f) and η(f) of the laminate (Fig. 4),

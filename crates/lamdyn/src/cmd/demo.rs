@@ -3,16 +3,30 @@
 
 use crate::Outcome;
 use crate::chain::RunOptions;
-use crate::chain::demo::{demo_roof, run_demo};
+use crate::chain::demo::{DemoSampling, demo_roof, run_demo};
+use crate::chain::job::MAX_SAMPLES;
 use crate::cli::DemoArgs;
+use crate::output::OutputDir;
 use crate::progress::Spinner;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use lamdyn_testbench::description::Description;
 use std::io::Write;
 
 /// Runs `lamdyn demo`.
 pub fn run(args: &DemoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let t = std::time::Instant::now();
+    let defaults = DemoSampling::default();
+    let sampling = DemoSampling {
+        samples: args.samples.unwrap_or(defaults.samples),
+        seed: args.seed.unwrap_or(defaults.seed),
+    };
+    if sampling.samples > MAX_SAMPLES {
+        bail!("--samples: {} is more than {MAX_SAMPLES}", sampling.samples);
+    }
+    // Both folders are checked before the simulation: a wrong --out fails at once.
+    let inputs: Vec<std::path::PathBuf> = args.description.iter().cloned().collect();
+    let input_dir = OutputDir::prepare(&args.out.join("input"), &inputs, args.force)?;
+    let report_dir = OutputDir::prepare(&args.out.join("report"), &inputs, args.force)?;
     let desc = match &args.description {
         Some(p) => {
             let text = std::fs::read_to_string(p)
@@ -24,15 +38,13 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let options = RunOptions {
         // The cache beside the job, where `lamdyn run DIR/input/job.toml` looks.
         cache_dir: Some(args.out.join("input").join(".lamdyn-cache")),
-        samples: args.samples,
-        seed: args.seed,
     };
     let spinner = Spinner::new();
-    let (result, _job, simulate_s) = run_demo(&desc, &args.out, &options, &spinner)?;
-    let dir = args.out.join("report");
-    super::run::write_report(&result, &dir, &spinner)?;
+    let (result, _job, simulate_s) = run_demo(&desc, &input_dir, sampling, &options, &spinner)?;
+    super::run::write_report(&result, &report_dir, &spinner)?;
     spinner.finish();
-    let mut summary = super::run::summary(&result, &dir);
+    let dir = report_dir.path();
+    let mut summary = super::run::summary(&result, dir);
     summary.input(
         "virtual test",
         format!(

@@ -5,7 +5,7 @@
 
 use crate::Outcome;
 use crate::cli::{EmaArgs, Estimator};
-use crate::io::write_dir_atomically;
+use crate::output::OutputDir;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
@@ -232,6 +232,17 @@ fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
 
 /// Runs `lamdyn ema`.
 pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    let inputs: Vec<PathBuf> = [&args.uff, &args.channels, &args.frf]
+        .into_iter()
+        .flatten()
+        .chain(&args.time)
+        .cloned()
+        .collect();
+    let out_dir = args
+        .out
+        .as_ref()
+        .map(|d| OutputDir::prepare(d, &inputs, args.force))
+        .transpose()?;
     let (set, source, time) = match (&args.channels, args.time.is_empty()) {
         (Some(c), false) => {
             let (set, info) = frfs_from_time(c, &args.time, args)?;
@@ -258,11 +269,12 @@ pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     if let Some(info) = &time {
         add_time_info(&mut report, &set, &r, info);
     }
-    if let Some(dir) = &args.out {
+    if let Some(dir) = &out_dir {
         write_results(dir, &set, &r, &report)?;
-        report
-            .notes
-            .push(format!("results and charts written to '{}'", dir.display()));
+        report.notes.push(format!(
+            "results and charts written to '{}'",
+            dir.path().display()
+        ));
     }
     report.write(args.output.format(), out, err)?;
     Ok(
@@ -443,7 +455,7 @@ fn add_time_info(report: &mut Report, set: &FrfSet, r: &EmaResult, info: &TimeIn
 }
 
 /// Writes modes.csv, diagram.csv, result.json and the charts into `dir` atomically.
-fn write_results(dir: &Path, set: &FrfSet, r: &EmaResult, report: &Report) -> Result<()> {
+fn write_results(dir: &OutputDir, set: &FrfSet, r: &EmaResult, report: &Report) -> Result<()> {
     use lamdyn_report::ema::{cmif_chart, stabilization_chart};
     let mut modes =
         String::from("mode,freq_hz,damping_ratio,loss_factor,mpc,mpd_deg,stable_poles\n");
@@ -485,5 +497,5 @@ fn write_results(dir: &Path, set: &FrfSet, r: &EmaResult, report: &Report) -> Re
         ("cmif.svg", cmif.render_svg()?.into_bytes()),
         ("cmif.png", cmif.render_png()?),
     ];
-    write_dir_atomically(dir, &files)
+    dir.write(&files)
 }

@@ -9,7 +9,8 @@
 
 use crate::Outcome;
 use crate::cli::{CovarianceArg, FitArgs, FitExample, LawArg, MisfitArg};
-use crate::io::{read_toml, write_dir_atomically};
+use crate::io::read_toml;
+use crate::output::OutputDir;
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report, Section, write_csv_table};
 use anyhow::{Context, Result, bail};
@@ -127,18 +128,22 @@ pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     if !(args.noise.is_finite() && (0.0..1.0).contains(&args.noise)) {
         bail!("--noise {} must be a fraction in [0, 1)", args.noise);
     }
+    let inputs: Vec<PathBuf> = args.job.iter().cloned().collect();
+    let prepare = |d: &PathBuf| OutputDir::prepare(d, &inputs, args.force);
+    let out_dir = args.out.as_ref().map(prepare).transpose()?;
+    let example_dir = args.write_example.as_ref().map(prepare).transpose()?;
     let spinner = Spinner::new();
     let mut problem = match (&args.job, args.example) {
         (Some(path), _) => from_job(path, &spinner)?,
         (None, Some(e)) => from_example(e, args.seed, args.noise)?,
         (None, None) => bail!("give a fit job file or --example"),
     };
-    if let (Some(dir), Some(e)) = (&args.write_example, args.example) {
+    if let (Some(dir), Some(e)) = (&example_dir, args.example) {
         write_example(dir, e, &problem)?;
         writeln!(
             err,
             "lamdyn: wrote the example as a job to '{}'",
-            dir.display()
+            dir.path().display()
         )?;
     }
     apply_flags(args, &mut problem.settings);
@@ -153,7 +158,7 @@ pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     )?;
     let fitted_rms = objective.model_rms(&|w| result.modulus(w));
     let report = build_report(&problem, &result, &objective, &fitted_rms);
-    if let Some(dir) = &args.out {
+    if let Some(dir) = &out_dir {
         write_outputs(
             dir,
             &report,
@@ -387,7 +392,7 @@ fn read_measurement(m: &MeasurementSpec, base: &Path, job: &Path) -> Result<(Frf
 }
 
 /// Writes the example case as a job directory: model.toml, channels.csv, frf.csv, job.toml.
-fn write_example(dir: &Path, e: FitExample, problem: &Problem) -> Result<()> {
+fn write_example(dir: &OutputDir, e: FitExample, problem: &Problem) -> Result<()> {
     let case = PaperPlateCase::default();
     let spec = ModelSpec {
         mesh: MeshSpec::Rectangle {
@@ -426,24 +431,21 @@ fn write_example(dir: &Path, e: FitExample, problem: &Problem) -> Result<()> {
         },
         problem.source
     );
-    write_dir_atomically(
-        dir,
-        &[
-            (
-                "model.toml",
-                format!("# The paper's plate, flat, free.\n{model}\n").into_bytes(),
-            ),
-            (
-                "channels.csv",
-                lamdyn_frf::csv::write_channels(&problem.measured).into_bytes(),
-            ),
-            (
-                "frf.csv",
-                lamdyn_frf::csv::write_frf(&problem.measured).into_bytes(),
-            ),
-            ("job.toml", job.into_bytes()),
-        ],
-    )
+    dir.write(&[
+        (
+            "model.toml",
+            format!("# The paper's plate, flat, free.\n{model}\n").into_bytes(),
+        ),
+        (
+            "channels.csv",
+            lamdyn_frf::csv::write_channels(&problem.measured).into_bytes(),
+        ),
+        (
+            "frf.csv",
+            lamdyn_frf::csv::write_frf(&problem.measured).into_bytes(),
+        ),
+        ("job.toml", job.into_bytes()),
+    ])
 }
 
 fn build_report(
@@ -719,7 +721,7 @@ fn modewise_section(problem: &Problem, r: &FitResult) -> Section {
 
 /// `--out DIR`: report.json, one CSV per table, and the RMS curves (paper Fig. 5).
 fn write_outputs(
-    dir: &Path,
+    dir: &OutputDir,
     report: &Report,
     problem: &Problem,
     measured_rms: &[f64],
@@ -753,5 +755,5 @@ fn write_outputs(
     }
     files.push(("rms.csv".into(), rms.into_bytes()));
     let named: Vec<(&str, Vec<u8>)> = files.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
-    write_dir_atomically(dir, &named)
+    dir.write(&named)
 }

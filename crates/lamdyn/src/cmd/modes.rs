@@ -4,6 +4,7 @@
 use crate::Outcome;
 use crate::cli::{ModelExample, ModesArgs};
 use crate::io::read_toml;
+use crate::output::{check_file_target, write_file};
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result, bail};
@@ -13,7 +14,7 @@ use lamdyn_fem::eigen::{ModalParams, ModalSolution, Shift, solve_modes};
 use lamdyn_fem::element::ShellMaterial;
 use lamdyn_fem::mesh::Mesh;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
-use lamdyn_fem::output::{mac, write_vtu};
+use lamdyn_fem::output::{mac, vtu_text};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -113,6 +114,11 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
         Some(p) => Some(read_shapes(p)?),
         None => None,
     };
+    // Outputs are checked before the solve: a wrong path fails at once.
+    let inputs: Vec<PathBuf> = args.model.iter().chain(&args.compare).cloned().collect();
+    for path in args.vtu.iter().chain(&args.shapes_json) {
+        check_file_target(path, &inputs)?;
+    }
     let (mesh, springs) = spec
         .build(&base)
         .with_context(|| format!("invalid model {source}"))?;
@@ -135,10 +141,10 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
             .map(|j| sol.shapes.col(j).iter().copied().collect())
             .collect();
         let freqs: Vec<f64> = sol.modes.iter().map(|m| m.freq_hz).collect();
-        write_vtu(path, &mesh, &freqs, &shapes)?;
+        write_file(path, vtu_text(&mesh, &freqs, &shapes).as_bytes(), &inputs)?;
     }
     if let Some(path) = &args.shapes_json {
-        write_shapes(path, &mesh, &sol)?;
+        write_file(path, &shapes_json(&mesh, &sol)?, &inputs)?;
     }
     report.write(args.output.format(), out, err)?;
     Ok(Outcome::Done)
@@ -151,7 +157,8 @@ fn read_shapes(path: &Path) -> Result<ShapesFile> {
         .with_context(|| format!("'{}' is not a lamdyn shapes file", path.display()))
 }
 
-fn write_shapes(path: &Path, mesh: &Mesh, sol: &ModalSolution) -> Result<()> {
+/// The `--shapes-json` file's bytes.
+fn shapes_json(mesh: &Mesh, sol: &ModalSolution) -> Result<Vec<u8>> {
     let file = ShapesFile {
         lamdyn: env!("CARGO_PKG_VERSION").into(),
         nodes: mesh.nodes().to_vec(),
@@ -167,11 +174,7 @@ fn write_shapes(path: &Path, mesh: &Mesh, sol: &ModalSolution) -> Result<()> {
             })
             .collect(),
     };
-    let text = serde_json::to_string(&file)?;
-    let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, text).with_context(|| format!("cannot write '{}'", path.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot write '{}'", path.display()))?;
-    Ok(())
+    Ok(serde_json::to_vec(&file)?)
 }
 
 /// Translational part of a shape (u_x, u_y, u_z per node).

@@ -2,9 +2,10 @@
 //! folder, a summary of the core at the modal frequencies printed.
 
 use crate::Outcome;
+use crate::chain::job::{Job, base_of};
 use crate::chain::{ChainResult, RunOptions, report, run_job};
 use crate::cli::RunArgs;
-use crate::io::write_dir_atomically;
+use crate::output::OutputDir;
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result};
@@ -15,10 +16,13 @@ use std::path::{Path, PathBuf};
 /// Runs `lamdyn run`.
 pub fn run(args: &RunArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     crate::chain::check_job_path(&args.job)?;
-    let base = args
-        .job
-        .parent()
-        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let job = Job::read(&args.job)?.with_overrides(args.samples, args.seed)?;
+    let base = base_of(&args.job);
+    let mut inputs: Vec<PathBuf> = job.input_files(&base).into_iter().map(|(_, p)| p).collect();
+    inputs.push(args.job.clone());
+    let dir = args.out.clone().unwrap_or_else(|| base.join("report"));
+    // Checked before any work: an unwritable folder or one holding the inputs fails at once.
+    let out_dir = OutputDir::prepare(&dir, &inputs, args.force)?;
     let options = RunOptions {
         cache_dir: if args.no_cache {
             None
@@ -29,23 +33,20 @@ pub fn run(args: &RunArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
                     .unwrap_or_else(|| base.join(".lamdyn-cache")),
             )
         },
-        samples: args.samples,
-        seed: args.seed,
     };
     let spinner = Spinner::new();
-    let result = run_job(&args.job, &options, &spinner)?;
-    let dir = args.out.clone().unwrap_or_else(|| base.join("report"));
-    write_report(&result, &dir, &spinner)?;
+    let result = run_job(job, &args.job, &options, &spinner)?;
+    write_report(&result, &out_dir, &spinner)?;
     spinner.finish();
     summary(&result, &dir).write(args.output.format(), out, err)?;
     Ok(Outcome::Done)
 }
 
 /// Renders the report and writes the folder atomically.
-pub(crate) fn write_report(result: &ChainResult, dir: &Path, spinner: &Spinner) -> Result<()> {
+pub(crate) fn write_report(result: &ChainResult, dir: &OutputDir, spinner: &Spinner) -> Result<()> {
     spinner.stage("stage 'report': figures and tables");
     let files = report::build(result).context("stage 'report' failed")?;
-    write_dir_atomically(dir, &files).context("stage 'report' failed")
+    dir.write(&files).context("stage 'report' failed")
 }
 
 /// The summary table: the core at each modal frequency (errors when the truth is known).

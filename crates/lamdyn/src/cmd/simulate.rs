@@ -5,7 +5,7 @@
 
 use crate::Outcome;
 use crate::cli::SimulateArgs;
-use crate::io::write_dir_atomically;
+use crate::output::OutputDir;
 use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report};
 use anyhow::{Context, Result, anyhow, bail};
@@ -43,6 +43,12 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Res
         out.write_all(text.as_bytes())?;
         return Ok(Outcome::Done);
     }
+    let inputs: Vec<std::path::PathBuf> = args.description.iter().cloned().collect();
+    let out_dir = args
+        .out
+        .as_ref()
+        .map(|d| OutputDir::prepare(d, &inputs, args.force))
+        .transpose()?;
     let spinner = Spinner::new();
     let mut times: Vec<(&str, f64)> = Vec::new();
     let t0 = Instant::now();
@@ -65,14 +71,14 @@ pub fn run(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Res
     };
     spinner.finish();
     let mut report = build_report(&bench, &frfs, hits.as_ref(), &source, &times);
-    if let Some(dir) = &args.out {
+    if let Some(dir) = &out_dir {
         let t = Instant::now();
         let files = output_files(&bench, &frfs, hits.as_ref(), &text, &report)?;
-        write_dir_atomically(dir, &files)?;
+        dir.write(&files)?;
         report.notes.push(format!(
             "{} files written to '{}' in {:.2} s",
             files.len(),
-            dir.display(),
+            dir.path().display(),
             t.elapsed().as_secs_f64()
         ));
     }

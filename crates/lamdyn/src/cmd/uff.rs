@@ -2,7 +2,7 @@
 
 use crate::Outcome;
 use crate::cli::{UffCommand, UffConvertArgs, UffInfoArgs, UffTarget};
-use crate::io::write_dir_atomically;
+use crate::output::{OutputDir, check_file_target, write_file};
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result, anyhow};
 use lamdyn_uff::{Encoding, ReadOptions};
@@ -56,20 +56,6 @@ fn info(args: &UffInfoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     Ok(Outcome::Done)
 }
 
-/// Writes `bytes` to `path` through a temporary file renamed over it.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| anyhow!("'{}' is not a file name", path.display()))?;
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write '{}'", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot write '{}'", path.display()))
-}
-
 /// Notices of a read, with the skipped datasets summarised by number.
 fn report_notices(input: &Path, notices: &[String], err: &mut dyn Write) -> Result<()> {
     let mut skipped: std::collections::BTreeMap<String, usize> = Default::default();
@@ -98,6 +84,15 @@ fn convert(args: &UffConvertArgs, err: &mut dyn Write) -> Result<Outcome> {
     let options = ReadOptions {
         lenient_counts: args.lenient,
     };
+    // The output is checked before the input is read: a wrong target fails at once.
+    let inputs = [args.input.clone()];
+    let out_dir = if args.to == UffTarget::Csv {
+        Some(OutputDir::prepare(&args.output, &inputs, args.force)?)
+    } else {
+        check_file_target(&args.output, &inputs)?;
+        None
+    };
+    let write_atomically = |path: &Path, bytes: &[u8]| write_file(path, bytes, &inputs);
     if matches!(args.to, UffTarget::Ascii | UffTarget::Binary) {
         // Datasets 58 change encoding; every other dataset is copied as it is.
         let encoding = match args.to {
@@ -125,16 +120,14 @@ fn convert(args: &UffConvertArgs, err: &mut dyn Write) -> Result<Outcome> {
         UffTarget::Json => write_atomically(&args.output, &serde_json::to_vec_pretty(&file)?)?,
         UffTarget::Csv => {
             let set = lamdyn_uff::frf::to_frf_set(&file).map_err(context)?;
-            write_dir_atomically(
-                &args.output,
-                &[
-                    (
-                        "channels.csv",
-                        lamdyn_frf::csv::write_channels(&set).into_bytes(),
-                    ),
-                    ("frf.csv", lamdyn_frf::csv::write_frf(&set).into_bytes()),
-                ],
-            )?;
+            let dir = out_dir.ok_or_else(|| anyhow!("no output folder"))?;
+            dir.write(&[
+                (
+                    "channels.csv",
+                    lamdyn_frf::csv::write_channels(&set).into_bytes(),
+                ),
+                ("frf.csv", lamdyn_frf::csv::write_frf(&set).into_bytes()),
+            ])?;
         }
         UffTarget::Vtu => {
             let text = lamdyn_uff::vtu::to_vtu(&file).map_err(context)?;

@@ -1,4 +1,4 @@
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// (exit code, stdout, stderr) of `lamdyn args...`.
 pub fn lamdyn(args: &[&str]) -> (u8, String, String) {
@@ -23,12 +23,17 @@ pub fn example(rel: &str) -> String {
     p.to_str().unwrap().to_string()
 }
 
-/// A fresh temporary directory for one test.
-pub fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lamdyn-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A UFF conformance file among lamdyn-uff's test fixtures.
+pub fn uff_fixture(rel: &str) -> String {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../lamdyn-uff/tests/fixtures")
+        .join(rel);
+    p.to_str().unwrap().to_string()
+}
+
+/// A fresh temporary folder for one test, removed when dropped (also when the test fails).
+pub fn temp_dir(name: &str) -> lamdyn_testkit::TempDir {
+    lamdyn_testkit::TempDir::new(name)
 }
 
 /// Rows of a CSV output as maps from column to value.
@@ -51,4 +56,15 @@ pub fn num(row: &std::collections::BTreeMap<String, String>, key: &str) -> f64 {
     row[key]
         .parse()
         .unwrap_or_else(|_| panic!("{key} = {:?} is not a number", row[key]))
+}
+
+/// The bench's small laminate, free, 5 x 5 sensors, FRFs to 240 Hz (no hits: quick).
+pub fn small_description(dir: &Path) -> PathBuf {
+    let laminate = include_str!("../../../lamdyn-testbench/tests/data/small_laminate.toml");
+    let text = format!(
+        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\n"
+    );
+    let p = dir.join("small.toml");
+    std::fs::write(&p, text).unwrap();
+    p
 }

@@ -4,8 +4,9 @@ use super::common::*;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-/// The beam FRFs written as a CSV FRF set in a fresh folder: (channels, frf) paths.
-fn beam_csv(name: &str) -> (String, String) {
+/// The beam FRFs written as a CSV FRF set in a fresh folder: the folder (removed when dropped)
+/// and the channels and FRF paths.
+fn beam_csv(name: &str) -> (lamdyn_testkit::TempDir, String, String) {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../lamdyn-ema/tests/fixtures/free-free-beam");
     let curves: Vec<Vec<num_complex::Complex64>> = (1..=3)
@@ -29,7 +30,8 @@ fn beam_csv(name: &str) -> (String, String) {
     let (c, f) = (dir.join("channels.csv"), dir.join("frf.csv"));
     std::fs::write(&c, lamdyn_frf::csv::write_channels(&set)).unwrap();
     std::fs::write(&f, lamdyn_frf::csv::write_frf(&set)).unwrap();
-    (c.to_str().unwrap().into(), f.to_str().unwrap().into())
+    let (c, f) = (c.to_str().unwrap().into(), f.to_str().unwrap().into());
+    (dir, c, f)
 }
 
 /// `lamdyn ema` on the beam CSV over 10–1000 Hz with `extra` arguments, as JSON (exit code 0).
@@ -61,7 +63,7 @@ fn all_frac_above(doc: &serde_json::Value, min: f64) -> bool {
 
 #[test]
 fn beam_modes_and_correlation() {
-    let (c, f) = beam_csv("ema-beam");
+    let (_dir, c, f) = beam_csv("ema-beam");
     let doc = beam_json(&c, &f, &["--driving", "1"]);
     let rows = doc["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 6);
@@ -93,7 +95,7 @@ fn beam_modes_and_correlation() {
 
 #[test]
 fn picks_and_bad_arguments() {
-    let (c, f) = beam_csv("ema-bad");
+    let (_dir, c, f) = beam_csv("ema-bad");
     // A frequency with no pole: a warning and exit code 1.
     let (code, _, err) = lamdyn(&[
         "ema",

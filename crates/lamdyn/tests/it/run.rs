@@ -4,20 +4,9 @@
 //! EMA from the cache, bad job files name the field, a failed run names its stage and leaves
 //! the earlier report alone.
 
-use super::common::{lamdyn, temp_dir};
+use super::common::{lamdyn, small_description, temp_dir};
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
-
-/// The bench's small laminate, free, 5 x 5 sensors, FRFs to 240 Hz (no hits: quick).
-fn small_description(dir: &Path) -> PathBuf {
-    let laminate = include_str!("../../../lamdyn-testbench/tests/data/small_laminate.toml");
-    let text = format!(
-        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\n"
-    );
-    let p = dir.join("small.toml");
-    std::fs::write(&p, text).unwrap();
-    p
-}
+use std::path::Path;
 
 /// Runs the demo on the small laminate into `dir/out` (100 Monte Carlo samples).
 fn demo(dir: &Path) -> serde_json::Value {
@@ -127,7 +116,6 @@ fn demo_report_has_every_figure_and_recovers_the_core() {
     let csv = std::fs::read_to_string(report.join("core_modal.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains("within_phi_limit"));
     assert_eq!(csv.lines().count(), rows.len() + 1);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -167,7 +155,6 @@ fn rerun_uses_the_cache_and_a_failed_run_keeps_the_report() {
     assert_eq!(code, 2);
     assert!(err.contains("stage 'model' failed"), "{err}");
     assert_eq!(std::fs::read(report.join("report.html")).unwrap(), before);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -226,7 +213,6 @@ fn bad_job_files_name_the_field() {
         good.replace("channels = \"channels.csv\"", "channels = \"fewer.csv\""),
         "measurement.frf does not match the geometry in measurement.channels",
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Issue 19: `lamdyn demo` hung at stage 'uncertainty' when stderr was a terminal (the main
@@ -259,5 +245,4 @@ fn demo_finishes_with_stderr_on_a_terminal() {
         text.contains("stage 'uncertainty'"),
         "no spinner drawn on the terminal: {text}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -131,7 +131,6 @@ fn simulated_test_reads_back_through_ema() {
         "{err}"
     );
     assert!(out.join("hit1.csv").exists());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -1,0 +1,534 @@
+//! Writing results without destroying anything lamdyn did not write (issue 19).
+//!
+//! **Folders** ([`OutputDir`]). A results folder holds a manifest, `.lamdyn-manifest`, listing
+//! the files lamdyn wrote there last time. A new run
+//! 1. is checked before any work ([`OutputDir::prepare`]): the folder (or its nearest existing
+//!    parent) must be writable; it must not hold the run's own inputs (the job file, the
+//!    measurement) nor files lamdyn did not write ("foreign" files: anything not in the
+//!    manifest, except lamdyn's own dot-entries such as `.lamdyn-cache`), unless `--force`;
+//! 2. writes each file to a temporary name beside its target, and only when every file is
+//!    written renames them into place (a failed run leaves the earlier results as they were);
+//! 3. removes the files of the previous manifest that this run did not write again (a figure
+//!    no longer produced), never an input and never anything else, and writes the new
+//!    manifest.
+//!
+//! With `--force`, foreign files are kept and lamdyn writes beside them (a foreign file with
+//! the name of one of lamdyn's outputs is replaced), and no earlier file is removed. An input is never written over, with or
+//! without `--force`.
+//!
+//! **Files** ([`write_file`]): a temporary file renamed over the target. A symlink is written
+//! through (its target is replaced, the link stays); a target that is not a regular file (a
+//! device, a FIFO, a folder) is refused, as is an input of the run.
+
+use anyhow::{Context, Result, anyhow, bail};
+use std::collections::BTreeSet;
+use std::path::{Component, Path, PathBuf};
+
+/// Name of the manifest in a results folder.
+pub const MANIFEST: &str = ".lamdyn-manifest";
+
+/// First line of a manifest.
+const MANIFEST_HEADER: &str = "# lamdyn results: files written by lamdyn (one path per line, relative to this folder); lamdyn replaces or removes only these";
+
+/// How many foreign names an error lists.
+const LISTED: usize = 5;
+
+/// A results folder, checked and ready to receive files (module docs).
+#[derive(Debug, Clone)]
+pub struct OutputDir {
+    dir: PathBuf,
+    force: bool,
+    inputs: Vec<PathBuf>,
+    previous: BTreeSet<String>,
+}
+
+impl OutputDir {
+    /// Checks `dir` before any work: writable, holding none of `inputs` and no foreign files
+    /// (unless `force`).
+    ///
+    /// # Errors
+    /// The folder is a file, cannot be created or written, holds an input (named), or holds
+    /// files lamdyn did not write (the first few named) and `force` is off.
+    pub fn prepare(dir: &Path, inputs: &[PathBuf], force: bool) -> Result<Self> {
+        let inputs: Vec<PathBuf> = inputs
+            .iter()
+            .filter_map(|p| p.canonicalize().ok())
+            .collect();
+        let mut out = Self {
+            dir: dir.to_path_buf(),
+            force,
+            inputs,
+            previous: BTreeSet::new(),
+        };
+        match std::fs::metadata(dir) {
+            Ok(m) if !m.is_dir() => bail!(
+                "--out '{}' is not a folder: give a folder for the results",
+                dir.display()
+            ),
+            Ok(_) => {
+                out.previous = read_manifest(dir)?;
+                out.check_contents()?;
+                probe_writable(dir)?;
+            }
+            Err(_) => probe_writable(&nearest_existing(dir)?)?,
+        }
+        Ok(out)
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Refuses a folder holding inputs, or foreign files without `force`.
+    fn check_contents(&self) -> Result<()> {
+        let canonical = self
+            .dir
+            .canonicalize()
+            .with_context(|| format!("cannot read the folder '{}'", self.dir.display()))?;
+        if let Some(input) = self.inputs.iter().find(|p| p.starts_with(&canonical)) {
+            let what = if *input == canonical { "is" } else { "holds" };
+            if !self.force {
+                bail!(
+                    "the results folder '{}' {what} an input of this run ('{}'): lamdyn writes its results into a folder of their own; choose another --out (or --force to write beside the inputs, which are never written over)",
+                    self.dir.display(),
+                    input.display()
+                );
+            }
+        }
+        if self.force {
+            return Ok(());
+        }
+        let foreign: Vec<String> = list_files(&self.dir)?
+            .into_iter()
+            .filter(|f| !self.previous.contains(f))
+            .collect();
+        if !foreign.is_empty() {
+            let shown: Vec<String> = foreign
+                .iter()
+                .take(LISTED)
+                .map(|f| format!("'{f}'"))
+                .collect();
+            bail!(
+                "the results folder '{}' holds {} file(s) lamdyn did not write ({}{}): lamdyn does not delete them; choose a new or empty folder, or pass --force to write beside them",
+                self.dir.display(),
+                foreign.len(),
+                shown.join(", "),
+                if foreign.len() > LISTED { ", ..." } else { "" }
+            );
+        }
+        Ok(())
+    }
+
+    /// Writes `files` (paths relative to the folder, `/`-separated subfolders allowed): all to
+    /// temporary names first, then renamed into place; the previous run's files that are not
+    /// written again are removed; the manifest is rewritten.
+    ///
+    /// # Errors
+    /// A name that leaves the folder, a target that is not a regular file or is an input, or an
+    /// I/O error; before the renames, nothing of the earlier results has changed.
+    pub fn write<S: AsRef<str>>(&self, files: &[(S, Vec<u8>)]) -> Result<()> {
+        std::fs::create_dir_all(&self.dir)
+            .with_context(|| format!("cannot create '{}'", self.dir.display()))?;
+        // Checked again: the folder may have changed since `prepare` (another process).
+        self.check_contents()?;
+        let mut names = BTreeSet::new();
+        let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(files.len());
+        let result = (|| -> Result<()> {
+            for (name, bytes) in files {
+                let name = check_relative(name.as_ref())?;
+                if !names.insert(name.clone()) {
+                    bail!("'{name}' is written twice");
+                }
+                let target = resolve_target(&self.dir.join(&name), &self.inputs)?;
+                if let Some(parent) = target.parent() {
+                    std::fs::create_dir_all(parent)
+                        .with_context(|| format!("cannot create '{}'", parent.display()))?;
+                }
+                let tmp = temporary_beside(&target)?;
+                std::fs::write(&tmp, bytes)
+                    .with_context(|| format!("cannot write '{}'", tmp.display()))?;
+                staged.push((tmp, target));
+            }
+            Ok(())
+        })();
+        if let Err(e) = result {
+            for (tmp, _) in &staged {
+                let _ = std::fs::remove_file(tmp);
+            }
+            return Err(e);
+        }
+        for (tmp, target) in &staged {
+            std::fs::rename(tmp, target)
+                .with_context(|| format!("cannot write '{}'", target.display()))?;
+        }
+        // The previous run's files not written again: removed (a figure no longer produced),
+        // except inputs; with --force none are removed, and they stay lamdyn's in the manifest.
+        let mut listed = names.clone();
+        for stale in self.previous.difference(&names) {
+            let path = self.dir.join(stale);
+            let is_input = path.canonicalize().is_ok_and(|c| self.inputs.contains(&c));
+            if self.force || is_input {
+                if std::fs::symlink_metadata(&path).is_ok() {
+                    listed.insert(stale.clone());
+                }
+            } else {
+                remove_stale(&self.dir, stale);
+            }
+        }
+        let mut manifest = String::from(MANIFEST_HEADER);
+        for n in &listed {
+            manifest.push('\n');
+            manifest.push_str(n);
+        }
+        manifest.push('\n');
+        let path = self.dir.join(MANIFEST);
+        let tmp = temporary_beside(&path)?;
+        std::fs::write(&tmp, manifest)
+            .and_then(|()| std::fs::rename(&tmp, &path))
+            .with_context(|| format!("cannot write '{}'", path.display()))
+    }
+}
+
+/// Writes one file atomically (module docs): through a symlink, never over a non-regular file
+/// or one of `inputs`.
+///
+/// # Errors
+/// The target is not a regular file, is an input, or cannot be written.
+pub fn write_file(path: &Path, bytes: &[u8], inputs: &[PathBuf]) -> Result<()> {
+    let inputs: Vec<PathBuf> = inputs
+        .iter()
+        .filter_map(|p| p.canonicalize().ok())
+        .collect();
+    let target = resolve_target(path, &inputs)?;
+    let tmp = temporary_beside(&target)?;
+    let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, &target));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written.with_context(|| format!("cannot write '{}'", path.display()))
+}
+
+/// Checks a file target before any work: its folder exists and is writable, it is not a
+/// non-regular file nor one of `inputs`.
+///
+/// # Errors
+/// As [`write_file`] would fail.
+pub fn check_file_target(path: &Path, inputs: &[PathBuf]) -> Result<()> {
+    let inputs: Vec<PathBuf> = inputs
+        .iter()
+        .filter_map(|p| p.canonicalize().ok())
+        .collect();
+    let target = resolve_target(path, &inputs)?;
+    let folder = match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !folder.is_dir() {
+        bail!(
+            "cannot write '{}': the folder '{}' does not exist",
+            path.display(),
+            folder.display()
+        );
+    }
+    probe_writable(&folder)
+}
+
+/// The file a write to `path` must replace: `path`, or a symlink's final target. Refuses a
+/// non-regular file, a dangling link and an input.
+fn resolve_target(path: &Path, inputs: &[PathBuf]) -> Result<PathBuf> {
+    let target = match std::fs::symlink_metadata(path) {
+        Err(_) => return Ok(path.to_path_buf()),
+        Ok(m) if m.file_type().is_symlink() => path.canonicalize().with_context(|| {
+            format!(
+                "cannot write '{}': it is a symbolic link to nothing",
+                path.display()
+            )
+        })?,
+        Ok(_) => path.to_path_buf(),
+    };
+    let meta =
+        std::fs::metadata(&target).with_context(|| format!("cannot write '{}'", path.display()))?;
+    if !meta.is_file() {
+        bail!(
+            "cannot write '{}': it exists and is not a regular file ({}); lamdyn writes only regular files",
+            path.display(),
+            kind_of(&meta)
+        );
+    }
+    if let Ok(c) = target.canonicalize() {
+        if inputs.contains(&c) {
+            bail!(
+                "cannot write '{}': it is an input of this run; write the results elsewhere",
+                path.display()
+            );
+        }
+    }
+    Ok(target)
+}
+
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = meta.file_type();
+    if t.is_dir() {
+        "a folder"
+    } else if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
+    }
+}
+
+/// `.NAME.lamdyn-tmp-PID` beside `target`.
+fn temporary_beside(target: &Path) -> Result<PathBuf> {
+    let name = target
+        .file_name()
+        .ok_or_else(|| anyhow!("'{}' is not a file name", target.display()))?;
+    Ok(target.with_file_name(format!(
+        ".{}.lamdyn-tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    )))
+}
+
+/// A relative, `/`-separated name inside the folder (no `..`, not absolute, not one of
+/// lamdyn's dot-entries).
+fn check_relative(name: &str) -> Result<String> {
+    let p = Path::new(name);
+    let ok = !name.is_empty()
+        && p.components().all(|c| matches!(c, Component::Normal(_)))
+        && !name.starts_with(".lamdyn");
+    if ok {
+        Ok(name.to_string())
+    } else {
+        Err(anyhow!(
+            "'{name}' is not a file name inside the results folder"
+        ))
+    }
+}
+
+/// The manifest's names (empty if there is none).
+fn read_manifest(dir: &Path) -> Result<BTreeSet<String>> {
+    let path = dir.join(MANIFEST);
+    match std::fs::read_to_string(&path) {
+        Ok(text) => Ok(text
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with('#'))
+            .filter(|l| check_relative(l).is_ok())
+            .map(String::from)
+            .collect()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(BTreeSet::new()),
+        Err(e) => Err(e).with_context(|| format!("cannot read '{}'", path.display())),
+    }
+}
+
+/// Every file and link under `dir` as a `/`-separated relative name, lamdyn's dot-entries
+/// (manifest, cache, temporary files) left out; an empty subfolder counts as itself.
+fn list_files(dir: &Path) -> Result<Vec<String>> {
+    let mut out = Vec::new();
+    let mut stack = vec![(dir.to_path_buf(), String::new())];
+    while let Some((path, prefix)) = stack.pop() {
+        let entries = std::fs::read_dir(&path)
+            .with_context(|| format!("cannot read '{}'", path.display()))?;
+        let mut empty = true;
+        for entry in entries {
+            let entry = entry.with_context(|| format!("cannot read '{}'", path.display()))?;
+            empty = false;
+            let name = entry.file_name().to_string_lossy().to_string();
+            if name.starts_with(".lamdyn") || name.contains(".lamdyn-tmp-") {
+                continue;
+            }
+            let rel = format!("{prefix}{name}");
+            let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+            if is_dir {
+                stack.push((entry.path(), format!("{rel}/")));
+            } else {
+                out.push(rel);
+            }
+        }
+        if empty && !prefix.is_empty() {
+            out.push(prefix.trim_end_matches('/').to_string());
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// Removes a file of the previous run (a link itself, not its target) and its subfolders if
+/// they are left empty.
+fn remove_stale(dir: &Path, name: &str) {
+    let path = dir.join(name);
+    if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir()) {
+        let _ = std::fs::remove_file(&path);
+    }
+    let mut parent = path.parent();
+    while let Some(p) = parent {
+        if p == dir || std::fs::remove_dir(p).is_err() {
+            break;
+        }
+        parent = p.parent();
+    }
+}
+
+/// The nearest existing ancestor of a folder that does not exist yet.
+fn nearest_existing(dir: &Path) -> Result<PathBuf> {
+    let mut p = dir.to_path_buf();
+    loop {
+        match p.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => p = parent.to_path_buf(),
+            _ => return Ok(PathBuf::from(".")),
+        }
+        if let Ok(m) = std::fs::metadata(&p) {
+            if m.is_dir() {
+                return Ok(p);
+            }
+            bail!(
+                "cannot create '{}': '{}' is not a folder",
+                dir.display(),
+                p.display()
+            );
+        }
+    }
+}
+
+/// Creates and removes a probe file in `dir`: the only check that holds for every user
+/// (root included) and every file system (read-only mounts included).
+fn probe_writable(dir: &Path) -> Result<()> {
+    let probe = dir.join(format!(".lamdyn-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .map_err(|e| anyhow!("cannot write into '{}': {e}", dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use lamdyn_testkit::TempDir;
+
+    fn files(list: &[(&str, &str)]) -> Vec<(String, Vec<u8>)> {
+        list.iter()
+            .map(|(n, b)| (n.to_string(), b.as_bytes().to_vec()))
+            .collect()
+    }
+
+    /// A re-run replaces lamdyn's files, removes the ones it no longer writes, and leaves no
+    /// temporary file behind.
+    #[test]
+    fn rerun_replaces_own_files_and_removes_stale_ones() {
+        let s = TempDir::new("rerun");
+        let dir = s.join("out");
+        let out = OutputDir::prepare(&dir, &[], false).unwrap();
+        out.write(&files(&[("a.txt", "1"), ("figures/f.svg", "<svg/>")]))
+            .unwrap();
+        let out = OutputDir::prepare(&dir, &[], false).unwrap();
+        out.write(&files(&[("a.txt", "2")])).unwrap();
+        assert_eq!(std::fs::read_to_string(dir.join("a.txt")).unwrap(), "2");
+        assert!(!dir.join("figures").exists(), "stale figure folder left");
+        let names = list_files(&dir).unwrap();
+        assert_eq!(names, vec!["a.txt".to_string()]);
+        let all: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(all.len(), 2, "a.txt and the manifest only");
+    }
+
+    /// A folder with a user's file is refused; with force the file is kept and lamdyn writes
+    /// beside it.
+    #[test]
+    fn foreign_files_refuse_or_stay() {
+        let s = TempDir::new("foreign");
+        let dir = s.join("report");
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        std::fs::write(dir.join("sub/notes.docx"), "mine").unwrap();
+        let e = OutputDir::prepare(&dir, &[], false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("holds 1 file(s) lamdyn did not write ('sub/notes.docx')"),
+            "{e}"
+        );
+        let out = OutputDir::prepare(&dir, &[], true).unwrap();
+        out.write(&files(&[("a.txt", "1")])).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(dir.join("sub/notes.docx")).unwrap(),
+            "mine"
+        );
+        // A later run without --force still refuses: notes.docx is not lamdyn's.
+        assert!(OutputDir::prepare(&dir, &[], false).is_err());
+    }
+
+    /// The folder of the job's inputs is refused; even with force, an input is never written.
+    #[test]
+    fn inputs_are_never_written() {
+        let s = TempDir::new("inputs");
+        let job = s.join("job.toml");
+        std::fs::write(&job, "x").unwrap();
+        let e = OutputDir::prepare(s.path(), std::slice::from_ref(&job), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("holds an input of this run"), "{e}");
+        let out = OutputDir::prepare(s.path(), std::slice::from_ref(&job), true).unwrap();
+        let e = out
+            .write(&files(&[("job.toml", "y")]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is an input of this run"), "{e}");
+        assert_eq!(std::fs::read_to_string(&job).unwrap(), "x");
+        let e = write_file(&job, b"y", std::slice::from_ref(&job))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is an input"), "{e}");
+    }
+
+    /// A symlink is written through; a FIFO is refused and stays a FIFO.
+    #[test]
+    fn symlinks_are_written_through_and_special_files_refused() {
+        let s = TempDir::new("links");
+        let real = s.join("real.json");
+        std::fs::write(&real, "old").unwrap();
+        let link = s.join("link.json");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        write_file(&link, b"new", &[]).unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read_to_string(&real).unwrap(), "new");
+        let fifo = s.join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            let e = write_file(&fifo, b"x", &[]).unwrap_err().to_string();
+            assert!(e.contains("not a regular file (a FIFO)"), "{e}");
+            use std::os::unix::fs::FileTypeExt;
+            assert!(
+                std::fs::symlink_metadata(&fifo)
+                    .unwrap()
+                    .file_type()
+                    .is_fifo()
+            );
+        }
+        let e = write_file(s.path(), b"x", &[]).unwrap_err().to_string();
+        assert!(e.contains("(a folder)"), "{e}");
+    }
+
+    /// Names that leave the folder are refused; a file given as --out is refused.
+    #[test]
+    fn names_stay_inside_and_a_file_is_not_a_folder() {
+        let s = TempDir::new("names");
+        let out = OutputDir::prepare(&s.join("o"), &[], false).unwrap();
+        for bad in ["../x", "/etc/x", "", ".lamdyn-manifest"] {
+            assert!(out.write(&files(&[(bad, "1")])).is_err(), "{bad}");
+        }
+        let f = s.join("file");
+        std::fs::write(&f, "").unwrap();
+        assert!(OutputDir::prepare(&f, &[], false).is_err());
+        assert!(OutputDir::prepare(&f.join("sub"), &[], false).is_err());
+    }
+}
