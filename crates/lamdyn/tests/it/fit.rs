@@ -10,7 +10,11 @@ use std::sync::OnceLock;
 fn example_job() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir = temp_dir("fit-example").join("job");
+        // Shared by every test of this file, so it outlives each of them: it lives in cargo's
+        // folder for integration-test files (target/tmp), not in the system's temp folder.
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("lamdyn-fit-example-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
         let (code, _, err) = lamdyn(&[
             "fit",
             "--example",
