@@ -192,6 +192,34 @@ fn validate(omega: &[f64], modulus: &[Complex64]) -> Result<(), MaterialError> {
     Ok(())
 }
 
+/// Kramers–Kronig verdicts at the points (f in Hz, G* in Pa) that have a modulus; `None` at the
+/// others, and everywhere when fewer than three points have one (the check needs a slope).
+///
+/// # Errors
+/// As [`kramers_kronig_check`] on the points with a modulus (frequencies not increasing, a
+/// non-finite value).
+pub fn verdicts_where_known(
+    points: &[(f64, Option<Complex64>)],
+    params: CausalityParams,
+) -> Result<Vec<Option<CausalityVerdict>>, MaterialError> {
+    let known: Vec<(usize, f64, Complex64)> = points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, (f, g))| g.map(|g| (i, 2.0 * std::f64::consts::PI * f, g)))
+        .collect();
+    let mut verdicts = vec![None; points.len()];
+    if known.len() < 3 {
+        return Ok(verdicts);
+    }
+    let omega: Vec<f64> = known.iter().map(|k| k.1).collect();
+    let modulus: Vec<Complex64> = known.iter().map(|k| k.2).collect();
+    let report = kramers_kronig_check(&omega, &modulus, params)?;
+    for (k, (i, _, _)) in known.iter().enumerate() {
+        verdicts[*i] = Some(report.lines[k].verdict);
+    }
+    Ok(verdicts)
+}
+
 /// Second-order three-point derivative of `f` at `x[i]` on a non-uniform grid (central inside,
 /// one-sided at both ends).
 fn derivative(x: &[f64], f: &[f64], i: usize) -> f64 {

@@ -245,6 +245,23 @@ pub struct Bench {
 }
 
 impl Bench {
+    /// The core's true law at `freqs_hz` as CSV (`f_hz,storage_pa,loss_pa,loss_factor`, Pa),
+    /// under a comment naming the law: the table `lamdyn simulate` writes as truth.csv and the
+    /// chain reads back to state its errors.
+    pub fn truth_table(&self, freqs_hz: &[f64]) -> String {
+        let which = if self.core_law_is_shear { "G" } else { "E" };
+        let mut s = format!(
+            "# the core's law ({which}*), layer {}: {}\nf_hz,storage_pa,loss_pa,loss_factor\n",
+            self.core_layer,
+            self.core_law.describe()
+        );
+        for f in freqs_hz {
+            let m = self.core_law.modulus(2.0 * std::f64::consts::PI * f);
+            s += &format!("{f},{:e},{:e},{:e}\n", m.re, m.im, m.im / m.re);
+        }
+        s
+    }
+
     /// s(ω) = M*(ω)/M_a (module docs).
     pub fn core_scale(&self, omega: f64) -> Complex64 {
         self.core_law.modulus(omega) / self.assembled_modulus_pa

@@ -12,20 +12,17 @@
 //! | `lamdyn fit` | measured FRFs + FE model → E*(f) law with intervals, Table 3 | [`cmd::fit`] |
 //! | `lamdyn ema` | measured FRFs → stabilization diagram, modes, damping, shapes | [`cmd::ema`] |
 //! | `lamdyn simulate` | virtual impact test on the layered model → FRFs, hits, true core | [`cmd::simulate`] |
-//! | `lamdyn run` | job file → EMA → fit → both inverses → Monte Carlo → HTML report | [`cmd::run`], [`chain`] |
-//! | `lamdyn demo` | virtual roof → simulated impact test → `lamdyn run` → errors against the truth | [`cmd::demo`], [`chain::demo`] |
+//! | `lamdyn run` | job file → EMA → fit → both inverses → Monte Carlo → HTML report | [`cmd::run`], [`lamdyn_pipeline`] |
+//! | `lamdyn demo` | virtual roof → simulated impact test → `lamdyn run` → errors against the truth | [`cmd::demo`], [`lamdyn_pipeline::demo`] |
 //! | `lamdyn uff info\|convert` | list a UFF file; convert to CSV/JSON or ASCII ↔ binary | [`cmd::uff`] |
 //!
 //! Exit codes: 0 done; 1 done but a check failed (lines without a solution); 2 error. Errors
 //! print as `lamdyn: {error}` with their causes; a closed pipe on stdout exits 0.
 
-pub mod chain;
 pub mod cli;
 pub mod cmd;
 mod examples;
 mod grid;
-mod io;
-pub mod output;
 mod progress;
 pub mod table;
 

@@ -102,11 +102,6 @@ impl Spinner {
         }
     }
 
-    /// No progress at all.
-    pub fn silent() -> Self {
-        Self(Mode::Off)
-    }
-
     fn terminal() -> Self {
         let bar = indicatif::ProgressBar::new_spinner();
         bar.set_style(
@@ -222,7 +217,7 @@ mod tests {
     #[test]
     fn updates_from_worker_threads_return() {
         use rayon::prelude::*;
-        for s in [Spinner::lines(), Spinner::silent()] {
+        for s in [Spinner::lines(), Spinner(Mode::Off)] {
             (0..200)
                 .into_par_iter()
                 .for_each(|k| s.message(&format!("stage 'x': {k}/200")));

@@ -7,16 +7,16 @@ use crate::Outcome;
 use crate::cli::{BendingArg, CoreArgs, CoreFormulaArg, ExampleArg, GlassShearArg};
 use crate::examples;
 use crate::grid;
-use crate::io::{CsvTable, read_toml};
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result, bail};
-use lamdyn_material::causality::{CausalityParams, CausalityVerdict, kramers_kronig_check};
+use lamdyn_material::causality::{CausalityParams, CausalityVerdict, verdicts_where_known};
 use lamdyn_material::laminate::{
     CoreEstimate, CoreShearFormula, FaceBending, FaceShear, PHI_ACCURACY_LIMIT,
     PaperInverseOptions, SandwichStack, StackSpec, paper_inverse,
 };
 use lamdyn_material::law::{PaperEq7Law, ViscoelasticLaw};
 use lamdyn_material::sandwich::{ExactCoreEstimate, exact_inverse};
+use lamdyn_pipeline::io::{CsvTable, read_toml};
 use num_complex::Complex64;
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -223,31 +223,7 @@ fn causality(
     params: CausalityParams,
 ) -> Result<Vec<Option<CausalityVerdict>>> {
     let points: Vec<(f64, Option<Complex64>)> = lines.iter().map(|l| (l.freq_hz, g(l))).collect();
-    kk_verdicts(&points, params)
-}
-
-/// Kramers–Kronig verdicts at the (f in Hz, G*) points that have a modulus; `None` elsewhere,
-/// and everywhere when fewer than three points have one.
-pub(crate) fn kk_verdicts(
-    points: &[(f64, Option<Complex64>)],
-    params: CausalityParams,
-) -> Result<Vec<Option<CausalityVerdict>>> {
-    let known: Vec<(usize, f64, Complex64)> = points
-        .iter()
-        .enumerate()
-        .filter_map(|(i, (f, g))| g.map(|g| (i, 2.0 * PI * f, g)))
-        .collect();
-    let mut verdicts = vec![None; points.len()];
-    if known.len() < 3 {
-        return Ok(verdicts);
-    }
-    let omega: Vec<f64> = known.iter().map(|k| k.1).collect();
-    let modulus: Vec<Complex64> = known.iter().map(|k| k.2).collect();
-    let report = kramers_kronig_check(&omega, &modulus, params)?;
-    for (k, (i, _, _)) in known.iter().enumerate() {
-        verdicts[*i] = Some(report.lines[k].verdict);
-    }
-    Ok(verdicts)
+    Ok(verdicts_where_known(&points, params)?)
 }
 
 fn build_report(config: &CoreConfig, lines: &[CoreLine]) -> Result<Report> {

@@ -1,14 +1,14 @@
 //! `lamdyn demo`: the virtual roof → its simulated impact test → the whole chain → the
-//! recovered core against the truth ([`crate::chain::demo`]).
+//! recovered core against the truth ([`lamdyn_pipeline::demo`]).
 
 use crate::Outcome;
-use crate::chain::RunOptions;
-use crate::chain::demo::{DemoSampling, demo_roof, run_demo};
-use crate::chain::job::MAX_SAMPLES;
 use crate::cli::DemoArgs;
-use crate::output::OutputDir;
 use crate::progress::Spinner;
 use anyhow::{Context, Result, bail};
+use lamdyn_pipeline::RunOptions;
+use lamdyn_pipeline::demo::{DemoSampling, demo_roof, run_demo};
+use lamdyn_pipeline::job::MAX_SAMPLES;
+use lamdyn_pipeline::output::OutputDir;
 use lamdyn_testbench::description::Description;
 use std::io::Write;
 

@@ -3,10 +3,10 @@
 
 use crate::Outcome;
 use crate::cli::{E756Args, E756Config};
-use crate::io::{CsvTable, read_toml};
 use crate::table::{Column, Fmt, Report};
 use anyhow::{Context, Result, bail};
 use lamdyn_material::e756::{OberstBeam, ReducedModulus, Resonance, SandwichBeam, UniformBeam};
+use lamdyn_pipeline::io::{CsvTable, read_toml};
 use serde::Deserialize;
 use std::io::Write;
 

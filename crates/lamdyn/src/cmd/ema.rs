@@ -5,12 +5,13 @@
 
 use crate::Outcome;
 use crate::cli::{EmaArgs, Estimator};
-use crate::output::OutputDir;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
-use lamdyn_ema::spectra::{Hit, Spectra, SpectraSettings, estimate};
+use lamdyn_ema::spectra::Spectra;
 use lamdyn_frf::FrfSet;
+use lamdyn_pipeline::measurement::{TimeOptions, read_frfs, time_frfs};
+use lamdyn_pipeline::output::OutputDir;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -20,20 +21,6 @@ struct TimeInfo {
     spectra: Spectra,
 }
 
-fn read_text(p: &Path) -> Result<String> {
-    std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
-}
-
-/// How time data become FRFs: the estimator and the record settings (rate from the files).
-pub(crate) struct TimeOptions {
-    pub estimator: Estimator,
-    pub trigger: f64,
-    pub pretrigger_s: f64,
-    pub force_window_s: f64,
-    pub record_s: Option<f64>,
-    pub exp_tau_s: Option<f64>,
-}
-
 /// FRFs estimated from hammer-test time files (one per hit) and the channels table.
 fn frfs_from_time(
     channels: &Path,
@@ -41,7 +28,11 @@ fn frfs_from_time(
     args: &EmaArgs,
 ) -> Result<(FrfSet, TimeInfo)> {
     let options = TimeOptions {
-        estimator: args.estimator,
+        estimator: match args.estimator {
+            Estimator::H1 => lamdyn_pipeline::measurement::Estimator::H1,
+            Estimator::H2 => lamdyn_pipeline::measurement::Estimator::H2,
+            Estimator::Hv => lamdyn_pipeline::measurement::Estimator::Hv,
+        },
         trigger: args.trigger,
         pretrigger_s: args.pretrigger_s,
         force_window_s: args.force_window_s,
@@ -50,123 +41,6 @@ fn frfs_from_time(
     };
     let (set, spectra, hits) = time_frfs(channels, files, &options)?;
     Ok((set, TimeInfo { hits, spectra }))
-}
-
-/// FRFs (the chosen estimator) from hit files and the channels table, with the spectra
-/// (coherence, warnings) and the number of hits.
-pub(crate) fn time_frfs(
-    channels: &Path,
-    files: &[PathBuf],
-    options: &TimeOptions,
-) -> Result<(FrfSet, Spectra, usize)> {
-    let (responses, references) =
-        lamdyn_frf::csv::parse_channels(&channels.display().to_string(), &read_text(channels)?)?;
-    let [hammer] = &references[..] else {
-        bail!(
-            "'{}': time data needs exactly one reference channel (the hammer), the file has {}",
-            channels.display(),
-            references.len()
-        );
-    };
-    let mut hits = Vec::with_capacity(files.len());
-    let (mut rate, mut quantity) = (None, None);
-    for f in files {
-        let rec = lamdyn_frf::csv::parse_time(
-            &f.display().to_string(),
-            &read_text(f)?,
-            &responses,
-            hammer,
-        )?;
-        let r0 = *rate.get_or_insert(rec.rate_hz);
-        if (rec.rate_hz - r0).abs() > 1e-6 * r0 {
-            bail!(
-                "'{}': sampled at {} Hz, the first hit at {r0} Hz",
-                f.display(),
-                rec.rate_hz
-            );
-        }
-        if *quantity.get_or_insert(rec.quantity) != rec.quantity {
-            bail!(
-                "'{}': its responses are {}, the first hit's {}",
-                f.display(),
-                rec.quantity.unit(),
-                quantity.map_or("", |q| q.unit())
-            );
-        }
-        hits.push(Hit {
-            force: rec.force,
-            responses: rec.responses,
-        });
-    }
-    let rate_hz = rate.ok_or_else(|| anyhow!("no time file given"))?;
-    for (name, v) in [
-        ("trigger", options.trigger),
-        ("pretrigger", options.pretrigger_s),
-        ("force window", options.force_window_s),
-    ] {
-        if v < 0.0 {
-            bail!("the {name} {v} must not be negative");
-        }
-    }
-    let settings = SpectraSettings {
-        rate_hz,
-        trigger: options.trigger,
-        pretrigger: (options.pretrigger_s * rate_hz).round() as usize,
-        length: options
-            .record_s
-            .map_or(0, |t| (t * rate_hz).round() as usize),
-        force_window_s: options.force_window_s,
-        exp_tau_s: options.exp_tau_s,
-        double_hit: 0.2,
-    };
-    let spectra = estimate(&hits, &settings).context("FRF estimation from the time data failed")?;
-    let data = spectra
-        .channels
-        .iter()
-        .flat_map(|c| match options.estimator {
-            Estimator::H1 => c.h1.clone(),
-            Estimator::H2 => c.h2.clone(),
-            Estimator::Hv => c.hv.clone(),
-        })
-        .collect();
-    let set = FrfSet::new(
-        spectra.freqs_hz.clone(),
-        responses,
-        references,
-        quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
-        data,
-    )?;
-    Ok((set, spectra, hits.len()))
-}
-
-/// The FRF set named by the arguments.
-pub(crate) fn read_frfs(
-    uff: Option<&Path>,
-    channels: Option<&Path>,
-    frf: Option<&Path>,
-) -> Result<(FrfSet, String)> {
-    match (uff, channels, frf) {
-        (Some(u), _, _) => {
-            let file = lamdyn_uff::read_path(u, Default::default()).map_err(|e| anyhow!(e))?;
-            let set = lamdyn_uff::frf::to_frf_set(&file)
-                .map_err(|e| anyhow!("'{}': {e}", u.display()))?;
-            Ok((set, format!("UFF '{}'", u.display())))
-        }
-        (None, Some(c), Some(f)) => {
-            let text = |p: &Path| {
-                std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
-            };
-            let (r, q) = lamdyn_frf::csv::parse_channels(&c.display().to_string(), &text(c)?)?;
-            let set = lamdyn_frf::csv::parse_frf(&f.display().to_string(), &text(f)?, r, q)?;
-            Ok((
-                set,
-                format!("CSV '{}' with channels '{}'", f.display(), c.display()),
-            ))
-        }
-        _ => bail!(
-            "give --uff FILE, --channels FILE with --frf FILE, or --channels FILE with --time FILE..."
-        ),
-    }
 }
 
 fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
@@ -497,5 +371,5 @@ fn write_results(dir: &OutputDir, set: &FrfSet, r: &EmaResult, report: &Report) 
         ("cmif.svg", cmif.render_svg()?.into_bytes()),
         ("cmif.png", cmif.render_png()?),
     ];
-    dir.write(&files)
+    Ok(dir.write(&files)?)
 }

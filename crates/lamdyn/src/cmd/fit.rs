@@ -9,8 +9,6 @@
 
 use crate::Outcome;
 use crate::cli::{CovarianceArg, FitArgs, FitExample, LawArg, MisfitArg};
-use crate::io::read_toml;
-use crate::output::OutputDir;
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report, Section, write_csv_table};
 use anyhow::{Context, Result, bail};
@@ -25,6 +23,8 @@ use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_fit::synthetic::PaperPlateCase;
 use lamdyn_frf::FrfSet;
 use lamdyn_material::law::{FractionalZener, PaperEq7Law, ViscoelasticLaw};
+use lamdyn_pipeline::io::read_toml;
+use lamdyn_pipeline::output::OutputDir;
 use serde::Deserialize;
 use std::f64::consts::PI;
 use std::io::Write;
@@ -431,7 +431,7 @@ fn write_example(dir: &OutputDir, e: FitExample, problem: &Problem) -> Result<()
         },
         problem.source
     );
-    dir.write(&[
+    Ok(dir.write(&[
         (
             "model.toml",
             format!("# The paper's plate, flat, free.\n{model}\n").into_bytes(),
@@ -445,7 +445,7 @@ fn write_example(dir: &OutputDir, e: FitExample, problem: &Problem) -> Result<()
             lamdyn_frf::csv::write_frf(&problem.measured).into_bytes(),
         ),
         ("job.toml", job.into_bytes()),
-    ])
+    ])?)
 }
 
 fn build_report(
@@ -755,5 +755,5 @@ fn write_outputs(
     }
     files.push(("rms.csv".into(), rms.into_bytes()));
     let named: Vec<(&str, Vec<u8>)> = files.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
-    dir.write(&named)
+    Ok(dir.write(&named)?)
 }

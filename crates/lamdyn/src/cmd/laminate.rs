@@ -8,11 +8,11 @@ use super::{kinematics, kinematics_label};
 use crate::Outcome;
 use crate::cli::LaminateArgs;
 use crate::grid;
-use crate::io::read_toml;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result};
 use lamdyn_material::laminate::{ModelWarning, StackSpec};
 use lamdyn_material::sandwich::MeadMarkus;
+use lamdyn_pipeline::io::read_toml;
 use std::f64::consts::PI;
 use std::io::Write;
 

@@ -3,8 +3,6 @@
 
 use crate::Outcome;
 use crate::cli::{ModelExample, ModesArgs};
-use crate::io::read_toml;
-use crate::output::{check_file_target, write_file};
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result, bail};
@@ -15,6 +13,8 @@ use lamdyn_fem::element::ShellMaterial;
 use lamdyn_fem::mesh::Mesh;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_fem::output::{mac, vtu_text};
+use lamdyn_pipeline::io::read_toml;
+use lamdyn_pipeline::output::{check_file_target, write_file};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};

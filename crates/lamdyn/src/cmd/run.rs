@@ -1,21 +1,21 @@
-//! `lamdyn run`: the whole chain on a job file ([`crate::chain`]), the report written to a
+//! `lamdyn run`: the whole chain on a job file ([`lamdyn_pipeline`]), the report written to a
 //! folder, a summary of the core at the modal frequencies printed.
 
 use crate::Outcome;
-use crate::chain::job::{Job, base_of};
-use crate::chain::{ChainResult, RunOptions, report, run_job};
 use crate::cli::RunArgs;
-use crate::output::OutputDir;
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result};
 use lamdyn_fem::eigen::Progress;
+use lamdyn_pipeline::job::{Job, base_of};
+use lamdyn_pipeline::output::OutputDir;
+use lamdyn_pipeline::{ChainResult, RunOptions, report, run_job};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Runs `lamdyn run`.
 pub fn run(args: &RunArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
-    crate::chain::check_job_path(&args.job)?;
+    lamdyn_pipeline::stages::check_job_path(&args.job)?;
     let job = Job::read(&args.job)?.with_overrides(args.samples, args.seed)?;
     let base = base_of(&args.job);
     let mut inputs: Vec<PathBuf> = job.input_files(&base).into_iter().map(|(_, p)| p).collect();

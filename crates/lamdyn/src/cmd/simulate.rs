@@ -5,15 +5,14 @@
 
 use crate::Outcome;
 use crate::cli::SimulateArgs;
-use crate::output::OutputDir;
 use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report};
 use anyhow::{Context, Result, anyhow, bail};
 use lamdyn_fem::eigen::Progress;
 use lamdyn_frf::FrfSet;
+use lamdyn_pipeline::output::OutputDir;
 use lamdyn_testbench::description::{Bench, Description, ROOF_TOML};
 use lamdyn_testbench::impact::{Hits, to_global_frame};
-use std::f64::consts::PI;
 use std::io::Write;
 use std::time::Instant;
 
@@ -177,7 +176,10 @@ fn output_files(
             "frf.csv".into(),
             lamdyn_frf::csv::write_frf(frfs).into_bytes(),
         ),
-        ("truth.csv".into(), truth_table(bench, frfs).into_bytes()),
+        (
+            "truth.csv".into(),
+            bench.truth_table(frfs.freqs_hz()).into_bytes(),
+        ),
     ];
     match to_global_frame(frfs) {
         Ok(global) => {
@@ -202,19 +204,4 @@ fn output_files(
     report.write(crate::table::Format::Json, &mut json, &mut std::io::sink())?;
     files.push(("summary.json".into(), json));
     Ok(files)
-}
-
-/// The core's true modulus at every line: f_hz, storage_pa, loss_pa, loss_factor.
-pub(crate) fn truth_table(bench: &Bench, frfs: &FrfSet) -> String {
-    let which = if bench.core_law_is_shear { "G" } else { "E" };
-    let mut s = format!(
-        "# the core's law ({which}*), layer {}: {}\nf_hz,storage_pa,loss_pa,loss_factor\n",
-        bench.core_layer,
-        bench.core_law.describe()
-    );
-    for f in frfs.freqs_hz() {
-        let m = bench.core_law.modulus(2.0 * PI * f);
-        s += &format!("{f},{:e},{:e},{:e}\n", m.re, m.im, m.im / m.re);
-    }
-    s
 }

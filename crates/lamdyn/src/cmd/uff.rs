@@ -2,9 +2,9 @@
 
 use crate::Outcome;
 use crate::cli::{UffCommand, UffConvertArgs, UffInfoArgs, UffTarget};
-use crate::output::{OutputDir, check_file_target, write_file};
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result, anyhow};
+use lamdyn_pipeline::output::{OutputDir, check_file_target, write_file};
 use lamdyn_uff::{Encoding, ReadOptions};
 use std::io::Write;
 use std::path::Path;

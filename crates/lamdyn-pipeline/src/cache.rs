@@ -12,7 +12,7 @@
 //! flipped on disk, a truncated copy, a file renamed to another key) is removed, noted in
 //! [`Cache::notes`] for the report, and its stage recomputes.
 
-use anyhow::{Context, Result};
+use crate::error::{Context, Result};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 

@@ -9,10 +9,10 @@
 use super::CorePoint;
 use super::cache::{Cache, Key};
 use super::job::Job;
-use crate::progress::Spinner;
-use anyhow::{Context, Result, bail};
+use crate::Reporter;
+use crate::bail;
+use crate::error::{Context, Result};
 use lamdyn_ema::identify::EmaResult;
-use lamdyn_fem::eigen::Progress;
 use lamdyn_fem::model::{MeshSpec, ModelSpec};
 use lamdyn_testbench::inverse::{InverseLayer, LayeredInverse};
 use num_complex::Complex64;
@@ -64,7 +64,7 @@ pub fn run(
     ema: &EmaResult,
     modal: &mut [CorePoint],
     cache: &Cache,
-    spinner: &Spinner,
+    spinner: &dyn Reporter,
 ) -> Result<(Option<String>, bool)> {
     let (plan, radii) = plate(job, base)?;
     let layers: Vec<InverseLayer> = job

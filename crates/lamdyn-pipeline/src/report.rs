@@ -12,7 +12,8 @@
 
 use super::uncertainty::{Band, Bands};
 use super::{ChainResult, CorePoint};
-use anyhow::{Result, anyhow};
+use crate::err;
+use crate::error::Result;
 use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
 use lamdyn_report::chart::{Axis, Chart, Mark, Series};
 use lamdyn_report::{HtmlReport, shape_map};
@@ -87,10 +88,10 @@ fn add_figure(
 ) -> Result<()> {
     let svg = chart
         .render_svg()
-        .map_err(|e| anyhow!("figure '{name}': {e}"))?;
+        .map_err(|e| err!("figure '{name}': {e}"))?;
     let png = chart
         .render_png()
-        .map_err(|e| anyhow!("figure '{name}': {e}"))?;
+        .map_err(|e| err!("figure '{name}': {e}"))?;
     files.push((format!("figures/{name}.svg"), svg.clone().into_bytes()));
     files.push((format!("figures/{name}.png"), png));
     html.figure(name, caption, svg);

@@ -1,33 +1,19 @@
-//! The whole chain of `lamdyn run` and `lamdyn demo`, one stage after the other:
+//! The chain of `lamdyn run` and `lamdyn demo`, one stage after the other ([`run_job`]; the
+//! table of stages is in the [crate docs](crate)): measurement, EMA, model, fit, inverse setup,
+//! inverse, layered inverse, uncertainty, truth.
 //!
-//! | stage | what | crate |
-//! |---|---|---|
-//! | measurement | FRFs from CSV/UFF, or H1 from hammer-hit time files (coherence) | lamdyn-frf, lamdyn-ema |
-//! | ema | stabilization diagram, poles, damping, shapes, CMIF (paper §2.1) | lamdyn-ema |
-//! | model | the FE model's real modes projected on the channels (paper eqs. 3–4) | lamdyn-fem, lamdyn-fit |
-//! | fit | the laminate's E*(ω) so that synthesized FRFs match (eqs. 2–10) | lamdyn-fit |
-//! | inverse | G*(f) of the core by the paper's inverse (eqs. 33–45) and the exact one (Mead–Markus) | lamdyn-material |
-//! | uncertainty | Monte Carlo over the stack and the fit's covariance ([`uncertainty`]) | here |
-//! | report | HTML with figures, CSV/JSON tables, written atomically ([`report`]) | lamdyn-report |
-//!
-//! The slow results (model, EMA) are cached keyed by their inputs ([`cache`]). Every stage's
-//! error is reported as "stage 'NAME' failed: why".
+//! The slow results (model, EMA, layered model) are cached keyed by their inputs
+//! ([`crate::cache`]). Every stage's error is a [`PipelineError::Stage`] naming it.
 
-pub mod cache;
-pub mod demo;
-pub mod job;
-pub mod layered;
-pub mod report;
-pub mod uncertainty;
-
-use crate::cmd::ema::{TimeOptions, time_frfs};
-use crate::progress::Spinner;
-use anyhow::{Context, Result, anyhow, bail};
-use cache::{Cache, Key};
-use job::{Job, KinematicsChoice, relative};
+use crate::cache::{Cache, Key};
+use crate::error::{Context, Result};
+use crate::job::{Job, KinematicsChoice, relative};
+use crate::measurement::{Measured, read_measurement};
+use crate::{PipelineError, Reporter};
+use crate::{bail, err};
+use crate::{job, layered, uncertainty};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
 use lamdyn_fem::assembly::Assembly;
-use lamdyn_fem::eigen::Progress;
 use lamdyn_fem::eigen::{ModalParams, solve_modes};
 use lamdyn_fem::model::{MeshSpec, ModelSpec};
 use lamdyn_fit::fit::{FitResult, FitSettings, fit};
@@ -53,18 +39,6 @@ use std::time::Instant;
 pub struct RunOptions {
     /// Cache folder (absent: no cache).
     pub cache_dir: Option<PathBuf>,
-}
-
-/// The measured data as the chain uses it.
-pub struct Measured {
-    /// The FRFs.
-    pub set: FrfSet,
-    /// Where they came from.
-    pub source: String,
-    /// Time data: the lowest coherence of each response in the fit band.
-    pub min_coherence: Option<Vec<f64>>,
-    /// Time data: the estimator's warnings (double hits, overloads).
-    pub warnings: Vec<String>,
 }
 
 /// The inverse at one frequency, both ways.
@@ -185,13 +159,16 @@ pub struct ChainResult {
 /// Runs `f` as stage `name`: progress, timing, and "stage 'NAME' failed" on error.
 fn stage<T>(
     name: &'static str,
-    spinner: &Spinner,
+    spinner: &dyn Reporter,
     timings: &mut Vec<StageTime>,
     f: impl FnOnce() -> Result<(T, bool)>,
 ) -> Result<T> {
     spinner.stage(&format!("stage '{name}'"));
     let t = Instant::now();
-    let (value, cached) = f().with_context(|| format!("stage '{name}' failed"))?;
+    let (value, cached) = f().map_err(|e| PipelineError::Stage {
+        stage: name,
+        source: Box::new(e),
+    })?;
     timings.push(StageTime {
         name,
         seconds: t.elapsed().as_secs_f64(),
@@ -210,7 +187,7 @@ pub fn run_job(
     job: Job,
     path: &Path,
     options: &RunOptions,
-    spinner: &Spinner,
+    spinner: &dyn Reporter,
 ) -> Result<ChainResult> {
     let base = job::base_of(path);
     let cache = Cache::new(options.cache_dir.clone());
@@ -324,119 +301,6 @@ pub fn run_job(
     })
 }
 
-fn read_text(p: &Path) -> Result<String> {
-    std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
-}
-
-/// The measured FRF set of the job, with the expected channel count checked.
-fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured> {
-    let m = &job.measurement;
-    let mut out = match (&m.channels, &m.frf, &m.uff) {
-        (Some(c), Some(f), None) => {
-            let (c, f) = (relative(base, c), relative(base, f));
-            let (responses, references) =
-                lamdyn_frf::csv::parse_channels(&c.display().to_string(), &read_text(&c)?)
-                    .context("measurement.channels")?;
-            let set = lamdyn_frf::csv::parse_frf(
-                &f.display().to_string(),
-                &read_text(&f)?,
-                responses,
-                references,
-            )
-            .with_context(|| {
-                format!(
-                    "measurement.frf does not match the geometry in measurement.channels ('{}')",
-                    c.display()
-                )
-            })?;
-            Measured {
-                set,
-                source: format!("FRFs '{}', channels '{}'", f.display(), c.display()),
-                min_coherence: None,
-                warnings: vec![],
-            }
-        }
-        (Some(c), None, None) => {
-            let c = relative(base, c);
-            let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
-            let options = TimeOptions {
-                estimator: crate::cli::Estimator::H1,
-                trigger: m.trigger,
-                pretrigger_s: m.pretrigger_s,
-                force_window_s: m.force_window_s,
-                record_s: None,
-                exp_tau_s: None,
-            };
-            let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
-                format!(
-                    "measurement.time does not match the geometry in measurement.channels ('{}')",
-                    c.display()
-                )
-            })?;
-            let band = job.fit.misfit.band_hz.unwrap_or([0.0, f64::INFINITY]);
-            let min_coherence = spectra
-                .channels
-                .iter()
-                .map(|ch| {
-                    spectra
-                        .freqs_hz
-                        .iter()
-                        .zip(&ch.coherence)
-                        .filter(|(f, _)| **f >= band[0] && **f <= band[1])
-                        .map(|(_, g)| *g)
-                        .fold(1.0, f64::min)
-                })
-                .collect();
-            Measured {
-                set,
-                source: format!(
-                    "H1 from {hits} hammer hits ('{}'...), channels '{}'",
-                    files
-                        .first()
-                        .map_or(String::new(), |f| f.display().to_string()),
-                    c.display()
-                ),
-                min_coherence: Some(min_coherence),
-                warnings: spectra.warnings.clone(),
-            }
-        }
-        (None, None, Some(u)) => {
-            let (set, source) = crate::cmd::ema::read_frfs(Some(&relative(base, u)), None, None)
-                .context("measurement.uff")?;
-            Measured {
-                set,
-                source,
-                min_coherence: None,
-                warnings: vec![],
-            }
-        }
-        _ => bail!(
-            "error in '{}': measurement: give channels with frf or time, or uff",
-            path.display()
-        ),
-    };
-    if let Some(n) = m.responses {
-        let got = out.set.responses().len();
-        if got != n {
-            bail!("measurement.responses = {n}, but the geometry has {got} response channels",);
-        }
-    }
-    if out.set.references().is_empty() {
-        bail!("measurement: no reference (hammer) channel in the geometry");
-    }
-    out.source = format!(
-        "{} ({} responses x {} references, {} lines {:.3}-{:.3} Hz, {})",
-        out.source,
-        out.set.responses().len(),
-        out.set.references().len(),
-        out.set.n_lines(),
-        out.set.freqs_hz()[0],
-        out.set.freqs_hz()[out.set.n_lines() - 1],
-        out.set.quantity().unit()
-    );
-    Ok(out)
-}
-
 /// The EMA band: the job's, else the fit's, else every line.
 fn ema_band(job: &Job) -> Option<[f64; 2]> {
     job.ema.band_hz.or(job.fit.misfit.band_hz)
@@ -486,7 +350,7 @@ fn build_model(
     base: &Path,
     set: &FrfSet,
     cache: &Cache,
-    spinner: &Spinner,
+    spinner: &dyn Reporter,
 ) -> Result<((ModalModel, String), bool)> {
     let (spec, spec_dir, label) = match (&job.model.file, &job.model.spec) {
         (Some(f), None) => {
@@ -656,7 +520,10 @@ fn causality(
     g: fn(&CorePoint) -> Option<Complex64>,
 ) -> Result<Vec<Option<CausalityVerdict>>> {
     let pts: Vec<(f64, Option<Complex64>)> = points.iter().map(|p| (p.freq_hz, g(p))).collect();
-    crate::cmd::core::kk_verdicts(&pts, CausalityParams::default())
+    Ok(lamdyn_material::causality::verdicts_where_known(
+        &pts,
+        CausalityParams::default(),
+    )?)
 }
 
 /// The truth table: f_hz, storage_pa, loss_pa (as `lamdyn simulate` writes truth.csv).
@@ -768,7 +635,7 @@ fn collect_warnings(
 /// A helpful error when a job path is missing.
 pub fn check_job_path(p: &Path) -> Result<()> {
     if !p.exists() {
-        return Err(anyhow!("job file '{}' does not exist", p.display()));
+        return Err(err!("job file '{}' does not exist", p.display()));
     }
     Ok(())
 }

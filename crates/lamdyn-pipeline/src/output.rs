@@ -20,7 +20,8 @@
 //! through (its target is replaced, the link stays); a target that is not a regular file (a
 //! device, a FIFO, a folder) is refused, as is an input of the run.
 
-use anyhow::{Context, Result, anyhow, bail};
+use crate::error::{Context, Result};
+use crate::{bail, err};
 use std::collections::BTreeSet;
 use std::path::{Component, Path, PathBuf};
 
@@ -287,7 +288,7 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
 fn temporary_beside(target: &Path) -> Result<PathBuf> {
     let name = target
         .file_name()
-        .ok_or_else(|| anyhow!("'{}' is not a file name", target.display()))?;
+        .ok_or_else(|| err!("'{}' is not a file name", target.display()))?;
     Ok(target.with_file_name(format!(
         ".{}.lamdyn-tmp-{}",
         name.to_string_lossy(),
@@ -305,7 +306,7 @@ fn check_relative(name: &str) -> Result<String> {
     if ok {
         Ok(name.to_string())
     } else {
-        Err(anyhow!(
+        Err(err!(
             "'{name}' is not a file name inside the results folder"
         ))
     }
@@ -400,8 +401,7 @@ fn nearest_existing(dir: &Path) -> Result<PathBuf> {
 /// (root included) and every file system (read-only mounts included).
 fn probe_writable(dir: &Path) -> Result<()> {
     let probe = dir.join(format!(".lamdyn-probe-{}", std::process::id()));
-    std::fs::write(&probe, b"")
-        .map_err(|e| anyhow!("cannot write into '{}': {e}", dir.display()))?;
+    std::fs::write(&probe, b"").map_err(|e| err!("cannot write into '{}': {e}", dir.display()))?;
     let _ = std::fs::remove_file(&probe);
     Ok(())
 }

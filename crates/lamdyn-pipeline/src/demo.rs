@@ -18,12 +18,11 @@
 //! factor 128 % high, the dashpots doubling that mode's tiny damping. Free, it recovers every
 //! mode within 1 % (G') and 2 % (η).
 
-use super::job::Job;
-use super::{ChainResult, RunOptions, run_job};
+use crate::Reporter;
+use crate::error::{Context, Result};
+use crate::job::Job;
 use crate::output::OutputDir;
-use crate::progress::Spinner;
-use anyhow::{Context, Result};
-use lamdyn_fem::eigen::Progress;
+use crate::{ChainResult, RunOptions, run_job};
 use lamdyn_fem::element::ShellMaterial;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_frf::FrfSet;
@@ -154,7 +153,7 @@ fn input_files(
         ),
         (
             "truth.csv".to_string(),
-            crate::cmd::simulate::truth_table(bench, frfs).into_bytes(),
+            bench.truth_table(frfs.freqs_hz()).into_bytes(),
         ),
     ];
     match hits {
@@ -203,7 +202,7 @@ pub fn run_demo(
     input: &OutputDir,
     sampling: DemoSampling,
     options: &RunOptions,
-    spinner: &Spinner,
+    spinner: &dyn Reporter,
 ) -> Result<(ChainResult, PathBuf, f64)> {
     let t = std::time::Instant::now();
     spinner.stage("stage 'virtual test': building the layered roof");

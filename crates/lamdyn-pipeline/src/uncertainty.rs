@@ -12,9 +12,8 @@
 //! samples run in parallel (rayon).
 
 use super::job::{KinematicsChoice, UncertaintyOptions};
-use crate::progress::Spinner;
-use anyhow::Result;
-use lamdyn_fem::eigen::Progress;
+use crate::Reporter;
+use crate::error::Result;
 use lamdyn_fit::fit::FitResult;
 use lamdyn_fit::synthetic::Normal;
 use lamdyn_material::laminate::{Kinematics, PaperInverseOptions, StackSpec, paper_inverse};
@@ -177,7 +176,7 @@ pub fn band95(mut v: Vec<f64>) -> Option<Band> {
 ///
 /// # Errors
 /// None today; kept for inputs that may fail in the future (the signature of a stage).
-pub fn monte_carlo(input: &McInput<'_>, spinner: &Spinner) -> Result<McResult> {
+pub fn monte_carlo(input: &McInput<'_>, spinner: &dyn Reporter) -> Result<McResult> {
     let n = input.options.samples;
     let t = std::time::Instant::now();
     let done = AtomicUsize::new(0);

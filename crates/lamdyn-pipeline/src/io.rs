@@ -1,6 +1,7 @@
 //! Reading input files: TOML into typed specs, and small numeric CSV tables with a header.
 
-use anyhow::{Context, Result, anyhow, bail};
+use crate::error::{Context, Result};
+use crate::{bail, err};
 use serde::de::DeserializeOwned;
 use std::path::Path;
 
@@ -9,7 +10,7 @@ use std::path::Path;
 pub fn read_toml<T: DeserializeOwned>(path: &Path) -> Result<T> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read '{}'", path.display()))?;
-    toml::from_str(&text).map_err(|e| anyhow!("error in '{}': {e}", path.display()))
+    toml::from_str(&text).map_err(|e| err!("error in '{}': {e}", path.display()))
 }
 
 /// A CSV table of numbers with a header row. Blank lines and lines starting with `#` are
@@ -56,7 +57,7 @@ impl CsvTable {
                 .zip(&headers)
                 .map(|(f, h)| match f.parse::<f64>() {
                     Ok(v) if v.is_finite() => Ok(v),
-                    _ => Err(anyhow!(
+                    _ => Err(err!(
                         "'{path}' line {line_no}: column '{h}': '{f}' is not a finite number"
                     )),
                 })
@@ -86,7 +87,7 @@ impl CsvTable {
     /// Index of the first of `names` present, or an error listing what was expected.
     pub fn require_any(&self, names: &[&str]) -> Result<usize> {
         names.iter().find_map(|n| self.find(n)).ok_or_else(|| {
-            anyhow!(
+            err!(
                 "'{}': no column {}; the header has: {}",
                 self.path,
                 names

@@ -4,7 +4,8 @@
 //! column), and [`Job::check`] catches values in the wrong unit (a thickness in mm, a modulus
 //! in GPa) or outside their physical range, naming the field.
 
-use anyhow::{Result, anyhow};
+use crate::err;
+use crate::error::Result;
 use lamdyn_fem::model::ModelSpec;
 use lamdyn_fit::fit::{Covariance, LawKind};
 use lamdyn_fit::misfit::{MisfitKind, MisfitSpec};
@@ -309,7 +310,7 @@ impl Job {
         let job: Job = crate::io::read_toml(path)?;
         job.check()
             .and_then(|()| job.check_files(&base_of(path)))
-            .map_err(|e| anyhow!("error in '{}': {e}", path.display()))?;
+            .map_err(|e| err!("error in '{}': {e}", path.display()))?;
         Ok(job)
     }
 
@@ -325,7 +326,7 @@ impl Job {
         if let Some(s) = seed {
             self.uncertainty.seed = s;
         }
-        check_samples(self.uncertainty.samples).map_err(|e| anyhow!("--samples: {e}"))?;
+        check_samples(self.uncertainty.samples).map_err(|e| err!("--samples: {e}"))?;
         Ok(self)
     }
 
@@ -364,8 +365,8 @@ impl Job {
         for (field, p) in self.input_files(base) {
             match std::fs::metadata(&p) {
                 Ok(m) if m.is_file() => {}
-                Ok(_) => return Err(anyhow!("{field}: '{}' is not a file", p.display())),
-                Err(e) => return Err(anyhow!("{field}: cannot read '{}': {e}", p.display())),
+                Ok(_) => return Err(err!("{field}: '{}' is not a file", p.display())),
+                Err(e) => return Err(err!("{field}: cannot read '{}': {e}", p.display())),
             }
         }
         Ok(())
@@ -376,7 +377,7 @@ impl Job {
         let m = &self.measurement;
         positive("measurement.tolerance_m", m.tolerance_m)?;
         if m.tolerance_m > 0.1 {
-            return Err(anyhow!(
+            return Err(err!(
                 "measurement.tolerance_m: {} m is larger than a sensor; lengths are in m",
                 m.tolerance_m
             ));
@@ -389,7 +390,7 @@ impl Job {
             (Some(_), Some(_), true, None) | (Some(_), None, false, None) => {}
             (None, None, true, Some(_)) => {}
             _ => {
-                return Err(anyhow!(
+                return Err(err!(
                     "measurement: give channels with frf (CSV) or with time (hit files), or uff alone"
                 ));
             }
@@ -397,7 +398,7 @@ impl Job {
         match (&self.model.file, &self.model.spec) {
             (Some(_), None) | (None, Some(_)) => {}
             _ => {
-                return Err(anyhow!(
+                return Err(err!(
                     "model: give either file (a model TOML) or [model.spec], not both or neither"
                 ));
             }
@@ -406,7 +407,7 @@ impl Job {
             check_shell("model.spec.material", spec)?;
         }
         if self.model.modes.is_some_and(|n| n < 7) {
-            return Err(anyhow!(
+            return Err(err!(
                 "model.modes: keep at least the 6 rigid-body modes and one elastic mode"
             ));
         }
@@ -415,7 +416,7 @@ impl Job {
             band("ema.band_hz", lo, hi)?;
         }
         if !(4..=400).contains(&self.ema.max_order) {
-            return Err(anyhow!(
+            return Err(err!(
                 "ema.max_order: {} must lie in 4..=400",
                 self.ema.max_order
             ));
@@ -424,25 +425,25 @@ impl Job {
             band("fit.misfit.band_hz", lo, hi)?;
         }
         if !(self.fit.prominence.is_finite() && self.fit.prominence > 1.0) {
-            return Err(anyhow!(
+            return Err(err!(
                 "fit.prominence: {} must be a ratio above 1",
                 self.fit.prominence
             ));
         }
         if let Some(f) = &self.inverse.freq_hz {
             if f.is_empty() || f.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-                return Err(anyhow!("inverse.freq_hz: give positive frequencies in Hz"));
+                return Err(err!("inverse.freq_hz: give positive frequencies in Hz"));
             }
         }
         let inv = &self.inverse;
         if inv.layered_elements.iter().any(|n| !(2..=60).contains(n)) {
-            return Err(anyhow!(
+            return Err(err!(
                 "inverse.layered_elements: {:?} must lie in 2..=60 per side",
                 inv.layered_elements
             ));
         }
         if !(6..=200).contains(&inv.layered_modes) {
-            return Err(anyhow!(
+            return Err(err!(
                 "inverse.layered_modes: {} must lie in 6..=200",
                 inv.layered_modes
             ));
@@ -453,25 +454,25 @@ impl Job {
             ("uncertainty.density_rel_sd", u.density_rel_sd),
         ] {
             if !(v.is_finite() && (0.0..0.5).contains(&v)) {
-                return Err(anyhow!(
+                return Err(err!(
                     "{name}: {v} must be a relative standard deviation in [0, 0.5) (0.02 is 2 %)"
                 ));
             }
         }
         if !(u.thickness_sd_m.is_finite() && (0.0..1e-3).contains(&u.thickness_sd_m)) {
-            return Err(anyhow!(
+            return Err(err!(
                 "uncertainty.thickness_sd_m: {} must be in m, below 1e-3 (a standard deviation of 0.01 mm is 1e-5)",
                 u.thickness_sd_m
             ));
         }
-        check_samples(u.samples).map_err(|e| anyhow!("uncertainty.samples: {e}"))?;
+        check_samples(u.samples).map_err(|e| err!("uncertainty.samples: {e}"))?;
         Ok(())
     }
 
     /// The stack's layers in SI units: catches mm for m, GPa for Pa, g/cm³ for kg/m³.
     fn check_stack(&self) -> Result<()> {
         if self.stack.layers.len() != 3 {
-            return Err(anyhow!(
+            return Err(err!(
                 "stack.layers: the inverse needs three layers (face, core, face), got {}",
                 self.stack.layers.len()
             ));
@@ -480,7 +481,7 @@ impl Job {
             let at = |f: &str| format!("stack.layers[{k}].{f}");
             positive(&at("thickness_m"), l.thickness_m)?;
             if l.thickness_m > 0.05 {
-                return Err(anyhow!(
+                return Err(err!(
                     "{}: {} m is thicker than a laminate layer: thicknesses are in m (1.715 mm is 1.715e-3)",
                     at("thickness_m"),
                     l.thickness_m
@@ -488,7 +489,7 @@ impl Job {
             }
             positive(&at("density_kg_m3"), l.density_kg_m3)?;
             if l.density_kg_m3 < 100.0 {
-                return Err(anyhow!(
+                return Err(err!(
                     "{}: {} is not a solid's density in kg/m^3 (glass is 2500; g/cm^3 x 1000)",
                     at("density_kg_m3"),
                     l.density_kg_m3
@@ -496,11 +497,11 @@ impl Job {
             }
             if k != 1 {
                 let e = l.young_pa.ok_or_else(|| {
-                    anyhow!("{}: a face needs its Young's modulus in Pa", at("young_pa"))
+                    err!("{}: a face needs its Young's modulus in Pa", at("young_pa"))
                 })?;
                 positive(&at("young_pa"), e)?;
                 if e < 1e8 {
-                    return Err(anyhow!(
+                    return Err(err!(
                         "{}: {e} Pa is far below any face material: moduli are in Pa (70 GPa is 70e9)",
                         at("young_pa")
                     ));
@@ -524,13 +525,13 @@ impl Job {
 fn check_shell(at: &str, spec: &ModelSpec) -> Result<()> {
     let m = &spec.material;
     if m.young_pa < 1e8 {
-        return Err(anyhow!(
+        return Err(err!(
             "{at}.young_pa: {} Pa is far below glass or steel: moduli are in Pa",
             m.young_pa
         ));
     }
     if m.thickness_m > 0.1 {
-        return Err(anyhow!(
+        return Err(err!(
             "{at}.thickness_m: {} m: thicknesses are in m",
             m.thickness_m
         ));
@@ -543,7 +544,7 @@ pub const MAX_SAMPLES: usize = 100_000;
 
 fn check_samples(n: usize) -> Result<()> {
     if n > MAX_SAMPLES {
-        return Err(anyhow!("{n} is more than {MAX_SAMPLES}"));
+        return Err(err!("{n} is more than {MAX_SAMPLES}"));
     }
     Ok(())
 }
@@ -568,7 +569,7 @@ fn positive(name: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(anyhow!("{name}: {v} must be positive"))
+        Err(err!("{name}: {v} must be positive"))
     }
 }
 
@@ -576,7 +577,7 @@ fn non_negative(name: &str, v: f64) -> Result<()> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
-        Err(anyhow!("{name}: {v} must not be negative"))
+        Err(err!("{name}: {v} must not be negative"))
     }
 }
 
@@ -584,7 +585,7 @@ fn fraction(name: &str, v: f64) -> Result<()> {
     if v.is_finite() && (0.0..1.0).contains(&v) {
         Ok(())
     } else {
-        Err(anyhow!("{name}: {v} must be a fraction in [0, 1)"))
+        Err(err!("{name}: {v} must be a fraction in [0, 1)"))
     }
 }
 
@@ -592,7 +593,7 @@ fn band(name: &str, lo: f64, hi: f64) -> Result<()> {
     if lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo {
         Ok(())
     } else {
-        Err(anyhow!(
+        Err(err!(
             "{name}: [{lo}, {hi}] must be an increasing band in Hz"
         ))
     }

@@ -1,0 +1,66 @@
+//! # lamdyn-pipeline: the whole chain as a library
+//!
+//! From an impact test of a laminated part to its core's complex shear modulus G*(f), one stage
+//! after the other, as `lamdyn run` and `lamdyn demo` (and the Python package) run it:
+//!
+//! | stage | what | module, crate |
+//! |---|---|---|
+//! | measurement | FRFs from CSV/UFF, or H1 from hammer-hit time files (coherence) | [`measurement`], lamdyn-frf, lamdyn-ema |
+//! | ema | stabilization diagram, poles, damping, shapes, CMIF (paper §2.1) | lamdyn-ema |
+//! | model | the FE model's real modes projected on the channels (paper eqs. 3–4) | lamdyn-fem, lamdyn-fit |
+//! | fit | the laminate's E*(ω) so that synthesized FRFs match (eqs. 2–10) | lamdyn-fit |
+//! | inverse | G*(f) of the core by the paper's inverse (eqs. 33–45) and the exact one | lamdyn-material |
+//! | layered inverse | G* at each EMA pole through a layered solid model ([`layered`]) | lamdyn-testbench |
+//! | uncertainty | Monte Carlo over the stack and the fit's covariance ([`uncertainty`]) | here |
+//! | report | HTML with figures, CSV/JSON tables ([`report`]) into a results folder ([`output`]) | lamdyn-report |
+//!
+//! ## The API
+//!
+//! ```no_run
+//! use lamdyn_pipeline::{Job, RunOptions, Silent, OutputDir, run_job, report};
+//! # fn main() -> Result<(), lamdyn_pipeline::PipelineError> {
+//! let path = std::path::Path::new("job.toml");
+//! let job = Job::read(path)?; // every field and file checked, errors name them
+//! let out = OutputDir::prepare(std::path::Path::new("report"), &[path.to_path_buf()], false)?;
+//! let result = run_job(job, path, &RunOptions::default(), &Silent)?;
+//! out.write(&report::build(&result)?)?;
+//! for p in &result.modal {
+//!     println!("{:.2} Hz: G* by the layered model {:?}", p.freq_hz, p.layered_g());
+//! }
+//! # Ok(()) }
+//! ```
+//!
+//! - [`Job`] ([`job`]): the job file (TOML, SI units), read and checked before any work.
+//! - [`run_job`] ([`stages`]): the chain; [`ChainResult`] holds every stage's result.
+//! - [`report::build`]: the report's files; [`OutputDir`] writes them without destroying
+//!   anything lamdyn did not write.
+//! - [`demo`]: the virtual roof's simulated test and the chain on it.
+//! - [`cache`]: the slow results (modal model, EMA, layered model) keyed by their inputs and
+//!   checked on every read.
+//! - [`Progress`]: what a caller hears of long work (a spinner, log lines, nothing: [`Silent`]).
+//!
+//! Errors are [`PipelineError`]s: each layer says what failed, the causes are its source chain
+//! ([`error::chain_text`] joins them into one line).
+
+pub mod cache;
+pub mod demo;
+pub mod error;
+pub mod io;
+pub mod job;
+pub mod layered;
+pub mod measurement;
+pub mod output;
+pub mod report;
+pub mod stages;
+pub mod uncertainty;
+
+pub use error::{PipelineError, Result};
+pub use job::Job;
+pub use lamdyn_fem::eigen::{Progress, Silent};
+pub use output::OutputDir;
+pub use stages::{ChainResult, CorePoint, RunOptions, StageTime, Truth, run_job};
+
+/// Progress that may be reported from worker threads (the Monte Carlo runs on rayon).
+pub trait Reporter: Progress + Sync {}
+
+impl<T: Progress + Sync + ?Sized> Reporter for T {}

@@ -1,0 +1,275 @@
+//! The measurement: FRFs from CSV (`lamdyn_frf::csv`) or UFF files, or H1/H2/Hv estimated from
+//! hammer-hit time files, as the chain and the commands read them; and the job's measurement
+//! ([`read_measurement`]) with its coherence and the estimator's warnings.
+
+use crate::error::{Context, Result};
+use crate::job::{Job, relative};
+use crate::{bail, err};
+use lamdyn_ema::spectra::{Hit, Spectra, SpectraSettings, estimate};
+use lamdyn_frf::FrfSet;
+use std::path::{Path, PathBuf};
+
+/// FRF estimators from time data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Estimator {
+    /// H1 = Gyx/Gxx: unbiased by response noise (the usual choice for hammer tests).
+    H1,
+    /// H2 = Gyy/Gxy: unbiased by force noise.
+    H2,
+    /// Hv = sqrt(H1 H2) with the phase of H1.
+    Hv,
+}
+
+/// The measured data as the chain uses it.
+pub struct Measured {
+    /// The FRFs.
+    pub set: FrfSet,
+    /// Where they came from.
+    pub source: String,
+    /// Time data: the lowest coherence of each response in the fit band.
+    pub min_coherence: Option<Vec<f64>>,
+    /// Time data: the estimator's warnings (double hits, overloads).
+    pub warnings: Vec<String>,
+}
+
+fn read_text(p: &Path) -> Result<String> {
+    std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
+}
+
+/// How time data become FRFs: the estimator and the record settings (rate from the files).
+pub struct TimeOptions {
+    pub estimator: Estimator,
+    pub trigger: f64,
+    pub pretrigger_s: f64,
+    pub force_window_s: f64,
+    pub record_s: Option<f64>,
+    pub exp_tau_s: Option<f64>,
+}
+
+/// FRFs (the chosen estimator) from hit files and the channels table, with the spectra
+/// (coherence, warnings) and the number of hits.
+pub fn time_frfs(
+    channels: &Path,
+    files: &[PathBuf],
+    options: &TimeOptions,
+) -> Result<(FrfSet, Spectra, usize)> {
+    let (responses, references) =
+        lamdyn_frf::csv::parse_channels(&channels.display().to_string(), &read_text(channels)?)?;
+    let [hammer] = &references[..] else {
+        bail!(
+            "'{}': time data needs exactly one reference channel (the hammer), the file has {}",
+            channels.display(),
+            references.len()
+        );
+    };
+    let mut hits = Vec::with_capacity(files.len());
+    let (mut rate, mut quantity) = (None, None);
+    for f in files {
+        let rec = lamdyn_frf::csv::parse_time(
+            &f.display().to_string(),
+            &read_text(f)?,
+            &responses,
+            hammer,
+        )?;
+        let r0 = *rate.get_or_insert(rec.rate_hz);
+        if (rec.rate_hz - r0).abs() > 1e-6 * r0 {
+            bail!(
+                "'{}': sampled at {} Hz, the first hit at {r0} Hz",
+                f.display(),
+                rec.rate_hz
+            );
+        }
+        if *quantity.get_or_insert(rec.quantity) != rec.quantity {
+            bail!(
+                "'{}': its responses are {}, the first hit's {}",
+                f.display(),
+                rec.quantity.unit(),
+                quantity.map_or("", |q| q.unit())
+            );
+        }
+        hits.push(Hit {
+            force: rec.force,
+            responses: rec.responses,
+        });
+    }
+    let rate_hz = rate.ok_or_else(|| err!("no time file given"))?;
+    for (name, v) in [
+        ("trigger", options.trigger),
+        ("pretrigger", options.pretrigger_s),
+        ("force window", options.force_window_s),
+    ] {
+        if v < 0.0 {
+            bail!("the {name} {v} must not be negative");
+        }
+    }
+    let settings = SpectraSettings {
+        rate_hz,
+        trigger: options.trigger,
+        pretrigger: (options.pretrigger_s * rate_hz).round() as usize,
+        length: options
+            .record_s
+            .map_or(0, |t| (t * rate_hz).round() as usize),
+        force_window_s: options.force_window_s,
+        exp_tau_s: options.exp_tau_s,
+        double_hit: 0.2,
+    };
+    let spectra = estimate(&hits, &settings).context("FRF estimation from the time data failed")?;
+    let data = spectra
+        .channels
+        .iter()
+        .flat_map(|c| match options.estimator {
+            Estimator::H1 => c.h1.clone(),
+            Estimator::H2 => c.h2.clone(),
+            Estimator::Hv => c.hv.clone(),
+        })
+        .collect();
+    let set = FrfSet::new(
+        spectra.freqs_hz.clone(),
+        responses,
+        references,
+        quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
+        data,
+    )?;
+    Ok((set, spectra, hits.len()))
+}
+
+/// The FRF set named by the arguments.
+pub fn read_frfs(
+    uff: Option<&Path>,
+    channels: Option<&Path>,
+    frf: Option<&Path>,
+) -> Result<(FrfSet, String)> {
+    match (uff, channels, frf) {
+        (Some(u), _, _) => {
+            let file = lamdyn_uff::read_path(u, Default::default())
+                .map_err(crate::PipelineError::Invalid)?;
+            let set =
+                lamdyn_uff::frf::to_frf_set(&file).map_err(|e| err!("'{}': {e}", u.display()))?;
+            Ok((set, format!("UFF '{}'", u.display())))
+        }
+        (None, Some(c), Some(f)) => {
+            let text = |p: &Path| {
+                std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
+            };
+            let (r, q) = lamdyn_frf::csv::parse_channels(&c.display().to_string(), &text(c)?)?;
+            let set = lamdyn_frf::csv::parse_frf(&f.display().to_string(), &text(f)?, r, q)?;
+            Ok((
+                set,
+                format!("CSV '{}' with channels '{}'", f.display(), c.display()),
+            ))
+        }
+        _ => bail!(
+            "give --uff FILE, --channels FILE with --frf FILE, or --channels FILE with --time FILE..."
+        ),
+    }
+}
+
+/// The measured FRF set of the job, with the expected channel count checked.
+pub fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured> {
+    let m = &job.measurement;
+    let mut out = match (&m.channels, &m.frf, &m.uff) {
+        (Some(c), Some(f), None) => {
+            let (c, f) = (relative(base, c), relative(base, f));
+            let (responses, references) =
+                lamdyn_frf::csv::parse_channels(&c.display().to_string(), &read_text(&c)?)
+                    .context("measurement.channels")?;
+            let set = lamdyn_frf::csv::parse_frf(
+                &f.display().to_string(),
+                &read_text(&f)?,
+                responses,
+                references,
+            )
+            .with_context(|| {
+                format!(
+                    "measurement.frf does not match the geometry in measurement.channels ('{}')",
+                    c.display()
+                )
+            })?;
+            Measured {
+                set,
+                source: format!("FRFs '{}', channels '{}'", f.display(), c.display()),
+                min_coherence: None,
+                warnings: vec![],
+            }
+        }
+        (Some(c), None, None) => {
+            let c = relative(base, c);
+            let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
+            let options = TimeOptions {
+                estimator: Estimator::H1,
+                trigger: m.trigger,
+                pretrigger_s: m.pretrigger_s,
+                force_window_s: m.force_window_s,
+                record_s: None,
+                exp_tau_s: None,
+            };
+            let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
+                format!(
+                    "measurement.time does not match the geometry in measurement.channels ('{}')",
+                    c.display()
+                )
+            })?;
+            let band = job.fit.misfit.band_hz.unwrap_or([0.0, f64::INFINITY]);
+            let min_coherence = spectra
+                .channels
+                .iter()
+                .map(|ch| {
+                    spectra
+                        .freqs_hz
+                        .iter()
+                        .zip(&ch.coherence)
+                        .filter(|(f, _)| **f >= band[0] && **f <= band[1])
+                        .map(|(_, g)| *g)
+                        .fold(1.0, f64::min)
+                })
+                .collect();
+            Measured {
+                set,
+                source: format!(
+                    "H1 from {hits} hammer hits ('{}'...), channels '{}'",
+                    files
+                        .first()
+                        .map_or(String::new(), |f| f.display().to_string()),
+                    c.display()
+                ),
+                min_coherence: Some(min_coherence),
+                warnings: spectra.warnings.clone(),
+            }
+        }
+        (None, None, Some(u)) => {
+            let (set, source) =
+                read_frfs(Some(&relative(base, u)), None, None).context("measurement.uff")?;
+            Measured {
+                set,
+                source,
+                min_coherence: None,
+                warnings: vec![],
+            }
+        }
+        _ => bail!(
+            "error in '{}': measurement: give channels with frf or time, or uff",
+            path.display()
+        ),
+    };
+    if let Some(n) = m.responses {
+        let got = out.set.responses().len();
+        if got != n {
+            bail!("measurement.responses = {n}, but the geometry has {got} response channels",);
+        }
+    }
+    if out.set.references().is_empty() {
+        bail!("measurement: no reference (hammer) channel in the geometry");
+    }
+    out.source = format!(
+        "{} ({} responses x {} references, {} lines {:.3}-{:.3} Hz, {})",
+        out.source,
+        out.set.responses().len(),
+        out.set.references().len(),
+        out.set.n_lines(),
+        out.set.freqs_hz()[0],
+        out.set.freqs_hz()[out.set.n_lines() - 1],
+        out.set.quantity().unit()
+    );
+    Ok(out)
+}
