@@ -3,19 +3,26 @@
 //! **Channels file** (`name,role,x_m,y_m,z_m,dx,dy,dz`): one line per response or reference
 //! channel, `role` = `response` or `reference`, position in m and direction in the global frame.
 //!
-//! **FRF file**: an optional first line `# quantity = accelerance` (or `receptance`,
-//! `mobility`), then a header `f_hz,R@F:re,R@F:im,...` with one pair of columns per response `R`
+//! **FRF file**: a line `# quantity = accelerance` (or `receptance`, `mobility`) before the
+//! header — required: a file without it is refused, since reading accelerance as receptance
+//! gives loss factors wrong by orders of magnitude without any other sign —, then a header `f_hz,R@F:re,R@F:im,...` with one pair of columns per response `R`
 //! and reference `F` named in the channels file, then one line per frequency (Hz, increasing).
 //! Every response × reference pair must appear once.
 //!
-//! **Time file** (one per hammer hit): an optional first line `# quantity = accelerance` (what
-//! the responses are: `receptance` = displacement in m, `mobility` = velocity in m/s,
-//! `accelerance` = acceleration in m/s²), then a header `t_s,NAME,...` naming the reference
-//! (the force, N) and every response of the channels file, then one line per sample at a
-//! uniform time step.
+//! **Time file** (one per hammer hit): a line `# quantity = accelerance` (what the responses
+//! are: `receptance` = displacement in m, `mobility` = velocity in m/s, `accelerance` =
+//! acceleration in m/s²; required, as for FRF files), then a header `t_s,NAME,...` naming the
+//! reference (the force, N) and every response of the channels file, then one line per sample
+//! at a uniform time step: each step within 1 % of the mean step (the least-squares slope of t
+//! against the sample index), which
+//! absorbs the rounding of a time column printed to a few digits and still refuses a missing
+//! or repeated sample.
 //!
-//! Lines starting with `#` are comments; fields are separated by commas.
+//! Lines starting with `#` are comments. Fields are separated by commas, or by semicolons or
+//! tabs with decimal commas allowed (detected from the header; [`crate::text`]); files may be
+//! UTF-8 (with a byte-order mark), UTF-16 or Latin-1 ([`crate::text::read_text`]).
 
+use crate::text::{Dialect, data_lines, short};
 use crate::{Channel, FrfError, FrfSet, Quantity};
 use num_complex::Complex64;
 use std::collections::HashMap;
@@ -29,48 +36,75 @@ fn err(path: &str, line: usize, reason: String) -> FrfError {
     }
 }
 
-/// Data lines of a CSV text: (1-based line number, fields), comments and blank lines skipped.
-fn lines(text: &str) -> impl Iterator<Item = (usize, Vec<&str>)> {
-    text.lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
-        .map(|(i, l)| (i, l.split(',').map(str::trim).collect()))
+/// The dialect of a CSV text (from its header line) and its data lines split into fields:
+/// (1-based line number, fields), comments and blank lines skipped.
+fn lines(text: &str) -> (Dialect, impl Iterator<Item = (usize, Vec<&str>)>) {
+    let dialect = data_lines(text)
+        .next()
+        .map_or_else(Dialect::default, |(_, header)| Dialect::detect(header));
+    (
+        dialect,
+        data_lines(text).map(move |(i, l)| (i, dialect.split(l))),
+    )
 }
 
-fn number(path: &str, line: usize, column: &str, s: &str) -> Result<f64, FrfError> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(err(
+fn number(d: Dialect, path: &str, line: usize, column: &str, s: &str) -> Result<f64, FrfError> {
+    d.number(s).ok_or_else(|| {
+        err(
             path,
             line,
-            format!("column '{column}': '{s}' is not a finite number"),
+            if d.separator == ',' {
+                format!("column '{column}': '{s}' is not a finite number")
+            } else {
+                format!(
+                    "column '{column}': '{s}' is not a finite number (read as {})",
+                    d.describe()
+                )
+            },
+        )
+    })
+}
+
+/// The `# quantity = ...` line of an FRF or time file (required: module docs).
+fn declared_quantity(path: &str, text: &str) -> Result<Quantity, FrfError> {
+    let found = text.lines().enumerate().find_map(|(i, l)| {
+        l.trim()
+            .strip_prefix('#')
+            .and_then(|r| r.trim().strip_prefix("quantity"))
+            .map(|r| (i + 1, r.trim().trim_start_matches('=').trim()))
+    });
+    match found {
+        Some((_, "receptance")) => Ok(Quantity::Receptance),
+        Some((_, "mobility")) => Ok(Quantity::Mobility),
+        Some((_, "accelerance")) => Ok(Quantity::Accelerance),
+        Some((line, other)) => Err(err(
+            path,
+            line,
+            format!("quantity '{other}' must be receptance, mobility or accelerance"),
+        )),
+        None => Err(err(
+            path,
+            1,
+            "no '# quantity = ...' line: say what the responses are, in a line before the header: `# quantity = accelerance` (m/s^2), `mobility` (m/s) or `receptance` (m); lamdyn does not guess, since a wrong quantity gives loss factors wrong by orders of magnitude".into(),
         )),
     }
 }
 
-/// The `# quantity = ...` line of an FRF or time file (receptance if absent).
-fn declared_quantity(path: &str, text: &str) -> Result<Quantity, FrfError> {
-    text.lines()
-        .find_map(|l| {
-            l.trim()
-                .strip_prefix('#')
-                .and_then(|r| r.trim().strip_prefix("quantity"))
-        })
-        .map(|r| r.trim().trim_start_matches('=').trim())
-        .map(|q| match q {
-            "receptance" => Ok(Quantity::Receptance),
-            "mobility" => Ok(Quantity::Mobility),
-            "accelerance" => Ok(Quantity::Accelerance),
-            other => Err(err(
-                path,
-                1,
-                format!("quantity '{other}' must be receptance, mobility or accelerance"),
-            )),
-        })
-        .transpose()
-        .map(|q| q.unwrap_or(Quantity::Receptance))
+/// The least-squares slope of t against the sample index: the time step with the printing
+/// errors of the stamps averaged out (their effect on the step falls as n^(-3/2)).
+fn mean_step(t: &[f64]) -> f64 {
+    let n = t.len() as f64;
+    let k_mean = (n - 1.0) / 2.0;
+    let t_mean = t.iter().sum::<f64>() / n;
+    let (num, den) = t.iter().enumerate().fold((0.0, 0.0), |(a, b), (k, tk)| {
+        let dk = k as f64 - k_mean;
+        (a + dk * (tk - t_mean), b + dk * dk)
+    });
+    num / den
 }
+
+/// Largest deviation of a time step from the mean step, as a fraction of it (module docs).
+pub const TIME_STEP_TOLERANCE: f64 = 0.01;
 
 /// One hammer hit read from a time file: the force and the responses sampled at `rate_hz`.
 #[derive(Debug, Clone, PartialEq)]
@@ -98,7 +132,7 @@ pub fn parse_time(
     reference: &Channel,
 ) -> Result<TimeRecord, FrfError> {
     let quantity = declared_quantity(path, text)?;
-    let mut it = lines(text);
+    let (d, mut it) = lines(text);
     let Some((hl, header)) = it.next() else {
         return Err(err(path, 0, "empty: expected a header t_s,NAME,...".into()));
     };
@@ -128,10 +162,10 @@ pub fn parse_time(
                 format!("{} fields, the header has {}", fields.len(), header.len()),
             ));
         }
-        t.push(number(path, line, "t_s", fields[0])?);
-        force.push(number(path, line, &reference.name, fields[force_col])?);
+        t.push(number(d, path, line, "t_s", fields[0])?);
+        force.push(number(d, path, line, &reference.name, fields[force_col])?);
         for (r, &c) in resp.iter_mut().zip(&resp_cols) {
-            r.push(number(path, line, header[c], fields[c])?);
+            r.push(number(d, path, line, header[c], fields[c])?);
         }
     }
     if t.len() < 2 {
@@ -141,18 +175,26 @@ pub fn parse_time(
             format!("{} samples: at least 2 needed", t.len()),
         ));
     }
-    let dt = t[1] - t[0];
-    if let Some(k) = t
-        .windows(2)
-        .position(|w| !(w[1] - w[0] > 0.0 && ((w[1] - w[0]) - dt).abs() <= 1e-6 * dt))
-    {
+    let dt = mean_step(&t);
+    if let Some(k) = t.windows(2).position(|w| {
+        !(w[1] - w[0] > 0.0 && ((w[1] - w[0]) - dt).abs() <= TIME_STEP_TOLERANCE * dt)
+    }) {
+        let step = t[k + 1] - t[k];
+        let why = if step <= 0.0 {
+            "the time must increase (a repeated or reversed time stamp)"
+        } else if step > dt {
+            "a gap (a missing sample?)"
+        } else {
+            "the sampling must be uniform"
+        };
         return Err(err(
             path,
             line_of[k + 1],
             format!(
-                "time step {} s after {} s, the first step is {dt} s: the sampling must be uniform",
-                t[k + 1] - t[k],
-                t[k]
+                "time step {} s after {} s, the mean step is {} s: {why}",
+                short(step),
+                short(t[k]),
+                short(dt)
             ),
         ));
     }
@@ -170,7 +212,7 @@ pub fn parse_time(
 /// [`FrfError::File`] naming the line: wrong field count, bad numbers, unknown role, repeated
 /// names, zero directions.
 pub fn parse_channels(path: &str, text: &str) -> Result<(Vec<Channel>, Vec<Channel>), FrfError> {
-    let mut it = lines(text);
+    let (d, mut it) = lines(text);
     let Some((hl, header)) = it.next() else {
         return Err(err(
             path,
@@ -204,7 +246,7 @@ pub fn parse_channels(path: &str, text: &str) -> Result<(Vec<Channel>, Vec<Chann
             ));
         }
         let v: Vec<f64> = (2..8)
-            .map(|k| number(path, line, want[k], f[k]))
+            .map(|k| number(d, path, line, want[k], f[k]))
             .collect::<Result<_, _>>()?;
         let ch = Channel::new(f[0], [v[0], v[1], v[2]], [v[3], v[4], v[5]])
             .map_err(|e| err(path, line, e.to_string()))?;
@@ -246,7 +288,7 @@ pub fn parse_frf(
     references: Vec<Channel>,
 ) -> Result<FrfSet, FrfError> {
     let quantity = declared_quantity(path, text)?;
-    let mut it = lines(text);
+    let (d, mut it) = lines(text);
     let Some((hl, header)) = it.next() else {
         return Err(err(
             path,
@@ -339,7 +381,7 @@ pub fn parse_frf(
                 format!("{} fields, the header has {}", f.len(), header.len()),
             ));
         }
-        let hz = number(path, line, "f_hz", f[0])?;
+        let hz = number(d, path, line, "f_hz", f[0])?;
         if let Some(prev) = freqs.last() {
             if hz <= *prev {
                 return Err(err(
@@ -354,7 +396,7 @@ pub fn parse_frf(
             v.push(Complex64::new(0.0, 0.0));
         }
         for (k, &(p, im)) in columns.iter().enumerate() {
-            let x = number(path, line, header[k + 1], f[k + 1])?;
+            let x = number(d, path, line, header[k + 1], f[k + 1])?;
             let slot = values[p].last_mut().expect("pushed above");
             if im {
                 slot.im = x;
@@ -488,6 +530,99 @@ mod tests {
             [0.0, 0.0, 1.0],
             "directions are normalised"
         );
+    }
+
+    /// The same set written with semicolons and decimal commas, with a byte-order mark or in
+    /// Latin-1 with a "µ" in a comment, reads back equal.
+    #[test]
+    fn spreadsheet_dialects_and_encodings_read_the_same() {
+        let set = sample();
+        let (r, f) = parse_channels("c.csv", &write_channels(&set)).unwrap();
+        let comma = write_frf(&set);
+        let semi: String = comma
+            .lines()
+            .map(|l| {
+                if l.starts_with('#') {
+                    l.to_string()
+                } else {
+                    l.replace(',', ";").replace('.', ",")
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let back = parse_frf("h.csv", &semi, r.clone(), f.clone()).unwrap();
+        assert_eq!(back, set);
+        let mut bom = b"\xEF\xBB\xBF".to_vec();
+        bom.extend_from_slice(comma.as_bytes());
+        let text = crate::text::decode(&bom).0;
+        assert_eq!(
+            parse_frf("h.csv", &text, r.clone(), f.clone()).unwrap(),
+            set
+        );
+        let mut latin1 = b"# sensor sensitivity 10 mV/(m/s\xB2), \xB5-accelerometers\n".to_vec();
+        latin1.extend_from_slice(comma.as_bytes());
+        let text = crate::text::decode(&latin1).0;
+        assert_eq!(parse_frf("h.csv", &text, r, f).unwrap(), set);
+    }
+
+    /// Without its quantity line a file is refused, naming the line to add.
+    #[test]
+    fn the_quantity_line_is_required() {
+        let set = sample();
+        let (r, f) = parse_channels("c.csv", &write_channels(&set)).unwrap();
+        let text = write_frf(&set);
+        let without: String = text.lines().skip(1).collect::<Vec<_>>().join("\n");
+        let e = parse_frf("h.csv", &without, r.clone(), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no '# quantity = ...' line"), "{e}");
+        let hammer = &f[0];
+        let e = parse_time(
+            "t.csv",
+            "t_s,hammer,p1+Z,p2+X\n0,1,0,0\n1,0,0,0\n",
+            &r,
+            hammer,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("line 1: no '# quantity = ...' line"), "{e}");
+    }
+
+    /// A time column printed to 1 ns at 25.6 kHz (steps of 39.0625 µs printed as 39.062 or
+    /// 39.063 µs) is uniform; a missing sample and a repeated stamp are refused by line.
+    #[test]
+    fn time_steps_within_printing_precision_are_uniform() {
+        let r = vec![Channel::new("a", [0.0; 3], [0.0, 0.0, 1.0]).unwrap()];
+        let f = Channel::new("F", [0.0; 3], [0.0, 0.0, -1.0]).unwrap();
+        let rows = |t: &[f64]| {
+            let mut s = String::from("# quantity = accelerance\nt_s,F,a\n");
+            for (k, t) in t.iter().enumerate() {
+                s += &format!("{t:.9},{k},0\n");
+            }
+            s
+        };
+        let t: Vec<f64> = (0..2000).map(|k| k as f64 / 25600.0).collect();
+        let rec = parse_time("t.csv", &rows(&t), &r, &f).unwrap();
+        assert!(
+            (rec.rate_hz / 25600.0 - 1.0).abs() < 1e-9,
+            "{}",
+            rec.rate_hz
+        );
+        let mut gap = t.clone();
+        gap.remove(700);
+        let e = parse_time("t.csv", &rows(&gap), &r, &f)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 703: time step 7.8124e-5 s after 0.0273047 s") && e.contains("a gap"),
+            "{e}"
+        );
+        let mut repeated = t.clone();
+        repeated[900] = repeated[899];
+        let e = parse_time("t.csv", &rows(&repeated), &r, &f)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 903:") && e.contains("repeated"), "{e}");
     }
 
     #[test]

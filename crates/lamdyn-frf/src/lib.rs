@@ -10,6 +10,7 @@
 //! | [`Quantity`] | receptance (m/N), mobility (m/s/N), accelerance (m/s²/N), conversions |
 //! | [`FrfSet::rms`] | the paper's RMS FRF over channels (eq. 2, as RMS of magnitudes) |
 //! | [`csv`] | a plain CSV layout for FRFs and channel tables |
+//! | [`text`] | text files as instruments write them: encodings, separators, decimal commas |
 //!
 //! Convention: time dependence e^{+iωt}; H = X/F (response over force, the H1 estimator's
 //! target). Frequencies in Hz on the axis, ω = 2πf in formulas.
@@ -18,5 +19,6 @@
 
 pub mod csv;
 mod set;
+pub mod text;
 
 pub use set::{Channel, FrfError, FrfSet, Quantity};

@@ -1,20 +1,35 @@
-//! Reading input files: TOML into typed specs, and small numeric CSV tables with a header.
+//! Reading input files: text in any of the encodings instruments write
+//! ([`lamdyn_frf::text`]), TOML into typed specs, and small numeric CSV tables with a header.
 
 use crate::error::{Context, Result};
 use crate::{bail, err};
+use lamdyn_frf::text::{Dialect, data_lines};
 use serde::de::DeserializeOwned;
 use std::path::Path;
 
+/// The text of a file: UTF-8 (with or without a byte-order mark), UTF-16 with one, or Latin-1
+/// ([`lamdyn_frf::text::decode`]); the error names the file.
+///
+/// # Errors
+/// The file cannot be read (missing, a folder, no permission).
+pub fn read_text(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read '{}'", path.display()))?;
+    Ok(lamdyn_frf::text::decode(&bytes).0)
+}
+
 /// Reads and parses a TOML file; errors name the file and, from the parser, the line, column and
 /// key.
+///
+/// # Errors
+/// The file cannot be read or parsed.
 pub fn read_toml<T: DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read '{}'", path.display()))?;
+    let text = read_text(path)?;
     toml::from_str(&text).map_err(|e| err!("error in '{}': {e}", path.display()))
 }
 
 /// A CSV table of numbers with a header row. Blank lines and lines starting with `#` are
-/// skipped; fields are separated by commas.
+/// skipped; fields are separated by commas, or by semicolons or tabs with decimal commas
+/// allowed (detected from the header, [`Dialect`]).
 #[derive(Debug, Clone)]
 pub struct CsvTable {
     path: String,
@@ -25,25 +40,24 @@ pub struct CsvTable {
 impl CsvTable {
     /// Reads `path`.
     pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read '{}'", path.display()))?;
-        Self::parse(&path.display().to_string(), &text)
+        Self::parse(&path.display().to_string(), &read_text(path)?)
     }
 
     /// Parses `text`, naming `path` in errors.
     pub fn parse(path: &str, text: &str) -> Result<Self> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim()))
-            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+        let mut lines = data_lines(text);
         let Some((_, header)) = lines.next() else {
             bail!("'{path}' is empty: expected a header line of column names");
         };
-        let headers: Vec<String> = header.split(',').map(|h| h.trim().to_string()).collect();
+        let dialect = Dialect::detect(header);
+        let headers: Vec<String> = dialect
+            .split(header)
+            .into_iter()
+            .map(String::from)
+            .collect();
         let mut rows = Vec::new();
         for (line_no, line) in lines {
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            let fields = dialect.split(line);
             if fields.len() != headers.len() {
                 bail!(
                     "'{path}' line {line_no}: {} fields, but the header has {} ({})",
@@ -55,11 +69,10 @@ impl CsvTable {
             let values = fields
                 .iter()
                 .zip(&headers)
-                .map(|(f, h)| match f.parse::<f64>() {
-                    Ok(v) if v.is_finite() => Ok(v),
-                    _ => Err(err!(
-                        "'{path}' line {line_no}: column '{h}': '{f}' is not a finite number"
-                    )),
+                .map(|(f, h)| {
+                    dialect.number(f).ok_or_else(|| {
+                        err!("'{path}' line {line_no}: column '{h}': '{f}' is not a finite number")
+                    })
                 })
                 .collect::<Result<Vec<f64>>>()?;
             rows.push((line_no, values));

@@ -34,7 +34,7 @@ pub struct Measured {
 }
 
 fn read_text(p: &Path) -> Result<String> {
-    std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
+    crate::io::read_text(p)
 }
 
 /// How time data become FRFs: the estimator and the record settings (rate from the files).
@@ -149,9 +149,7 @@ pub fn read_frfs(
             Ok((set, format!("UFF '{}'", u.display())))
         }
         (None, Some(c), Some(f)) => {
-            let text = |p: &Path| {
-                std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
-            };
+            let text = |p: &Path| crate::io::read_text(p);
             let (r, q) = lamdyn_frf::csv::parse_channels(&c.display().to_string(), &text(c)?)?;
             let set = lamdyn_frf::csv::parse_frf(&f.display().to_string(), &text(f)?, r, q)?;
             Ok((

@@ -4,7 +4,7 @@
 use crate::Outcome;
 use crate::cli::DemoArgs;
 use crate::progress::Spinner;
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use lamdyn_pipeline::RunOptions;
 use lamdyn_pipeline::demo::{DemoSampling, demo_roof, run_demo};
 use lamdyn_pipeline::job::MAX_SAMPLES;
@@ -29,8 +29,7 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let report_dir = OutputDir::prepare(&args.out.join("report"), &inputs, args.force)?;
     let desc = match &args.description {
         Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("cannot read '{}'", p.display()))?;
+            let text = lamdyn_pipeline::io::read_text(p)?;
             Description::parse(&p.display().to_string(), &text)?
         }
         None => demo_roof(),

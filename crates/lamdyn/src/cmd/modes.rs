@@ -151,8 +151,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
 }
 
 fn read_shapes(path: &Path) -> Result<ShapesFile> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read '{}'", path.display()))?;
+    let text = lamdyn_pipeline::io::read_text(path)?;
     serde_json::from_str(&text)
         .with_context(|| format!("'{}' is not a lamdyn shapes file", path.display()))
 }

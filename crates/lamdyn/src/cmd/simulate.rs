@@ -20,8 +20,7 @@ use std::time::Instant;
 fn description(args: &SimulateArgs) -> Result<(Description, String, String)> {
     match (&args.description, args.example.as_deref()) {
         (Some(p), None) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("cannot read '{}'", p.display()))?;
+            let text = lamdyn_pipeline::io::read_text(p)?;
             let d = Description::parse(&p.display().to_string(), &text)?;
             Ok((d, p.display().to_string(), text))
         }

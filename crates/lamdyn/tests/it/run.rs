@@ -24,11 +24,21 @@ fn demo_and_run_print_the_core_at_each_mode() {
     ]);
     assert_eq!(code, 0, "{err}");
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
-    assert!(doc["inputs"]["report"].as_str().unwrap().ends_with("report.html"));
+    assert!(
+        doc["inputs"]["report"]
+            .as_str()
+            .unwrap()
+            .ends_with("report.html")
+    );
     let rows = doc["rows"].as_array().unwrap();
     assert!(rows.len() >= 3, "{rows:?}");
     for r in rows {
-        for k in ["err_g_paper", "err_g_exact", "err_g_layered", "err_eta_layered"] {
+        for k in [
+            "err_g_paper",
+            "err_g_exact",
+            "err_g_layered",
+            "err_eta_layered",
+        ] {
             assert!(r[k].is_number(), "{k} missing in {r}");
         }
     }
