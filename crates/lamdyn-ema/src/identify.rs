@@ -152,10 +152,29 @@ fn participation(fit: &ModalFit, r: usize, nr: usize, nf: usize) -> Vec<Complex6
     v.iter().map(|z| z / big).collect()
 }
 
+/// The band lies inside the data's lines: a band beyond the last line (or before the first)
+/// is refused with both ranges, and a hint when the data end far below the band (a time
+/// column in ms read as s gives lines a thousand times too low).
+fn check_band_in_data(band: [f64; 2], freqs: &[f64]) -> Result<(), EmaError> {
+    let (first, last) = (freqs[0], freqs[freqs.len() - 1]);
+    let [lo, hi] = band;
+    if lo >= hi {
+        return Err(invalid("band", format!("[{lo}, {hi}] Hz is empty")));
+    }
+    if hi <= last * (1.0 + 1e-9) && lo >= first * (1.0 - 1e-9) {
+        return Ok(());
+    }
+    let mut why = format!("[{lo}, {hi}] Hz reaches beyond the data's lines, {first} to {last} Hz");
+    if last < 0.1 * lo || last < 0.01 * hi {
+        why += ": the data end far below the band; is the time column in s (not ms) and the sampling as recorded?";
+    }
+    Err(invalid("band", why))
+}
+
 /// Identifies the modes of `set` (module docs).
 ///
 /// # Errors
-/// [`EmaError::Invalid`] for bad bands or orders ([`lscf`]), no physical pole, or a
+/// [`EmaError::Invalid`] for bad bands (beyond the data's lines) or orders ([`lscf`]), no physical pole, or a
 /// driving-point index out of range.
 pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
     let clock = Instant::now();
@@ -173,6 +192,7 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
         freqs.iter().copied().find(|f| *f > 0.0).unwrap_or(0.0),
         freqs[freqs.len() - 1],
     ]);
+    check_band_in_data(band, freqs)?;
     let curves: Vec<&[Complex64]> = (0..nr)
         .flat_map(|i| (0..nf).map(move |j| (i, j)))
         .map(|(i, j)| set.curve(i, j))

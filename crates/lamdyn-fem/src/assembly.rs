@@ -165,7 +165,8 @@ impl Assembly {
     /// Assembles the MITC4 stiffness and mass of `mesh` with `material`, in parallel.
     ///
     /// # Errors
-    /// [`FemError::InvalidParameter`] for a non-physical material; [`FemError::InvalidMesh`]
+    /// [`FemError::InvalidParameter`] for a non-physical material or a mesh whose modal solve
+    /// would need more memory than is available ([`crate::memory`]); [`FemError::InvalidMesh`]
     /// for an element whose Jacobian turns negative through the thickness; invalid springs.
     pub fn new(
         mesh: &Mesh,
@@ -173,6 +174,7 @@ impl Assembly {
         springs: &[NodeSpring],
     ) -> Result<Self, FemError> {
         validate_material(material)?;
+        crate::memory::check_modal_memory(6 * mesh.nodes().len())?;
         let pattern = Arc::new(SystemPattern::new(mesh));
         let nnz = pattern.nnz();
         let mut k = vec![0.0; nnz];

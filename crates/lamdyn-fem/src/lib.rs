@@ -9,6 +9,7 @@
 //! | [`element`] | the MITC4 shell element (stiffness, consistent mass) and its material |
 //! | [`assembly`] | planned sparse pattern, parallel assembly of K0 and M, elastic supports |
 //! | [`eigen`] | LLᵀ/LDLᵀ on faer, thick-restart Lanczos, [`eigen::solve_modes`] |
+//! | [`memory`] | the memory a modal solve needs, checked before allocating |
 //! | [`model`] | the TOML model description (mesh, material, supports, solver) |
 //! | [`output`] | MAC, VTK `.vtu` and JSON mode shapes |
 //! | [`sparse`] | parallel symmetric sparse products |
@@ -41,6 +42,7 @@ pub mod assembly;
 pub mod eigen;
 pub mod element;
 mod error;
+pub mod memory;
 pub mod mesh;
 pub mod model;
 pub mod output;

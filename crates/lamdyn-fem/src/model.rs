@@ -30,6 +30,7 @@ use crate::element::ShellMaterial;
 use crate::error::FemError;
 use crate::mesh::structured::RectangleSpec;
 use crate::mesh::{Locator, Mesh, gmsh};
+use lamdyn_material::units::{self, Quantity};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -141,6 +142,7 @@ impl ModelSpec {
     /// # Errors
     /// [`FemError`] naming the field, file, node or support.
     pub fn build(&self, base_dir: &Path) -> Result<(Mesh, Vec<NodeSpring>), FemError> {
+        self.check_units()?;
         let mesh = match &self.mesh {
             MeshSpec::Rectangle {
                 length_x_m,
@@ -150,16 +152,20 @@ impl ModelSpec {
                 radius_x_m,
                 radius_y_m,
                 grading,
-            } => RectangleSpec {
-                length_x_m: *length_x_m,
-                length_y_m: *length_y_m,
-                elements_x: *elements_x,
-                elements_y: *elements_y,
-                radius_x_m: *radius_x_m,
-                radius_y_m: *radius_y_m,
-                grading: *grading,
+            } => {
+                // Refused before the mesh is built: a 2000 x 2000 mesh takes seconds to make.
+                crate::memory::check_modal_memory(6 * (elements_x + 1) * (elements_y + 1))?;
+                RectangleSpec {
+                    length_x_m: *length_x_m,
+                    length_y_m: *length_y_m,
+                    elements_x: *elements_x,
+                    elements_y: *elements_y,
+                    radius_x_m: *radius_x_m,
+                    radius_y_m: *radius_y_m,
+                    grading: *grading,
+                }
+                .build()?
             }
-            .build()?,
             MeshSpec::Gmsh { file, unit } => {
                 let scale = match unit.as_str() {
                     "m" => 1.0,
@@ -176,6 +182,7 @@ impl ModelSpec {
                 gmsh::read_msh(&base_dir.join(file), scale)?
             }
         };
+        check_span(&mesh, self.material.thickness_m)?;
         let locator = Locator::new(&mesh, f64::INFINITY);
         let mut springs = Vec::new();
         for (i, s) in self.supports.iter().enumerate() {
@@ -204,4 +211,73 @@ impl ModelSpec {
         }
         Ok((mesh, springs))
     }
+
+    /// The material and the rectangle's lengths in plausible SI ranges
+    /// ([`lamdyn_material::units`]): catches mm, GPa and g/cm³ before any work.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidParameter`] naming the field and the unit probably meant.
+    pub fn check_units(&self) -> Result<(), FemError> {
+        let m = &self.material;
+        let mut fields = vec![
+            ("material", "young_pa", m.young_pa, Quantity::StiffModulus),
+            (
+                "material",
+                "density_kg_m3",
+                m.density_kg_m3,
+                Quantity::Density,
+            ),
+            (
+                "material",
+                "thickness_m",
+                m.thickness_m,
+                Quantity::Thickness,
+            ),
+        ];
+        if let MeshSpec::Rectangle {
+            length_x_m,
+            length_y_m,
+            ..
+        } = &self.mesh
+        {
+            fields.push(("mesh", "length_x_m", *length_x_m, Quantity::Length));
+            fields.push(("mesh", "length_y_m", *length_y_m, Quantity::Length));
+        }
+        for (context, field, value, quantity) in fields {
+            units::check(quantity, value).map_err(|requirement| FemError::InvalidParameter {
+                context: context.into(),
+                field: field.into(),
+                value: format!("{value}"),
+                requirement,
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// The mesh's span (largest side of its bounding box) is a plausible length in m and larger
+/// than the shell's thickness: a Gmsh file in mm read as m is a part hundreds of metres wide.
+fn check_span(mesh: &Mesh, thickness_m: f64) -> Result<(), FemError> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for x in mesh.nodes() {
+        for c in 0..3 {
+            lo[c] = lo[c].min(x[c]);
+            hi[c] = hi[c].max(x[c]);
+        }
+    }
+    let span = (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f64::max);
+    let invalid = |requirement: String| FemError::InvalidParameter {
+        context: "mesh".into(),
+        field: "span".into(),
+        value: format!("{span} m"),
+        requirement,
+    };
+    units::check(Quantity::Length, span).map_err(invalid)?;
+    if span < 5.0 * thickness_m {
+        return Err(invalid(format!(
+            "must be at least 5 shell thicknesses ({thickness_m} m) for a shell model"
+        )));
+    }
+    Ok(())
 }

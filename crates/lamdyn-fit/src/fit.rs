@@ -144,6 +144,8 @@ pub struct FitResult {
     pub peaks: Vec<Peak>,
     /// Wall time of the fit, s.
     pub seconds: f64,
+    /// What the plausibility check noticed but did not refuse ([`fit`]).
+    pub warnings: Vec<String>,
     #[serde(skip)]
     cov_u: Option<Mat<f64>>,
     #[serde(skip)]
@@ -268,12 +270,89 @@ pub(crate) fn match_modes(peaks: &[Peak], fe_hz: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Fits the law of `settings` to `measured` through `model`.
+/// Fits the law of `settings` to `measured` through `model`, then checks the result against
+/// what a laminate can be ([`check_plausible`]).
 ///
 /// # Errors
 /// [`FitError::Inconsistent`] for mismatched channels, an empty band, fewer residuals than
-/// parameters, no resonance peak in the band, or no start that evaluates.
+/// parameters, no resonance peak in the band, no start that evaluates, or an implausible
+/// result (a modulus orders of magnitude from the model's, a loss factor above 1).
 pub fn fit(
+    model: &ModalModel,
+    measured: &FrfSet,
+    settings: &FitSettings,
+) -> Result<FitResult, FitError> {
+    let mut result = fit_unchecked(model, measured, settings)?;
+    check_plausible(&mut result, model.e_ref_pa())?;
+    Ok(result)
+}
+
+/// Largest factor between the fitted storage modulus at a peak and the model's reference
+/// modulus: a laminate's effective modulus lies between its faces' bending alone (a few % of
+/// E_ref for thin faces) and E_ref itself, so a factor of 50 either way means the data and the
+/// model do not belong together (frequencies in kHz read as Hz, a wrong model or quantity).
+pub const PLAUSIBLE_MODULUS_FACTOR: f64 = 50.0;
+
+/// Refuses a fit whose modulus at any measured peak is more than
+/// [`PLAUSIBLE_MODULUS_FACTOR`] from `e_ref_pa` or whose loss factor exceeds 1 there; warns
+/// (in [`FitResult::warnings`]) when the loss factor is below 1e-7 at every peak (no damping
+/// found: is the FRF's quantity right?) and for parameters at the edge of the floating-point
+/// range (the optimum ran off to a bound).
+///
+/// # Errors
+/// [`FitError::Inconsistent`] naming the peak and the figure.
+pub fn check_plausible(result: &mut FitResult, e_ref_pa: f64) -> Result<(), FitError> {
+    let mut max_eta: f64 = 0.0;
+    for p in &result.peaks {
+        let e = result.modulus(2.0 * PI * p.freq_hz);
+        let ratio = e.re / e_ref_pa;
+        let eta = e.im / e.re;
+        if !(ratio.is_finite()
+            && (1.0 / PLAUSIBLE_MODULUS_FACTOR..=PLAUSIBLE_MODULUS_FACTOR).contains(&ratio))
+        {
+            return Err(inconsistent(
+                "fit",
+                format!(
+                    "implausible result: E' = {:.3e} Pa at the peak at {:.4} Hz is {ratio:.3e} times the model's E_ref = {e_ref_pa:.4e} Pa; the measured peaks do not belong to this model: check the FRF's frequency unit (Hz), its quantity line and the model's material and size",
+                    e.re, p.freq_hz
+                ),
+            ));
+        }
+        if !(eta.is_finite() && eta <= 1.0) {
+            return Err(inconsistent(
+                "fit",
+                format!(
+                    "implausible result: loss factor {eta:.3e} at the peak at {:.4} Hz (above 1: no laminate damps that much); check the FRF's quantity line and the band",
+                    p.freq_hz
+                ),
+            ));
+        }
+        max_eta = max_eta.max(eta.abs());
+    }
+    if !result.peaks.is_empty() && max_eta < 1e-7 {
+        result.warnings.push(format!(
+            "loss factor below 1e-7 at every peak (largest {max_eta:.2e}): the fit found no damping; is the FRF's '# quantity' line right?"
+        ));
+    }
+    for p in &result.parameters {
+        let v = p.value.abs();
+        if !(v == 0.0 || (1e-150..=1e150).contains(&v)) {
+            result.warnings.push(format!(
+                "parameter {} = {:.3e} is at the edge of the number range: the optimum ran off to a bound and the law is not identified there",
+                p.name, p.value
+            ));
+        } else if v == 0.0 {
+            result.warnings.push(format!(
+                "parameter {} = 0 is at its bound: the data do not determine it",
+                p.name
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// [`fit`] without the plausibility check.
+fn fit_unchecked(
     model: &ModalModel,
     measured: &FrfSet,
     settings: &FitSettings,
@@ -482,6 +561,7 @@ fn run_starts(
         converged: best.converged,
         starts: reports,
         peaks: vec![],
+        warnings: Vec::new(),
         seconds: 0.0,
         cov_u,
         u: best.x,

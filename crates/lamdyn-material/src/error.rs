@@ -171,6 +171,16 @@ pub(crate) mod check {
         }
     }
 
+    /// `value` must lie in the plausible SI range of `quantity` ([`crate::units`]).
+    pub fn si(
+        context: &str,
+        field: &str,
+        value: f64,
+        quantity: crate::units::Quantity,
+    ) -> Result<f64, MaterialError> {
+        crate::units::check(quantity, value).map_err(|why| invalid(context, field, value, &why))
+    }
+
     /// A Poisson ratio of an isotropic solid: in (-1, 0.5).
     pub fn poisson(context: &str, field: &str, value: f64) -> Result<f64, MaterialError> {
         open_interval(context, field, value, -1.0, 0.5)

@@ -10,6 +10,7 @@
 //! | [`laminate`] | stacks, neutral plane, B_eq, K_eq, B_K(ω), φ(ω), E_eff, the paper's inverse | eqs. 11–45 |
 //! | [`sandwich`] | Mead–Markus sandwich beam and its exact inverse; RKU | method-notes §4 |
 //! | [`e756`] | ASTM E756-05 uniform, Oberst and sandwich beams, forward and reduction | method-notes §4 |
+//! | [`units`] | plausible ranges of SI inputs, shared by every command | — |
 //!
 //! Units are SI throughout (m, kg, s, Pa, rad/s); stiffnesses are per unit width (B in N·m,
 //! K in N/m). Frequencies enter as angular frequency ω in rad/s; the CLI converts from Hz.
@@ -37,6 +38,7 @@ pub mod laminate;
 pub mod law;
 mod roots;
 pub mod sandwich;
+pub mod units;
 
 pub use error::MaterialError;
 pub use roots::polynomial_roots;

@@ -404,7 +404,7 @@ impl Job {
             }
         }
         if let Some(spec) = &self.model.spec {
-            check_shell("model.spec.material", spec)?;
+            check_shell("model.spec", spec)?;
         }
         if self.model.modes.is_some_and(|n| n < 7) {
             return Err(err!(
@@ -469,7 +469,8 @@ impl Job {
         Ok(())
     }
 
-    /// The stack's layers in SI units: catches mm for m, GPa for Pa, g/cm³ for kg/m³.
+    /// The stack's layers in SI units ([`lamdyn_material::units`], the checks every command
+    /// shares): catches mm for m, GPa for Pa, g/cm³ for kg/m³.
     fn check_stack(&self) -> Result<()> {
         if self.stack.layers.len() != 3 {
             return Err(err!(
@@ -477,37 +478,7 @@ impl Job {
                 self.stack.layers.len()
             ));
         }
-        for (k, l) in self.stack.layers.iter().enumerate() {
-            let at = |f: &str| format!("stack.layers[{k}].{f}");
-            positive(&at("thickness_m"), l.thickness_m)?;
-            if l.thickness_m > 0.05 {
-                return Err(err!(
-                    "{}: {} m is thicker than a laminate layer: thicknesses are in m (1.715 mm is 1.715e-3)",
-                    at("thickness_m"),
-                    l.thickness_m
-                ));
-            }
-            positive(&at("density_kg_m3"), l.density_kg_m3)?;
-            if l.density_kg_m3 < 100.0 {
-                return Err(err!(
-                    "{}: {} is not a solid's density in kg/m^3 (glass is 2500; g/cm^3 x 1000)",
-                    at("density_kg_m3"),
-                    l.density_kg_m3
-                ));
-            }
-            if k != 1 {
-                let e = l.young_pa.ok_or_else(|| {
-                    err!("{}: a face needs its Young's modulus in Pa", at("young_pa"))
-                })?;
-                positive(&at("young_pa"), e)?;
-                if e < 1e8 {
-                    return Err(err!(
-                        "{}: {e} Pa is far below any face material: moduli are in Pa (70 GPa is 70e9)",
-                        at("young_pa")
-                    ));
-                }
-            }
-        }
+        self.stack.to_sandwich().map_err(|e| err!("stack.{e}"))?;
         Ok(())
     }
 
@@ -521,22 +492,9 @@ impl Job {
     }
 }
 
-/// The shell material of an inline model spec, in SI units.
+/// The shell material of an inline model spec, in SI units (the checks `lamdyn modes` uses).
 fn check_shell(at: &str, spec: &ModelSpec) -> Result<()> {
-    let m = &spec.material;
-    if m.young_pa < 1e8 {
-        return Err(err!(
-            "{at}.young_pa: {} Pa is far below glass or steel: moduli are in Pa",
-            m.young_pa
-        ));
-    }
-    if m.thickness_m > 0.1 {
-        return Err(err!(
-            "{at}.thickness_m: {} m: thicknesses are in m",
-            m.thickness_m
-        ));
-    }
-    Ok(())
+    spec.check_units().map_err(|e| err!("{at}: {e}"))
 }
 
 /// Most Monte Carlo samples a run takes (400 give 95 % bands to about ±1 % of their width).

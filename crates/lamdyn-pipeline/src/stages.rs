@@ -156,6 +156,25 @@ pub struct ChainResult {
     pub timings: Vec<StageTime>,
 }
 
+impl ChainResult {
+    /// Frequencies (Hz) of the modes where no inverse found a core it can stand behind: no
+    /// exact and no layered result, and the paper's none or beyond its validity
+    /// (|φ| > [`PHI_ACCURACY_LIMIT`](lamdyn_material::laminate::PHI_ACCURACY_LIMIT)). The run
+    /// has no answer there, and the CLI exits 1.
+    pub fn modes_without_core(&self) -> Vec<f64> {
+        use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
+        self.modal
+            .iter()
+            .filter(|p| {
+                let paper_valid =
+                    p.paper_g().is_some() && p.phi().is_some_and(|phi| phi <= PHI_ACCURACY_LIMIT);
+                !paper_valid && p.exact_g().is_none() && p.layered_g().is_none()
+            })
+            .map(|p| p.freq_hz)
+            .collect()
+    }
+}
+
 /// Runs `f` as stage `name`: progress, timing, and "stage 'NAME' failed" on error.
 fn stage<T>(
     name: &'static str,
@@ -207,6 +226,7 @@ pub fn run_job(
         Ok((run_fit(&job, &model, &measured.set)?, false))
     })?;
     let (fit_lines, measured_rms, fitted_rms, table3) = objective_parts;
+    warnings.extend(fit_result.warnings.iter().map(|w| format!("fit: {w}")));
     let (stack, kinematics, paper_options) = stage("inverse setup", spinner, &mut timings, || {
         let stack = job.stack.to_sandwich().context("the job's [stack]")?;
         let kin = match job.inverse.kinematics {

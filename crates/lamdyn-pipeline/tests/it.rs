@@ -196,12 +196,12 @@ fn bad_job_files_name_the_field() {
     check(
         "mm.toml",
         good.replacen("thickness_m = 0.003\n", "thickness_m = 3.0\n", 1),
-        "stack.layers[0].thickness_m: 3 m is thicker than a laminate layer",
+        "stack.layers[0] ('glass'): thickness_m = 3 is outside [1e-6, 1e-1]: thicknesses are in m",
     );
     check(
         "gpa.toml",
         good.replacen("young_pa = 70000000000.0", "young_pa = 70.0", 1),
-        "young_pa: 70 Pa is far below",
+        "young_pa = 70 is outside [1e8, 2e12]: moduli are in Pa",
     );
     // Channel counts: the job's count against the geometry, and an FRF table against it: these
     // are found by the measurement stage.

@@ -14,6 +14,7 @@
 
 use super::{ReducedModulus, Resonance, UniformBeam, check_mode};
 use crate::error::{MaterialError, check};
+use crate::units::Quantity;
 use num_complex::Complex64;
 
 /// An Oberst beam: base beam, its modulus, and the damping layer's thickness and density.
@@ -38,9 +39,19 @@ impl OberstBeam {
         layer_thickness_m: f64,
         layer_density_kg_m3: f64,
     ) -> Result<Self, MaterialError> {
-        check::positive(CONTEXT, "young_pa", base_young_pa)?;
-        check::positive(CONTEXT, "layer.thickness_m", layer_thickness_m)?;
-        check::positive(CONTEXT, "layer.density_kg_m3", layer_density_kg_m3)?;
+        check::si(CONTEXT, "young_pa", base_young_pa, Quantity::StiffModulus)?;
+        check::si(
+            CONTEXT,
+            "layer.thickness_m",
+            layer_thickness_m,
+            Quantity::Thickness,
+        )?;
+        check::si(
+            CONTEXT,
+            "layer.density_kg_m3",
+            layer_density_kg_m3,
+            Quantity::Density,
+        )?;
         Ok(Self {
             base,
             base_young_pa,

@@ -15,6 +15,7 @@
 use super::{ReducedModulus, Resonance, UniformBeam, c_n, check_mode};
 use crate::error::{MaterialError, check};
 use crate::sandwich::RkuBeam;
+use crate::units::Quantity;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
@@ -40,9 +41,19 @@ impl SandwichBeam {
         core_thickness_m: f64,
         core_density_kg_m3: f64,
     ) -> Result<Self, MaterialError> {
-        check::positive(CONTEXT, "young_pa", base_young_pa)?;
-        check::positive(CONTEXT, "layer.thickness_m", core_thickness_m)?;
-        check::positive(CONTEXT, "layer.density_kg_m3", core_density_kg_m3)?;
+        check::si(CONTEXT, "young_pa", base_young_pa, Quantity::StiffModulus)?;
+        check::si(
+            CONTEXT,
+            "layer.thickness_m",
+            core_thickness_m,
+            Quantity::Thickness,
+        )?;
+        check::si(
+            CONTEXT,
+            "layer.density_kg_m3",
+            core_density_kg_m3,
+            Quantity::Density,
+        )?;
         Ok(Self {
             base,
             base_young_pa,

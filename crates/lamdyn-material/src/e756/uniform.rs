@@ -4,6 +4,7 @@
 
 use super::{ReducedModulus, Resonance, c_n, check_mode, clamped_free_root};
 use crate::error::{MaterialError, check};
+use crate::units::Quantity;
 use num_complex::Complex64;
 
 /// A uniform clamped–free beam: free length l, thickness H, density ρ.
@@ -22,9 +23,9 @@ impl UniformBeam {
     /// # Errors
     /// [`MaterialError::InvalidParameter`] for a non-positive or non-finite value.
     pub fn new(length_m: f64, thickness_m: f64, density_kg_m3: f64) -> Result<Self, MaterialError> {
-        check::positive(CONTEXT, "length_m", length_m)?;
-        check::positive(CONTEXT, "thickness_m", thickness_m)?;
-        check::positive(CONTEXT, "density_kg_m3", density_kg_m3)?;
+        check::si(CONTEXT, "length_m", length_m, Quantity::Length)?;
+        check::si(CONTEXT, "thickness_m", thickness_m, Quantity::Thickness)?;
+        check::si(CONTEXT, "density_kg_m3", density_kg_m3, Quantity::Density)?;
         Ok(Self {
             length_m,
             thickness_m,

@@ -30,6 +30,7 @@ pub use spec::{LayerSpec, StackSpec};
 
 use crate::error::{MaterialError, check};
 use crate::law::{ConstantModulus, ViscoelasticLaw};
+use crate::units::Quantity;
 use num_complex::Complex64;
 use std::sync::Arc;
 
@@ -108,8 +109,8 @@ impl Layer {
     ) -> Result<Self, MaterialError> {
         let name = name.into();
         let ctx = format!("layer '{name}'");
-        check::positive(&ctx, "thickness_m", thickness_m)?;
-        check::positive(&ctx, "density_kg_m3", density_kg_m3)?;
+        check::si(&ctx, "thickness_m", thickness_m, Quantity::Thickness)?;
+        check::si(&ctx, "density_kg_m3", density_kg_m3, Quantity::Density)?;
         check::poisson(&ctx, "poisson", poisson)?;
         Ok(Self {
             name,
@@ -276,9 +277,9 @@ pub struct Face {
 
 impl Face {
     fn validate(&self, ctx: &str) -> Result<(), MaterialError> {
-        check::positive(ctx, "thickness_m", self.thickness_m)?;
-        check::positive(ctx, "density_kg_m3", self.density_kg_m3)?;
-        check::positive(ctx, "young_pa", self.young_pa)?;
+        check::si(ctx, "thickness_m", self.thickness_m, Quantity::Thickness)?;
+        check::si(ctx, "density_kg_m3", self.density_kg_m3, Quantity::Density)?;
+        check::si(ctx, "young_pa", self.young_pa, Quantity::StiffModulus)?;
         check::poisson(ctx, "poisson", self.poisson)?;
         check::non_negative(ctx, "loss_factor", self.loss_factor)?;
         Ok(())
@@ -323,8 +324,13 @@ impl SandwichStack {
     ) -> Result<Self, MaterialError> {
         bottom.validate("bottom face")?;
         top.validate("top face")?;
-        check::positive("core", "thickness_m", core.thickness_m)?;
-        check::positive("core", "density_kg_m3", core.density_kg_m3)?;
+        check::si("core", "thickness_m", core.thickness_m, Quantity::Thickness)?;
+        check::si(
+            "core",
+            "density_kg_m3",
+            core.density_kg_m3,
+            Quantity::Density,
+        )?;
         check::poisson("core", "poisson", core.poisson)?;
         if let Some(rho) = surface_density_kg_m2 {
             check::positive("sandwich", "surface_density_kg_m2", rho)?;

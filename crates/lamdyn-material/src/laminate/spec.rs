@@ -27,6 +27,7 @@
 use super::{CoreGeometry, Face, Layer, LayerStack, ModulusKind, SandwichStack};
 use crate::error::MaterialError;
 use crate::law::{ConstantModulus, LawSpec, ViscoelasticLaw};
+use crate::units::Quantity;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -124,21 +125,42 @@ impl LayerSpec {
                         .map_err(|e| e.context(&format!("{loc}.{field}")))?,
                 ))
             };
-        Ok(
-            match (
-                self.young_pa,
-                self.shear_pa,
-                &self.young_law,
-                &self.shear_law,
-            ) {
-                (Some(e), ..) => Some((ModulusKind::Young, constant(e, "young_pa")?)),
-                (_, Some(g), ..) => Some((ModulusKind::Shear, constant(g, "shear_pa")?)),
-                (_, _, Some(l), _) => Some((ModulusKind::Young, law(l, "young_law")?)),
-                (_, _, _, Some(l)) => Some((ModulusKind::Shear, law(l, "shear_law")?)),
-                _ => None,
-            },
-        )
+        let built = match (
+            self.young_pa,
+            self.shear_pa,
+            &self.young_law,
+            &self.shear_law,
+        ) {
+            (Some(e), ..) => Some((ModulusKind::Young, constant(e, "young_pa")?)),
+            (_, Some(g), ..) => Some((ModulusKind::Shear, constant(g, "shear_pa")?)),
+            (_, _, Some(l), _) => Some((ModulusKind::Young, law(l, "young_law")?)),
+            (_, _, _, Some(l)) => Some((ModulusKind::Shear, law(l, "shear_law")?)),
+            _ => None,
+        };
+        if let (Some((_, law)), Some(field)) = (&built, given.first()) {
+            check_modulus_units(loc, field, law.as_ref())?;
+        }
+        Ok(built)
     }
+}
+
+/// The modulus at 10 Hz, where every law of a laminate is in its measured range, lies in the
+/// plausible SI range ([`crate::units`]): catches MPa or GPa written for Pa.
+fn check_modulus_units(
+    loc: &str,
+    field: &str,
+    law: &dyn ViscoelasticLaw,
+) -> Result<(), MaterialError> {
+    let at_10_hz = law.modulus(2.0 * std::f64::consts::PI * 10.0).norm();
+    crate::units::check(Quantity::Modulus, at_10_hz).map_err(|why| {
+        MaterialError::InvalidParameter {
+            context: loc.to_string(),
+            field: field.to_string(),
+            value: format!("{at_10_hz:.4e} Pa at 10 Hz"),
+            requirement: why,
+        }
+    })?;
+    Ok(())
 }
 
 fn unsupported(loc: &str, reason: String) -> MaterialError {

@@ -111,3 +111,19 @@ fn e756_errors_name_the_problem() {
     let m = sandwich.reduce(1, 30.0, 5.0, 0.1).unwrap_err().to_string();
     assert!(m.starts_with("sandwich reduction, mode 1: A = "), "{m}");
 }
+
+/// Issue 19.3: a beam thickness in mm (1.5 for 1.5 mm) used to give G1 = 2915 MPa; now refused.
+#[test]
+fn e756_refuses_millimetres_and_gigapascals() {
+    let e = UniformBeam::new(0.2, 1.5, 7850.0).unwrap_err().to_string();
+    assert!(e.contains("thickness_m = 1.5") && e.contains("in m"), "{e}");
+    let beam = UniformBeam::new(0.2, 1.5e-3, 7850.0).unwrap();
+    let e = SandwichBeam::new(beam, 200.0, 1e-3, 1100.0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("young_pa = 200") && e.contains("GPa"), "{e}");
+    let e = OberstBeam::new(beam, 200e9, 1e-3, 1.1)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("g/cm^3"), "{e}");
+}

@@ -143,3 +143,19 @@ fn sandwich_spec_errors() {
     );
     assert!(parse(&no_core_law).to_sandwich().is_ok());
 }
+
+/// Issue 19.3: mm, MPa and g/cm³ written into SI fields are refused with the unit meant.
+#[test]
+fn units_other_than_si_are_refused() {
+    let mm = ROOF.replacen("thickness_m = 0.42e-3", "thickness_m = 0.42", 1);
+    assert!(
+        err_of(&mm).contains("thicknesses are in m"),
+        "{}",
+        err_of(&mm)
+    );
+    let gcm3 = ROOF.replacen("density_kg_m3 = 1070.0", "density_kg_m3 = 1.07", 1);
+    assert!(err_of(&gcm3).contains("g/cm^3"), "{}", err_of(&gcm3));
+    let gpa = ROOF.replacen("young_pa = 70e9", "young_pa = 70", 1);
+    assert!(err_of(&gpa).contains("70 GPa is 70e9"), "{}", err_of(&gpa));
+    assert!(parse(&gpa).to_sandwich().is_err());
+}

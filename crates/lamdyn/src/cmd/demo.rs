@@ -63,5 +63,5 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         "lamdyn: report written to '{}'",
         dir.join("report.html").display()
     )?;
-    Ok(Outcome::Done)
+    Ok(super::run::outcome(&result))
 }

@@ -549,6 +549,7 @@ fn build_report(
         "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak; eta = 2 zeta (half-power)."
             .into(),
     );
+    report.warnings.extend(r.warnings.iter().cloned());
     if !r.converged {
         report.warnings.push(format!(
             "the best start stopped without meeting a tolerance: {}",

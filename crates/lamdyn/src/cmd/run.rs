@@ -39,7 +39,16 @@ pub fn run(args: &RunArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     write_report(&result, &out_dir, &spinner)?;
     spinner.finish();
     summary(&result, &dir).write(args.output.format(), out, err)?;
-    Ok(Outcome::Done)
+    Ok(outcome(&result))
+}
+
+/// Exit 1 when some mode has no core by any inverse (the README's exit-code promise).
+pub(crate) fn outcome(result: &ChainResult) -> Outcome {
+    if result.modes_without_core().is_empty() {
+        Outcome::Done
+    } else {
+        Outcome::ChecksFailed
+    }
 }
 
 /// Renders the report and writes the folder atomically.
@@ -138,6 +147,14 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
         rep.row(row);
     }
     rep.warnings.extend(r.warnings.iter().cloned());
+    let failed = r.modes_without_core();
+    if !failed.is_empty() {
+        let list: Vec<String> = failed.iter().map(|f| format!("{f:.2}")).collect();
+        rep.warnings.push(format!(
+            "no core at {} Hz: neither the exact nor the layered inverse has a solution and the paper's is beyond its validity; check the stack's faces (modulus, thicknesses, densities) against the part; exit code 1",
+            list.join(", ")
+        ));
+    }
     rep.notes.push("G'_paper: paper eqs. 33-45 (eq. 41); G'_exact: Mead-Markus exact sandwich inverse; G'_layer: layered solid model matched to each EMA pole; |phi| > 0.1: beyond the paper model's ~1 % validity.".into());
     rep
 }

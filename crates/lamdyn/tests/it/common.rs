@@ -68,3 +68,20 @@ pub fn small_description(dir: &Path) -> PathBuf {
     std::fs::write(&p, text).unwrap();
     p
 }
+
+/// The small demo (FRFs, no hits) into `dir/demo`, without Monte Carlo; its job file.
+pub fn small_demo(dir: &Path) -> std::path::PathBuf {
+    let desc = small_description(dir);
+    let out = dir.join("demo");
+    let (code, _, err) = lamdyn(&[
+        "demo",
+        "--description",
+        desc.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--samples",
+        "0",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    out.join("input/job.toml")
+}

@@ -304,3 +304,48 @@ fn bad_time_data() {
         assert!(err.contains(needle), "expected {needle:?} in {err}");
     }
 }
+
+/// Issue 19.3 and 19.6: a hit file without its '# quantity' line was read as receptance (a
+/// loss factor of 1e-64, exit 0), and a time column in ms gave "0 lines in [5, 100] Hz".
+/// Both are errors that say what is wrong.
+#[test]
+fn time_files_without_quantity_or_in_ms_are_refused() {
+    let dir = temp_dir("ema-time-bad");
+    let (c, hits) = hammer_test(&dir);
+    let run = |hit: &str| {
+        lamdyn(&[
+            "ema",
+            "--channels",
+            &c,
+            "--time",
+            hit,
+            "--band-hz",
+            "5,100",
+            "--max-order",
+            "30",
+        ])
+    };
+    let text = std::fs::read_to_string(&hits[0]).unwrap();
+    let bare = dir.join("bare.csv");
+    std::fs::write(&bare, text.replacen("# quantity = accelerance\n", "", 1)).unwrap();
+    let (code, _, err) = run(bare.to_str().unwrap());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no '# quantity = ...' line"), "{err}");
+    let ms: String = text
+        .lines()
+        .map(|l| match l.split_once(',') {
+            Some((t, rest)) if t.parse::<f64>().is_ok() => {
+                format!("{},{rest}\n", t.parse::<f64>().unwrap() * 1000.0)
+            }
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    let ms_file = dir.join("ms.csv");
+    std::fs::write(&ms_file, ms).unwrap();
+    let (code, _, err) = run(ms_file.to_str().unwrap());
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("beyond the data's lines") && err.contains("time column in s (not ms)"),
+        "{err}"
+    );
+}

@@ -225,6 +225,22 @@ fn bad_inputs_give_clear_errors() {
         job_with(&sub, &[("model.toml", model)], ""),
         "exclude their resonance bands",
     ));
+    // Issue 19.3b: frequencies x1000 used to fit to E0 = 1.48e16 Pa with exit 0.
+    let khz: Vec<String> = frf
+        .lines()
+        .map(|l| match l.split_once(',') {
+            Some((f, rest)) if f.parse::<f64>().is_ok() => {
+                format!("{},{rest}", f.parse::<f64>().unwrap() * 1000.0)
+            }
+            _ => l.to_string(),
+        })
+        .collect();
+    let sub = dir.join("khz");
+    std::fs::create_dir_all(&sub).unwrap();
+    cases.push((
+        job_with(&sub, &[("frf.csv", khz.join("\n"))], ""),
+        "implausible result",
+    ));
     // A reference that does not exist.
     let sub = dir.join("reference");
     std::fs::create_dir_all(&sub).unwrap();

@@ -111,7 +111,32 @@ fn bad_models_name_the_field() {
         p.to_str().unwrap().to_string()
     };
     let good = "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = 10\nelements_y = 8\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n";
+    let plate = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../lamdyn-fem/testdata/gmsh/plate-v41.msh");
+    std::fs::copy(plate, dir.join("plate.msh")).unwrap();
     let cases = [
+        // Issue 19.3: mm, GPa and a metre mesh read as mm are refused with the unit meant.
+        (
+            write(
+                "mm.toml",
+                &good.replace("thickness_m = 0.004", "thickness_m = 4"),
+            ),
+            "material: thickness_m = 4 is outside [1e-6, 1e-1]: thicknesses are in m",
+        ),
+        (
+            write(
+                "gpa.toml",
+                &good.replace("young_pa = 70e9", "young_pa = 70"),
+            ),
+            "70 GPa is 70e9",
+        ),
+        (
+            write(
+                "span.toml",
+                "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\nunit = \"mm\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
+            ),
+            "mesh: span = 0.0003 m is outside [5e-3, 1e2]: lengths are in m",
+        ),
         (
             write(
                 "unknown.toml",
@@ -124,14 +149,14 @@ fn bad_models_name_the_field() {
                 "neg.toml",
                 &good.replace("thickness_m = 0.004", "thickness_m = -0.004"),
             ),
-            "shell material: thickness_m = -0.004 must be positive",
+            "material: thickness_m = -0.004 must be positive",
         ),
         (
             write(
                 "len.toml",
                 &good.replace("length_x_m = 0.5", "length_x_m = 0"),
             ),
-            "rectangle: length_x_m = 0 must be positive",
+            "mesh: length_x_m = 0 must be positive",
         ),
         (
             write("kind.toml", &good.replace("\"rectangle\"", "\"circle\"")),
@@ -176,4 +201,20 @@ fn bad_models_name_the_field() {
         err.contains("expected NXxNY such as 40x40, got '40y40'"),
         "{err}"
     );
+}
+
+/// Issue 19.3b: `--elements 2000x2000` (inside the documented range) aborted with "memory
+/// allocation of 10371456288 bytes failed" (rc 134); the memory is estimated first and the
+/// model refused with the figure.
+#[test]
+fn a_mesh_too_large_for_memory_is_refused_with_the_figure() {
+    let (code, _, err) = lamdyn(&[
+        "modes",
+        "--example",
+        "paper-plate",
+        "--elements",
+        "2000x2000",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("GB for a modal solve, more than the"), "{err}");
 }

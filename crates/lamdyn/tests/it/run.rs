@@ -2,7 +2,7 @@
 //! truth, and the demo in a terminal. The chain itself (report content, recovery, cache, job
 //! files) is tested in lamdyn-pipeline.
 
-use super::common::{lamdyn, small_description, temp_dir};
+use super::common::{lamdyn, small_demo, small_description, temp_dir};
 
 /// `lamdyn demo --json` on the small laminate: exit 0, the summary names the report and has
 /// one row per mode with the three inverses' errors against the truth; `lamdyn run` on the
@@ -99,4 +99,32 @@ fn demo_finishes_with_stderr_on_a_terminal() {
         text.contains("stage 'uncertainty'"),
         "no spinner drawn on the terminal: {text}"
     );
+}
+
+/// Issue 19.3: a run where no inverse finds a core at some mode (here faces written ten times
+/// too stiff) used to exit 0; it exits 1 and names the modes.
+#[test]
+fn run_exits_1_when_no_inverse_has_a_core_at_a_mode() {
+    let dir = temp_dir("no-core");
+    let job = small_demo(&dir);
+    let text = std::fs::read_to_string(&job).unwrap();
+    let at = text.find("[[stack.layers]]").unwrap();
+    let stiff = format!(
+        "{}{}",
+        &text[..at],
+        text[at..].replace("young_pa = 70000000000.0", "young_pa = 700000000000.0")
+    );
+    std::fs::write(&job, stiff).unwrap();
+    let report = dir.join("stiff");
+    let (code, _, err) = lamdyn(&[
+        "run",
+        job.to_str().unwrap(),
+        "--out",
+        report.to_str().unwrap(),
+        "--samples",
+        "0",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("no core at 78.04"), "{err}");
+    assert!(report.join("report.html").is_file());
 }

@@ -1,7 +1,7 @@
 //! Issue 19: lamdyn never destroys what it did not write, checks its outputs and inputs before
 //! the work, and trusts no cache entry blindly. Each test failed on the main of 2026-11-23.
 
-use super::common::{lamdyn, small_description, temp_dir};
+use super::common::{lamdyn, small_demo, temp_dir};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -24,23 +24,6 @@ fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
         }
     }
     out
-}
-
-/// The small demo (FRFs, no hits) into `dir/demo`, without Monte Carlo; its job file.
-fn small_demo(dir: &Path) -> std::path::PathBuf {
-    let desc = small_description(dir);
-    let out = dir.join("demo");
-    let (code, _, err) = lamdyn(&[
-        "demo",
-        "--description",
-        desc.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--samples",
-        "0",
-    ]);
-    assert_eq!(code, 0, "{err}");
-    out.join("input/job.toml")
 }
 
 /// `lamdyn run job/job.toml --out job` refused at once and deleted nothing (it deleted the job
