@@ -5,7 +5,7 @@
 
 use crate::error::{EmaError, invalid};
 use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz};
-use crate::lsfd::{ModalFit, frac, lsfd, refine};
+use crate::lsfd::{ModalFit, frac, lsfd, refine_with};
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
@@ -177,6 +177,19 @@ fn check_band_in_data(band: [f64; 2], freqs: &[f64]) -> Result<(), EmaError> {
 /// [`EmaError::Invalid`] for bad bands (beyond the data's lines) or orders ([`lscf`]), no physical pole, or a
 /// driving-point index out of range.
 pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
+    identify_with(set, s, &|_| {})
+}
+
+/// [`identify`], calling `on_stage` with a line as each step starts (the diagram, each
+/// refinement iteration, the residues): progress for a caller to show.
+///
+/// # Errors
+/// As [`identify`].
+pub fn identify_with(
+    set: &FrfSet,
+    s: &EmaSettings,
+    on_stage: &dyn Fn(&str),
+) -> Result<EmaResult, EmaError> {
     let clock = Instant::now();
     let freqs = set.freqs_hz();
     let (nr, nf) = (set.responses().len(), set.references().len());
@@ -204,6 +217,10 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
         })
         .collect();
     let (lo, hi, step) = s.orders;
+    on_stage(&format!(
+        "stabilization diagram: orders {lo} to {hi}, {} curves",
+        curves.len()
+    ));
     let orders = lscf(
         freqs,
         &curves,
@@ -239,15 +256,22 @@ pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
     let t_poles = clock.elapsed().as_secs_f64();
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
     let fit = if s.refine_iterations > 0 {
-        refine(
+        let n = poles.len();
+        refine_with(
             freqs,
             &curves,
             set.quantity(),
             &poles,
             band,
             s.refine_iterations,
+            &|k, max| {
+                on_stage(&format!(
+                    "refining {n} poles: iteration {k} of at most {max}"
+                ))
+            },
         )?
     } else {
+        on_stage("residues (LSFD)");
         lsfd(freqs, &curves, set.quantity(), &poles, band)?
     };
     let lines: Vec<usize> = (0..freqs.len())

@@ -227,6 +227,31 @@ pub fn refine(
     band_hz: [f64; 2],
     iterations: usize,
 ) -> Result<ModalFit, EmaError> {
+    refine_with(
+        freqs_hz,
+        curves,
+        quantity,
+        poles,
+        band_hz,
+        iterations,
+        &|_, _| {},
+    )
+}
+
+/// [`refine`], calling `on_iteration(k, max)` as iteration k of at most `max` starts (for
+/// progress on long records).
+///
+/// # Errors
+/// As [`lsfd`].
+pub fn refine_with(
+    freqs_hz: &[f64],
+    curves: &[&[Complex64]],
+    quantity: Quantity,
+    poles: &[Complex64],
+    band_hz: [f64; 2],
+    iterations: usize,
+    on_iteration: &dyn Fn(usize, usize),
+) -> Result<ModalFit, EmaError> {
     let lines: Vec<usize> = (0..freqs_hz.len())
         .filter(|&k| freqs_hz[k] > 0.0 && freqs_hz[k] >= band_hz[0] && freqs_hz[k] <= band_hz[1])
         .collect();
@@ -257,7 +282,8 @@ pub fn refine(
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
     let p = u.len();
-    for _ in 0..iterations {
+    for k in 0..iterations {
+        on_iteration(k + 1, iterations);
         // Central-difference Jacobian, columns in parallel.
         let cols: Vec<Option<Vec<f64>>> = {
             use rayon::prelude::*;

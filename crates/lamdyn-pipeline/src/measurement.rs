@@ -180,7 +180,8 @@ pub fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured>
             )
             .with_context(|| {
                 format!(
-                    "measurement.frf does not match the geometry in measurement.channels ('{}')",
+                    "measurement.frf ('{}', read against the channels of '{}')",
+                    f.display(),
                     c.display()
                 )
             })?;
@@ -204,7 +205,7 @@ pub fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured>
             };
             let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
                 format!(
-                    "measurement.time does not match the geometry in measurement.channels ('{}')",
+                    "measurement.time (read against the channels of '{}')",
                     c.display()
                 )
             })?;

@@ -12,7 +12,7 @@ use crate::measurement::{Measured, read_measurement};
 use crate::{PipelineError, Reporter};
 use crate::{bail, err};
 use crate::{job, layered, uncertainty};
-use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
+use lamdyn_ema::identify::{EmaResult, EmaSettings, identify_with};
 use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::{ModalParams, solve_modes};
 use lamdyn_fem::model::{MeshSpec, ModelSpec};
@@ -217,7 +217,7 @@ pub fn run_job(
     })?;
     warnings.extend(measured.warnings.iter().cloned());
     let ema = stage("ema", spinner, &mut timings, || {
-        run_ema(&job, &measured.set, &cache)
+        run_ema(&job, &measured.set, &cache, spinner)
     })?;
     let (model, model_line) = stage("model", spinner, &mut timings, || {
         build_model(&job, &base, &measured.set, &cache, spinner)
@@ -337,7 +337,12 @@ fn channels_key(key: Key, channels: &[Channel]) -> Key {
 }
 
 /// Modal identification, from the cache when the FRFs and settings are unchanged.
-fn run_ema(job: &Job, set: &FrfSet, cache: &Cache) -> Result<(EmaResult, bool)> {
+fn run_ema(
+    job: &Job,
+    set: &FrfSet,
+    cache: &Cache,
+    spinner: &dyn Reporter,
+) -> Result<(EmaResult, bool)> {
     let settings = EmaSettings {
         band_hz: ema_band(job),
         orders: (2, job.ema.max_order, 2),
@@ -359,7 +364,10 @@ fn run_ema(job: &Job, set: &FrfSet, cache: &Cache) -> Result<(EmaResult, bool)> 
             return Ok((r, true));
         }
     }
-    let r = identify(set, &settings).context("modal identification")?;
+    let r = identify_with(set, &settings, &|step| {
+        spinner.stage(&format!("stage 'ema': {step}"))
+    })
+    .context("modal identification")?;
     cache.put("ema", key, &serde_json::to_vec(&r)?)?;
     Ok((r, false))
 }

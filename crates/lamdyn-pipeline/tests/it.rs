@@ -231,7 +231,21 @@ fn bad_job_files_name_the_field() {
         good.replace("channels = \"channels.csv\"", "channels = \"fewer.csv\""),
     );
     assert!(
-        e.contains("measurement.frf does not match the geometry in measurement.channels"),
+        e.contains("measurement.frf ('") && e.contains("read against the channels of"),
         "{e}"
     );
+    // Issue 19.6: a missing FRF file was reported as "does not match the geometry"; it is
+    // refused when the job is read, naming the field and the file.
+    let missing = input.join("missing.toml");
+    std::fs::write(
+        &missing,
+        good.replace("frf = \"frf.csv\"", "frf = \"nothere.csv\""),
+    )
+    .unwrap();
+    let e = chain_text(&Job::read(&missing).err().expect("missing file"));
+    assert!(
+        e.contains("measurement.frf: cannot read") && e.contains("nothere.csv"),
+        "{e}"
+    );
+    assert!(!e.contains("geometry"), "{e}");
 }

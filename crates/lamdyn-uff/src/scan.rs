@@ -162,13 +162,12 @@ impl<R: BufRead> Scanner<R> {
                     start = self.offset;
                 }
                 Some(l) => {
-                    return Err(syntax(
-                        l,
-                        format!(
-                            "expected a dataset delimiter '    -1', found '{}'",
-                            latin1(&self.buf).trim_end()
-                        ),
-                    ));
+                    let what = if l == 1 {
+                        "not a universal file: it must start with a dataset delimiter '    -1'"
+                    } else {
+                        "expected a dataset delimiter '    -1'"
+                    };
+                    return Err(syntax(l, format!("{what}, found '{}'", excerpt(&self.buf))));
                 }
             }
         }
@@ -369,6 +368,19 @@ impl<R: BufRead> Scanner<R> {
         }
         Ok(())
     }
+}
+
+/// The start of a line for a message: at most 40 characters, control and non-ASCII bytes
+/// escaped (a binary file must not reach the terminal raw).
+fn excerpt(line: &[u8]) -> String {
+    let text: String = line
+        .iter()
+        .take(40)
+        .flat_map(|b| std::ascii::escape_default(*b))
+        .map(char::from)
+        .collect();
+    let text = text.trim_end().to_string();
+    if line.len() > 40 { text + "..." } else { text }
 }
 
 #[cfg(test)]

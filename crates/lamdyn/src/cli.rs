@@ -161,13 +161,13 @@ pub struct EmaArgs {
     /// FRF estimator for time data.
     #[arg(long, value_enum, default_value_t = Estimator::H1)]
     pub estimator: Estimator,
-    /// Trigger level for time data, fraction of each hit's peak force [default: 0.05].
+    /// Trigger level for time data, fraction of each hit's peak force.
     #[arg(long, default_value_t = 0.05, value_parser = finite)]
     pub trigger: f64,
-    /// Time kept before the trigger, s [default: 0.001].
+    /// Time kept before the trigger, s.
     #[arg(long, default_value_t = 0.001, value_parser = finite)]
     pub pretrigger_s: f64,
-    /// Force window after the record start, s [default: 0.05].
+    /// Force window after the record start, s.
     #[arg(long, default_value_t = 0.05, value_parser = finite)]
     pub force_window_s: f64,
     /// Record length, s [default: the longest every hit holds].
@@ -188,13 +188,13 @@ pub struct EmaArgs {
     /// Band LO,HI in Hz [default: all lines above 0 Hz].
     #[arg(long, value_name = "LO,HI", value_delimiter = ',', value_parser = finite)]
     pub band_hz: Option<Vec<f64>>,
-    /// Highest model order of the stabilization diagram [default: 60].
+    /// Highest model order of the stabilization diagram.
     #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u32).range(2..=400))]
     pub max_order: u32,
-    /// Lowest model order [default: 2].
+    /// Lowest model order.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=400))]
     pub min_order: u32,
-    /// Order step [default: 2].
+    /// Order step.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=50))]
     pub order_step: u32,
     /// Pick the stable pole nearest each of these frequencies (Hz) instead of the automatic
@@ -205,7 +205,7 @@ pub struct EmaArgs {
     /// reported apart.
     #[arg(long, value_name = "HZ,..", value_delimiter = ',', value_parser = finite)]
     pub reject_hz: Option<Vec<f64>>,
-    /// Window around each --near-hz and --reject-hz frequency, Hz [default: 1].
+    /// Window around each --near-hz and --reject-hz frequency, Hz.
     #[arg(long, default_value_t = 1.0, value_parser = finite)]
     pub window_hz: f64,
     /// Name of the driving-point response (mass-normalised shapes).
@@ -304,7 +304,7 @@ pub struct FitArgs {
     /// Noise seed of the example.
     #[arg(long, default_value_t = 1, requires = "example")]
     pub seed: u64,
-    /// Relative complex noise of the example (fraction) [default: 0.01].
+    /// Relative complex noise of the example (fraction).
     #[arg(long, default_value_t = 0.01, value_parser = finite, requires = "example", value_name = "FRACTION")]
     pub noise: f64,
     /// Law to fit (overrides the job's fit.law).
@@ -455,13 +455,13 @@ pub struct GridArgs {
     /// Frequencies in Hz, comma-separated and increasing (overrides --f-min-hz/--f-max-hz/--f-step-hz).
     #[arg(long, value_delimiter = ',', value_parser = finite, allow_hyphen_values = true, value_name = "HZ,..")]
     pub freq_hz: Option<Vec<f64>>,
-    /// Lowest frequency of the grid, Hz [default: 5].
+    /// Lowest frequency of the grid, Hz.
     #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 5.0, value_name = "HZ")]
     pub f_min_hz: f64,
-    /// Highest frequency of the grid, Hz [default: 80, the paper's band].
+    /// Highest frequency of the grid, Hz.
     #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 80.0, value_name = "HZ")]
     pub f_max_hz: f64,
-    /// Grid step, Hz [default: 5].
+    /// Grid step, Hz.
     #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 5.0, value_name = "HZ")]
     pub f_step_hz: f64,
 }
@@ -558,7 +558,7 @@ pub struct CoreArgs {
     /// Bending kinematics of both inverses.
     #[arg(long, value_enum, default_value_t = KinematicsArg::Beam)]
     pub kinematics: KinematicsArg,
-    /// Relative margin of the Kramers-Kronig check (dimensionless) [default: 0.05].
+    /// Relative margin of the Kramers-Kronig check (dimensionless).
     #[arg(long, value_parser = finite, allow_negative_numbers = true, default_value_t = 0.05, value_name = "FRACTION")]
     pub kk_tolerance: f64,
     /// Output format.
@@ -602,7 +602,7 @@ pub struct E756Args {
     /// Forward model: the material's loss factor.
     #[arg(long, value_parser = finite, allow_negative_numbers = true)]
     pub loss_factor: Option<f64>,
-    /// Forward model: number of modes [default: 5].
+    /// Forward model: number of modes.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=50))]
     pub modes: u32,
     /// Output format.

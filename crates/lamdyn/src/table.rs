@@ -380,16 +380,39 @@ fn csv_number(v: f64) -> String {
     }
 }
 
+/// Whether a fixed-point column can print `x` in a readable width (below 1e9 in magnitude;
+/// non-finite values print as themselves).
+fn fits_fixed(x: f64) -> bool {
+    !x.is_finite() || x.abs() < 1e9
+}
+
 fn text_cell(cell: &Cell, col: &Column) -> String {
     match cell {
         Cell::Num(v) => {
             let x = v / col.scale;
             match col.fmt {
-                Fmt::Fixed(d) => format!("{x:.d$}"),
-                Fmt::Sci(d) => format!("{x:.d$e}"),
+                Fmt::Fixed(d) if fits_fixed(x) => format!("{x:.d$}"),
+                // Out of a fixed column's range (a garbage value, 1e169): scientific, never
+                // hundreds of digits.
+                Fmt::Fixed(d) | Fmt::Sci(d) => format!("{x:.d$e}"),
             }
         }
         Cell::Text(t) => t.clone(),
         Cell::Empty => "-".to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 19.6: a garbage fit's t0 = 1.15e169 s printed as 170 digits in a fixed column.
+    #[test]
+    fn huge_values_in_fixed_columns_print_in_scientific_notation() {
+        let col = Column::new("t0_s", "t0", "s", Fmt::Fixed(3));
+        let text = text_cell(&Cell::Num(1.15e169), &col);
+        assert_eq!(text, "1.150e169");
+        assert_eq!(text_cell(&Cell::Num(12.3456), &col), "12.346");
+        assert_eq!(text_cell(&Cell::Num(f64::NAN), &col), "NaN");
     }
 }

@@ -5,10 +5,12 @@
 
 use crate::Outcome;
 use crate::cli::{EmaArgs, Estimator};
+use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
-use lamdyn_ema::identify::{EmaResult, EmaSettings, identify};
+use lamdyn_ema::identify::{EmaResult, EmaSettings, identify_with};
 use lamdyn_ema::spectra::Spectra;
+use lamdyn_fem::eigen::Progress;
 use lamdyn_frf::FrfSet;
 use lamdyn_pipeline::measurement::{TimeOptions, read_frfs, time_frfs};
 use lamdyn_pipeline::output::OutputDir;
@@ -138,7 +140,10 @@ pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
         }
     };
     let s = settings(args, &set)?;
-    let r = identify(&set, &s).context("identification failed")?;
+    let spinner = Spinner::new();
+    let r = identify_with(&set, &s, &|step| spinner.stage(step));
+    spinner.finish();
+    let r = r.context("identification failed")?;
     let mut report = build_report(&set, &source, &s, &r);
     if let Some(info) = &time {
         add_time_info(&mut report, &set, &r, info);

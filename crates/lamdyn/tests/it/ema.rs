@@ -349,3 +349,35 @@ fn time_files_without_quantity_or_in_ms_are_refused() {
         "{err}"
     );
 }
+
+/// Issue 19.7: `ema` showed no progress during the refinement, even in a terminal. Piped, its
+/// stderr carries plain progress lines for the diagram and the refinement.
+#[test]
+fn ema_reports_its_steps_as_plain_lines_when_piped() {
+    let dir = temp_dir("ema-progress");
+    let (c, hits) = hammer_test(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lamdyn"))
+        .args([
+            "ema",
+            "--channels",
+            &c,
+            "--time",
+            &hits[0],
+            "--band-hz",
+            "5,100",
+        ])
+        .args(["--max-order", "30"])
+        .env("LAMDYN_PROGRESS", "")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("] stabilization diagram: orders 2 to 30"),
+        "{err}"
+    );
+    assert!(
+        err.contains("] refining 2 poles: iteration 1 of at most"),
+        "{err}"
+    );
+}

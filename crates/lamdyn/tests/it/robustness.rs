@@ -127,3 +127,44 @@ fn binary_exit_codes() {
         .unwrap();
     assert_eq!(usage.status.code(), Some(2));
 }
+
+/// Issue 19.6: `--help` printed some defaults twice (in the doc text and by clap). Each
+/// option's block of every command's help states its default at most once.
+#[test]
+fn help_states_each_default_once() {
+    let commands: [&[&str]; 12] = [
+        &["run"],
+        &["demo"],
+        &["simulate"],
+        &["ema"],
+        &["fit"],
+        &["modes"],
+        &["laminate"],
+        &["core"],
+        &["e756"],
+        &["uff", "info"],
+        &["uff", "convert"],
+        &["uff", "write"],
+    ];
+    for cmd in commands {
+        let mut args = cmd.to_vec();
+        args.push("--help");
+        let (code, out, err) = lamdyn(&args);
+        if code != 0 && err.contains("unrecognized subcommand") {
+            continue;
+        }
+        assert_eq!(code, 0, "{cmd:?}: {err}");
+        let mut block = String::new();
+        for line in out.lines().chain(std::iter::once("  -end")) {
+            if line.trim_start().starts_with('-') && line.starts_with("  ") {
+                assert!(
+                    block.matches("[default:").count() <= 1,
+                    "{cmd:?}: default twice in\n{block}"
+                );
+                block.clear();
+            }
+            block.push_str(line);
+            block.push('\n');
+        }
+    }
+}

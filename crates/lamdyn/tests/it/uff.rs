@@ -139,3 +139,21 @@ fn lenient_reads_a_record_cut_short() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("kept 42"), "{err}");
 }
+
+/// Issue 19.6: `uff info` on a non-UFF binary file dumped its bytes to the terminal; the
+/// message says it is not a universal file and shows an escaped excerpt.
+#[test]
+fn a_binary_file_is_named_not_dumped() {
+    let dir = temp_dir("uff-binary");
+    let bin = dir.join("photo.jpg");
+    let bytes: Vec<u8> = (0..4000u32).map(|i| (i * 7919 % 251) as u8).collect();
+    std::fs::write(&bin, bytes).unwrap();
+    let (code, out, err) = lamdyn(&["uff", "info", bin.to_str().unwrap()]);
+    assert_eq!(code, 2, "{out}");
+    assert!(err.contains("line 1: not a universal file"), "{err}");
+    assert!(
+        err.chars().all(|c| c == '\n' || (' '..='~').contains(&c)),
+        "{err:?}"
+    );
+    assert!(err.len() < 300, "{err}");
+}
