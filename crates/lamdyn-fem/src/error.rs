@@ -7,7 +7,7 @@ use thiserror::Error;
 #[non_exhaustive]
 pub enum FemError {
     /// A mesh file could not be read or parsed.
-    #[error("error reading '{path}' line {line}: {reason}")]
+    #[error("{}", mesh_file_message(path, *line, reason))]
     MeshFile {
         /// The file.
         path: String,
@@ -88,6 +88,15 @@ pub enum FemError {
         /// Why.
         reason: String,
     },
+}
+
+/// "error reading 'FILE' line N: why", without the line when the error is not tied to one.
+fn mesh_file_message(path: &str, line: usize, reason: &str) -> String {
+    if line == 0 {
+        format!("error reading '{path}': {reason}")
+    } else {
+        format!("error reading '{path}' line {line}: {reason}")
+    }
 }
 
 pub(crate) fn check_positive(context: &str, field: &str, v: f64) -> Result<f64, FemError> {

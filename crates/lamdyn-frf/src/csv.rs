@@ -233,16 +233,21 @@ pub fn parse_channels(path: &str, text: &str) -> Result<(Vec<Channel>, Vec<Chann
         ));
     }
     let (mut responses, mut references) = (Vec::new(), Vec::new());
-    let mut seen: HashMap<String, usize> = HashMap::new();
+    // A name is unique within its role: a driving point has a response and a reference of the
+    // same name (a UFF's node and direction, as `uff convert` writes them).
+    let mut seen: HashMap<(String, String), usize> = HashMap::new();
     for (line, f) in it {
         if f.len() != 8 {
             return Err(err(path, line, format!("{} fields, expected 8", f.len())));
         }
-        if let Some(prev) = seen.insert(f[0].to_string(), line) {
+        if let Some(prev) = seen.insert((f[0].to_string(), f[1].to_string()), line) {
             return Err(err(
                 path,
                 line,
-                format!("channel '{}' was already defined on line {prev}", f[0]),
+                format!(
+                    "{} channel '{}' was already defined on line {prev}",
+                    f[1], f[0]
+                ),
             ));
         }
         let v: Vec<f64> = (2..8)

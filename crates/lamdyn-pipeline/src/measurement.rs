@@ -3,7 +3,7 @@
 //! ([`read_measurement`]) with its coherence and the estimator's warnings.
 
 use crate::error::{Context, Result};
-use crate::job::{Job, relative};
+use crate::job::{Job, Measurement, relative};
 use crate::{bail, err};
 use lamdyn_ema::spectra::{Hit, Spectra, SpectraSettings, estimate};
 use lamdyn_frf::FrfSet;
@@ -165,7 +165,18 @@ pub fn read_frfs(
 
 /// The measured FRF set of the job, with the expected channel count checked.
 pub fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured> {
-    let m = &job.measurement;
+    read_measurement_section(&job.measurement, job.fit.misfit.band_hz, base, path)
+}
+
+/// The measured FRF set of a job's `[measurement]` section (any command's job file), paths
+/// relative to `base`, `path` the job file for messages; `band_hz` is where the coherence of
+/// time data is judged (default: every line).
+pub fn read_measurement_section(
+    m: &Measurement,
+    band_hz: Option<[f64; 2]>,
+    base: &Path,
+    path: &Path,
+) -> Result<Measured> {
     let mut out = match (&m.channels, &m.frf, &m.uff) {
         (Some(c), Some(f), None) => {
             let (c, f) = (relative(base, c), relative(base, f));
@@ -209,7 +220,7 @@ pub fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured>
                     c.display()
                 )
             })?;
-            let band = job.fit.misfit.band_hz.unwrap_or([0.0, f64::INFINITY]);
+            let band = band_hz.unwrap_or([0.0, f64::INFINITY]);
             let min_coherence = spectra
                 .channels
                 .iter()

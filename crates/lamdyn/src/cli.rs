@@ -310,7 +310,7 @@ pub struct FitArgs {
     /// Law to fit (overrides the job's fit.law).
     #[arg(long, value_enum)]
     pub law: Option<LawArg>,
-    /// Misfit (overrides the job's misfit.kind).
+    /// Misfit (overrides the job's fit.misfit.kind).
     #[arg(long, value_enum)]
     pub misfit: Option<MisfitArg>,
     /// Covariance estimator (overrides the job's fit.covariance).
@@ -341,35 +341,58 @@ pub enum FitExample {
     PaperPlateZener,
 }
 
-/// Laws of `lamdyn fit`.
+/// Laws of `lamdyn fit`, spelled as in the job file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum LawArg {
     /// Paper eq. 7 (E0, mu, t0, c).
-    Eq7,
+    #[value(name = "paper_eq7")]
+    PaperEq7,
     /// Fractional-derivative Zener (G0, G_inf, tau, alpha).
-    Zener,
+    #[value(name = "fractional_zener")]
+    FractionalZener,
     /// Free E' and eta at each measured resonance, splined between.
+    #[value(name = "per_mode")]
     PerMode,
+    /// Old spelling of paper_eq7 (deprecated).
+    #[value(name = "eq7", hide = true)]
+    Eq7,
+    /// Old spelling of fractional_zener (deprecated).
+    #[value(name = "zener", hide = true)]
+    Zener,
+    /// Old spelling of per_mode (deprecated).
+    #[value(name = "per-mode", hide = true)]
+    PerModeKebab,
 }
 
-/// Misfits of `lamdyn fit`.
+/// Misfits of `lamdyn fit`, spelled as in the job file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum MisfitArg {
     /// Paper eqs. 2 and 10: RMS of magnitudes over channels, absolute difference.
+    #[value(name = "rms")]
     Rms,
     /// Log of the RMS magnitudes.
+    #[value(name = "log_rms")]
     LogRms,
     /// Complex FRFs per channel.
+    #[value(name = "complex")]
     Complex,
+    /// Old spelling of log_rms (deprecated).
+    #[value(name = "log-rms", hide = true)]
+    LogRmsKebab,
 }
 
-/// Covariance estimators of `lamdyn fit`.
+/// Covariance estimators of `lamdyn fit`, spelled as in the job file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum CovarianceArg {
     /// HC3 sandwich (robust to line-to-line changes of the noise).
-    Hc3,
+    #[value(name = "robust_hc3")]
+    RobustHc3,
     /// Classical s^2 (J^T J)^-1.
+    #[value(name = "classical")]
     Classical,
+    /// Old spelling of robust_hc3 (deprecated).
+    #[value(name = "hc3", hide = true)]
+    Hc3,
 }
 
 /// Built-in FE models.

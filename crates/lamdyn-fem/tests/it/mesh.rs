@@ -209,7 +209,14 @@ fn gmsh_errors_name_file_and_line() {
         "{e}"
     );
     let e = invalid(read_msh(&fixture("missing.msh"), 1.0).unwrap_err());
-    assert!(e.contains("missing.msh' line 0: No such file"), "{e}");
+    assert!(e.contains("missing.msh': No such file"), "{e}");
+    // Issue 19.9: a file with no quadrilaterals was reported at "line 0".
+    let lines_only = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n2 1 0 0\n$EndNodes\n$Elements\n1\n1 1 2 0 1 1 2\n$EndElements\n";
+    let e = invalid(parse_msh("edges.msh", lines_only, 1.0).unwrap_err());
+    assert_eq!(
+        e,
+        "error reading 'edges.msh': no 4-node quadrilaterals (element type 3) in the file"
+    );
     let text = std::fs::read_to_string(fixture("plate-v22.msh")).unwrap();
     let cases = [
         (

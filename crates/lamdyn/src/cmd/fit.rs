@@ -24,33 +24,49 @@ use lamdyn_fit::synthetic::PaperPlateCase;
 use lamdyn_frf::FrfSet;
 use lamdyn_material::law::{FractionalZener, PaperEq7Law, ViscoelasticLaw};
 use lamdyn_pipeline::io::read_toml;
+use lamdyn_pipeline::job::{Measurement, ModelSource, base_of, relative};
+use lamdyn_pipeline::measurement::read_measurement_section;
 use lamdyn_pipeline::output::OutputDir;
 use serde::Deserialize;
 use std::f64::consts::PI;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// A fit job file.
+/// A fit job file: the layout of a `lamdyn run` job (`[measurement]`, `[model]` with `file`
+/// or `spec`, `[fit]` with `[fit.misfit]`), so one file serves both commands; the run job's
+/// other sections are accepted and not used here. The layout before issue 19 (`model` as a
+/// path, top-level `modes`, `residual` and `[misfit]`) is still read, with a deprecation note.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[allow(dead_code)] // the run job's sections are read to be accepted, not used
 struct FitJob {
-    /// A `lamdyn modes` model file, relative to the job file; free (no supports).
-    model: PathBuf,
-    /// FE modes kept, rigid-body modes included [default: the model's solver.modes].
     #[serde(default)]
-    modes: Option<usize>,
-    /// Static correction for the modes left out [default: true].
-    #[serde(default = "yes")]
-    residual: bool,
-    measurement: MeasurementSpec,
+    title: Option<String>,
+    measurement: Measurement,
+    /// `[model]` (file or spec, modes, residual), or a path (deprecated).
+    model: toml::Value,
     #[serde(default)]
     fit: FitOptions,
-    #[serde(default = "default_misfit")]
-    misfit: MisfitSpec,
-}
-
-fn yes() -> bool {
-    true
+    /// Deprecated: `[model] modes`.
+    #[serde(default)]
+    modes: Option<usize>,
+    /// Deprecated: `[model] residual`.
+    #[serde(default)]
+    residual: Option<bool>,
+    /// Deprecated: `[fit.misfit]`.
+    #[serde(default)]
+    misfit: Option<MisfitSpec>,
+    // Sections of a run job that the fit does not use.
+    #[serde(default)]
+    stack: Option<toml::Value>,
+    #[serde(default)]
+    ema: Option<toml::Value>,
+    #[serde(default)]
+    inverse: Option<toml::Value>,
+    #[serde(default)]
+    uncertainty: Option<toml::Value>,
+    #[serde(default)]
+    truth: Option<toml::Value>,
 }
 
 /// The log-RMS misfit: calibrated intervals with either covariance and the fastest fit in the
@@ -59,28 +75,8 @@ fn default_misfit() -> MisfitSpec {
     MisfitSpec::new(MisfitKind::LogRms)
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MeasurementSpec {
-    /// Channels table (CSV), relative to the job file (with `frf`).
-    #[serde(default)]
-    channels: Option<PathBuf>,
-    /// FRF table (CSV), relative to the job file (with `channels`).
-    #[serde(default)]
-    frf: Option<PathBuf>,
-    /// A UFF file whose complex FRFs (datasets 58) and nodes (15/2411) are the measurement,
-    /// instead of `channels` and `frf`.
-    #[serde(default)]
-    uff: Option<PathBuf>,
-    /// Largest distance from a channel's point to its node, m.
-    #[serde(default = "default_tolerance")]
-    tolerance_m: f64,
-}
-
-fn default_tolerance() -> f64 {
-    1e-3
-}
-
+/// `[fit]` of a job: the run job's keys; the law defaults to the paper's eq. 7 here (`lamdyn
+/// run` defaults to `per_mode`).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FitOptions {
@@ -91,6 +87,8 @@ struct FitOptions {
     /// Peak prominence for the starts (ratio over the neighbouring valleys).
     #[serde(default = "default_prominence")]
     prominence: f64,
+    #[serde(default)]
+    misfit: Option<MisfitSpec>,
 }
 
 impl Default for FitOptions {
@@ -99,6 +97,7 @@ impl Default for FitOptions {
             law: default_law(),
             covariance: Covariance::default(),
             prominence: default_prominence(),
+            misfit: None,
         }
     }
 }
@@ -108,6 +107,62 @@ fn default_law() -> LawKind {
 }
 fn default_prominence() -> f64 {
     1.5
+}
+
+/// The job's model, misfit and their deprecation notes, in the current layout.
+struct Resolved {
+    model: ModelSource,
+    misfit: MisfitSpec,
+    notes: Vec<String>,
+}
+
+impl FitJob {
+    /// Reads the old spellings into the current layout, noting each; both spellings at once
+    /// is an error.
+    fn resolve(&self) -> std::result::Result<Resolved, String> {
+        let mut notes = Vec::new();
+        let mut model = match &self.model {
+            toml::Value::String(p) => {
+                notes.push(format!(
+                    "deprecated: model = \"{p}\" is the old layout; write [model] with file = \"{p}\" (as in a lamdyn run job)"
+                ));
+                ModelSource {
+                    file: Some(PathBuf::from(p)),
+                    spec: None,
+                    modes: None,
+                    residual: true,
+                }
+            }
+            v => ModelSource::deserialize(v.clone()).map_err(|e| format!("model: {e}"))?,
+        };
+        if let Some(n) = self.modes {
+            if model.modes.is_some() {
+                return Err("modes: give [model] modes only".into());
+            }
+            notes.push("deprecated: top-level modes; write it in [model]".into());
+            model.modes = Some(n);
+        }
+        if let Some(r) = self.residual {
+            notes.push("deprecated: top-level residual; write it in [model]".into());
+            model.residual = r;
+        }
+        let misfit = match (&self.misfit, &self.fit.misfit) {
+            (Some(_), Some(_)) => return Err("misfit: give [fit.misfit] only".into()),
+            (Some(m), None) => {
+                notes.push(
+                    "deprecated: [misfit]; write [fit.misfit] (as in a lamdyn run job)".into(),
+                );
+                m.clone()
+            }
+            (None, Some(m)) => m.clone(),
+            (None, None) => default_misfit(),
+        };
+        Ok(Resolved {
+            model,
+            misfit,
+            notes,
+        })
+    }
 }
 
 /// Everything a fit needs, validated.
@@ -121,6 +176,8 @@ struct Problem {
     /// examples).
     truth: Option<(Box<dyn ViscoelasticLaw>, Vec<f64>)>,
     model_seconds: f64,
+    /// Deprecated spellings met in the job or on the command line.
+    notes: Vec<String>,
 }
 
 /// Runs `lamdyn fit`.
@@ -146,7 +203,8 @@ pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
             dir.path().display()
         )?;
     }
-    apply_flags(args, &mut problem.settings);
+    let flag_notes = apply_flags(args, &mut problem.settings);
+    problem.notes.extend(flag_notes);
     spinner.stage("fitting the modulus law");
     let result =
         fit(&problem.model, &problem.measured, &problem.settings).context("the fit failed")?;
@@ -180,12 +238,32 @@ pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     })
 }
 
-fn apply_flags(args: &FitArgs, settings: &mut FitSettings) {
+/// The command line's overrides; old spellings (`eq7`, `zener`, `per-mode`, `log-rms`, `hc3`)
+/// are read with a deprecation note.
+fn apply_flags(args: &FitArgs, settings: &mut FitSettings) -> Vec<String> {
+    let mut notes = Vec::new();
+    let mut old = |was: &str, now: &str| {
+        notes.push(format!(
+            "deprecated: {was}; write {now} (the job file's spelling)"
+        ));
+    };
     if let Some(law) = args.law {
         settings.law = match law {
-            LawArg::Eq7 => LawKind::PaperEq7,
-            LawArg::Zener => LawKind::FractionalZener,
+            LawArg::PaperEq7 => LawKind::PaperEq7,
+            LawArg::FractionalZener => LawKind::FractionalZener,
             LawArg::PerMode => LawKind::PerMode,
+            LawArg::Eq7 => {
+                old("--law eq7", "--law paper_eq7");
+                LawKind::PaperEq7
+            }
+            LawArg::Zener => {
+                old("--law zener", "--law fractional_zener");
+                LawKind::FractionalZener
+            }
+            LawArg::PerModeKebab => {
+                old("--law per-mode", "--law per_mode");
+                LawKind::PerMode
+            }
         };
     }
     if let Some(m) = args.misfit {
@@ -193,14 +271,23 @@ fn apply_flags(args: &FitArgs, settings: &mut FitSettings) {
             MisfitArg::Rms => MisfitKind::Rms,
             MisfitArg::LogRms => MisfitKind::LogRms,
             MisfitArg::Complex => MisfitKind::Complex,
+            MisfitArg::LogRmsKebab => {
+                old("--misfit log-rms", "--misfit log_rms");
+                MisfitKind::LogRms
+            }
         };
     }
     if let Some(c) = args.covariance {
         settings.covariance = match c {
-            CovarianceArg::Hc3 => Covariance::RobustHc3,
+            CovarianceArg::RobustHc3 => Covariance::RobustHc3,
             CovarianceArg::Classical => Covariance::Classical,
+            CovarianceArg::Hc3 => {
+                old("--covariance hc3", "--covariance robust_hc3");
+                Covariance::RobustHc3
+            }
         };
     }
+    notes
 }
 
 /// The truth of a built-in example and its parameters in the fit's order: the paper's Table 2
@@ -250,24 +337,22 @@ fn from_example(e: FitExample, seed: u64, noise: f64) -> Result<Problem> {
         settings: FitSettings::new(law, default_misfit()),
         truth: Some((truth, truth_params)),
         model_seconds: built.model_seconds,
+        notes: Vec::new(),
     })
-}
-
-fn relative(base: &Path, p: &Path) -> PathBuf {
-    if p.is_absolute() {
-        p.to_path_buf()
-    } else {
-        base.join(p)
-    }
 }
 
 fn from_job(path: &Path, spinner: &Spinner) -> Result<Problem> {
     let job: FitJob = read_toml(path)?;
-    let base = path
-        .parent()
-        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let base = base_of(path);
     let bad =
         |field: &str, why: String| anyhow::anyhow!("error in '{}': {field}: {why}", path.display());
+    let Resolved {
+        model: source,
+        misfit,
+        notes,
+    } = job
+        .resolve()
+        .map_err(|e| anyhow::anyhow!("error in '{}': {e}", path.display()))?;
     let tol = job.measurement.tolerance_m;
     if !(tol.is_finite() && tol > 0.0) {
         return Err(bad(
@@ -282,113 +367,88 @@ fn from_job(path: &Path, spinner: &Spinner) -> Result<Problem> {
             format!("{prominence} must be a ratio above 1"),
         ));
     }
-    let model_path = relative(&base, &job.model);
-    let spec: ModelSpec = read_toml(&model_path)?;
+    let (spec, model_base, model_name) = match (&source.file, &source.spec) {
+        (Some(f), None) => {
+            let p = relative(&base, f);
+            let spec: ModelSpec = read_toml(&p)?;
+            (spec, base_of(&p), format!("'{}'", p.display()))
+        }
+        (None, Some(spec)) => (spec.clone(), base.clone(), "[model.spec]".to_string()),
+        _ => {
+            return Err(bad(
+                "model",
+                "give either file (a model TOML) or [model.spec], not both or neither".into(),
+            ));
+        }
+    };
     if !spec.supports.is_empty() {
         return Err(bad(
             "model",
             format!(
-                "'{}' has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and exclude their resonance bands with misfit.exclude_hz",
-                model_path.display(),
+                "{model_name} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and exclude their resonance bands with fit.misfit.exclude_hz",
                 spec.supports.len()
             ),
         ));
     }
-    let modes = job.modes.unwrap_or(spec.solver.modes);
+    let modes = source.modes.unwrap_or(spec.solver.modes);
     if modes < 7 {
         return Err(bad(
-            "modes",
+            "model.modes",
             format!("{modes}: keep at least the 6 rigid-body modes and one elastic mode"),
         ));
     }
-    let (measured, frf_path) = read_measurement(&job.measurement, &base, path)?;
-    if job.misfit.reference >= measured.references().len() {
+    let measured = read_measurement_section(&job.measurement, misfit.band_hz, &base, path)?;
+    let set = measured.set;
+    if misfit.reference >= set.references().len() {
         return Err(bad(
-            "misfit.reference",
+            "fit.misfit.reference",
             format!(
                 "{} but the measurement has {} reference(s), counted from 0",
-                job.misfit.reference,
-                measured.references().len()
+                misfit.reference,
+                set.references().len()
             ),
         ));
     }
     let clock = std::time::Instant::now();
-    let (mesh, _) = spec
-        .build(
-            &model_path
-                .parent()
-                .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
-        )
-        .with_context(|| format!("invalid model '{}'", model_path.display()))?;
-    let asm = Assembly::new(&mesh, &spec.material, &[])
-        .with_context(|| format!("invalid model '{}'", model_path.display()))?;
-    let resp = probes(&mesh, measured.responses(), tol)
-        .with_context(|| format!("channels of '{}'", frf_path.display()))?;
-    let refs = probes(&mesh, measured.references(), tol)
-        .with_context(|| format!("channels of '{}'", frf_path.display()))?;
+    let invalid = || format!("invalid model {model_name}");
+    let (mesh, _) = spec.build(&model_base).with_context(invalid)?;
+    let asm = Assembly::new(&mesh, &spec.material, &[]).with_context(invalid)?;
+    let channels = || format!("channels of {}", measured.source);
+    let resp = probes(&mesh, set.responses(), tol).with_context(channels)?;
+    let refs = probes(&mesh, set.references(), tol).with_context(channels)?;
     let sol = solve_modes(&asm, &ModalParams::lowest(modes), spinner)?;
     spinner.stage("projecting modes and residual terms");
-    let residual = if job.residual {
+    let residual = if source.residual {
         ResidualTerm::Static
     } else {
         ResidualTerm::None
     };
     let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, residual)?;
-    let mut settings = FitSettings::new(job.fit.law, job.misfit);
+    let mut settings = FitSettings::new(job.fit.law, misfit);
     settings.covariance = job.fit.covariance;
     settings.prominence = prominence;
+    let mut notes = notes;
+    notes.extend(measured.warnings);
     Ok(Problem {
-        source: format!("job '{}': FRFs '{}'", path.display(), frf_path.display()),
+        source: format!("job '{}': {}", path.display(), measured.source),
         model_line: format!(
-            "'{}': {} nodes, {} MITC4, {modes} modes{}, E_ref = {:.4e} Pa",
-            model_path.display(),
+            "{model_name}: {} nodes, {} MITC4, {modes} modes{}, E_ref = {:.4e} Pa",
             mesh.nodes().len(),
             mesh.elements().len(),
-            if job.residual { " + residual term" } else { "" },
+            if source.residual {
+                " + residual term"
+            } else {
+                ""
+            },
             spec.material.young_pa
         ),
         model,
-        measured,
+        measured: set,
         settings,
         truth: None,
         model_seconds: clock.elapsed().as_secs_f64(),
+        notes,
     })
-}
-
-/// The measured FRF set of a job: CSV channels + FRF tables, or a UFF file; and the path named in
-/// messages.
-fn read_measurement(m: &MeasurementSpec, base: &Path, job: &Path) -> Result<(FrfSet, PathBuf)> {
-    let text = |p: &Path| {
-        std::fs::read_to_string(p).with_context(|| format!("cannot read '{}'", p.display()))
-    };
-    match (&m.channels, &m.frf, &m.uff) {
-        (Some(c), Some(f), None) => {
-            let (channels_path, frf_path) = (relative(base, c), relative(base, f));
-            let (responses, references) = lamdyn_frf::csv::parse_channels(
-                &channels_path.display().to_string(),
-                &text(&channels_path)?,
-            )?;
-            let set = lamdyn_frf::csv::parse_frf(
-                &frf_path.display().to_string(),
-                &text(&frf_path)?,
-                responses,
-                references,
-            )?;
-            Ok((set, frf_path))
-        }
-        (None, None, Some(u)) => {
-            let p = relative(base, u);
-            let file = lamdyn_uff::read_path(&p, lamdyn_uff::ReadOptions::default())
-                .map_err(|e| anyhow::anyhow!(e))?;
-            let set = lamdyn_uff::frf::to_frf_set(&file)
-                .map_err(|e| anyhow::anyhow!("'{}': {e}", p.display()))?;
-            Ok((set, p))
-        }
-        _ => bail!(
-            "error in '{}': measurement: give either channels and frf (CSV) or uff",
-            job.display()
-        ),
-    }
 }
 
 /// Writes the example case as a job directory: model.toml, channels.csv, frf.csv, job.toml.
@@ -423,8 +483,9 @@ fn write_example(dir: &OutputDir, e: FitExample, problem: &Problem) -> Result<()
     };
     let job = format!(
         "# lamdyn fit job written by `lamdyn fit --example {}`: {}\n\
-         model = \"model.toml\"\nresidual = true\n\n[measurement]\nchannels = \"channels.csv\"\nfrf = \"frf.csv\"\ntolerance_m = 1e-6\n\n\
-         [fit]\nlaw = \"{law}\"\ncovariance = \"robust_hc3\"\n\n[misfit]\nkind = \"log_rms\"\n",
+         [measurement]\nchannels = \"channels.csv\"\nfrf = \"frf.csv\"\ntolerance_m = 1e-6\n\n\
+         [model]\nfile = \"model.toml\"\nresidual = true\n\n\
+         [fit]\nlaw = \"{law}\"\ncovariance = \"robust_hc3\"\n\n[fit.misfit]\nkind = \"log_rms\"\n",
         match e {
             FitExample::PaperPlate => "paper-plate",
             FitExample::PaperPlateZener => "paper-plate-zener",
@@ -549,6 +610,7 @@ fn build_report(
         "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak; eta = 2 zeta (half-power)."
             .into(),
     );
+    report.warnings.extend(problem.notes.iter().cloned());
     report.warnings.extend(r.warnings.iter().cloned());
     if !r.converged {
         report.warnings.push(format!(

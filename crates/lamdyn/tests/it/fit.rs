@@ -307,7 +307,153 @@ fn uff_measurement_gives_the_csv_result() {
     let (code, _, err) = lamdyn(&["fit", job.to_str().unwrap()]);
     assert_eq!(code, 2);
     assert!(
-        err.contains("either channels and frf (CSV) or uff"),
+        err.contains("measurement: give channels with frf or time, or uff"),
         "{err}"
     );
+}
+
+/// Issue 19.9: `uff convert --to csv` wrote a channels table that `ema` and `fit` rejected
+/// ("channel '1+Z' was already defined"). Round trip: the example's FRFs as UFF, converted to
+/// CSV, fitted again: the same result as the CSV files they came from.
+#[test]
+fn uff_converted_to_csv_feeds_fit_and_ema() {
+    let base = example_job();
+    let text = |n: &str| std::fs::read_to_string(base.join(n)).unwrap();
+    // The hammer moved onto response 41's node and direction: a driving point, whose response
+    // and reference share the UFF name '41+Z'.
+    let channels: Vec<String> = text("channels.csv").lines().map(String::from).collect();
+    let at_41 = channels.iter().find(|l| l.starts_with("41+Z,")).unwrap();
+    let driving = at_41.replacen("response", "reference", 1);
+    let with_driving: Vec<String> = channels
+        .iter()
+        .map(|l| {
+            if l.starts_with("hammer,") {
+                driving.clone()
+            } else {
+                l.clone()
+            }
+        })
+        .collect();
+    let (r, f) = lamdyn_frf::csv::parse_channels("channels.csv", &with_driving.join("\n")).unwrap();
+    let frf_text = text("frf.csv").replace("@hammer:", "@41+Z:");
+    let set = lamdyn_frf::csv::parse_frf("frf.csv", &frf_text, r, f).unwrap();
+    let dir = temp_dir("fit-uff-csv");
+    std::fs::write(dir.join("channels.csv"), with_driving.join("\n")).unwrap();
+    std::fs::write(dir.join("frf.csv"), frf_text).unwrap();
+    let uff = dir.join("test.uff");
+    let datasets = lamdyn_uff::frf::from_frf_set(&set).unwrap();
+    std::fs::write(
+        &uff,
+        lamdyn_uff::write(&datasets, lamdyn_uff::Encoding::Ascii).unwrap(),
+    )
+    .unwrap();
+    let csv = dir.join("csv");
+    let (code, _, err) = lamdyn(&[
+        "uff",
+        "convert",
+        uff.to_str().unwrap(),
+        csv.to_str().unwrap(),
+        "--to",
+        "csv",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (channels, frf) = (csv.join("channels.csv"), csv.join("frf.csv"));
+    let job = dir.join("job.toml");
+    std::fs::write(
+        &job,
+        format!(
+            "[measurement]\nchannels = {:?}\nfrf = {:?}\ntolerance_m = 1e-6\n[model]\nfile = {:?}\n",
+            channels,
+            frf,
+            base.join("model.toml")
+        ),
+    )
+    .unwrap();
+    let (code, from_csv_of_uff, err) = lamdyn(&["fit", job.to_str().unwrap(), "--csv"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("deprecated"), "{err}");
+    let direct = dir.join("direct.toml");
+    std::fs::write(
+        &direct,
+        format!(
+            "[measurement]\nchannels = \"channels.csv\"\nfrf = \"frf.csv\"\ntolerance_m = 1e-6\n[model]\nfile = {:?}\n",
+            base.join("model.toml")
+        ),
+    )
+    .unwrap();
+    let (code, from_csv, err) = lamdyn(&["fit", direct.to_str().unwrap(), "--csv"]);
+    assert_eq!(code, 0, "{err}");
+    // Equal to the ASCII UFF's 13 significant digits.
+    let (a, b) = (csv_rows(&from_csv_of_uff), csv_rows(&from_csv));
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        for k in ["f_hz", "e_storage_pa", "loss_factor"] {
+            let (x, y) = (num(x, k), num(y, k));
+            assert!((x - y).abs() <= 1e-9 * y.abs(), "{k}: {x} vs {y}");
+        }
+    }
+    let (code, _, err) = lamdyn(&[
+        "ema",
+        "--channels",
+        channels.to_str().unwrap(),
+        "--frf",
+        frf.to_str().unwrap(),
+        "--band-hz",
+        "10,78",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}
+
+/// Issue 19.9: one layout and one vocabulary. A `lamdyn run` job is a `lamdyn fit` job; the
+/// old fit layout (`model` as a path, `[misfit]`) and the old flag spellings still work, each
+/// with a deprecation note; the job file's spellings work on the command line without one.
+#[test]
+fn run_jobs_and_old_spellings_are_read_by_fit() {
+    let dir = temp_dir("fit-vocabulary");
+    let run_job = small_demo(&dir);
+    let (code, out, err) = lamdyn(&["fit", run_job.to_str().unwrap(), "--csv"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("deprecated"), "{err}");
+    assert!(csv_rows(&out).len() >= 3, "{out}");
+
+    let old = job_with(&dir, &[], "[misfit]\nkind = \"log_rms\"");
+    let (code, _, err) = lamdyn(&["fit", &old, "--csv"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("deprecated: model = "), "{err}");
+    assert!(
+        err.contains("deprecated: [misfit]; write [fit.misfit]"),
+        "{err}"
+    );
+    let both = job_with(
+        &dir,
+        &[],
+        "[misfit]\nkind = \"rms\"\n[fit.misfit]\nkind = \"rms\"",
+    );
+    let (code, _, err) = lamdyn(&["fit", &both]);
+    assert_eq!(code, 2);
+    assert!(err.contains("give [fit.misfit] only"), "{err}");
+
+    let example = ["fit", "--example", "paper-plate", "--csv"];
+    for (flags, note) in [
+        (
+            ["--law", "eq7"],
+            Some("deprecated: --law eq7; write --law paper_eq7"),
+        ),
+        (["--law", "paper_eq7"], None),
+        (["--misfit", "log-rms"], Some("write --misfit log_rms")),
+        (["--misfit", "log_rms"], None),
+        (
+            ["--covariance", "hc3"],
+            Some("write --covariance robust_hc3"),
+        ),
+        (["--covariance", "robust_hc3"], None),
+    ] {
+        let args: Vec<&str> = example.iter().chain(&flags).copied().collect();
+        let (code, _, err) = lamdyn(&args);
+        assert_eq!(code, 0, "{flags:?}: {err}");
+        match note {
+            Some(n) => assert!(err.contains(n), "{flags:?}: {err}"),
+            None => assert!(!err.contains("deprecated"), "{flags:?}: {err}"),
+        }
+    }
 }

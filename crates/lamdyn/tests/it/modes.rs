@@ -167,7 +167,7 @@ fn bad_models_name_the_field() {
                 "msh.toml",
                 "[mesh]\nkind = \"gmsh\"\nfile = \"none.msh\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
             ),
-            "none.msh' line 0",
+            "none.msh': No such file",
         ),
         (
             write(
