@@ -168,3 +168,24 @@ fn help_states_each_default_once() {
         }
     }
 }
+
+/// Issue 19.10: the README says how to put `lamdyn` on the PATH, with a path that holds the
+/// binary's package, and does not send readers to files the repository lacks without saying so.
+#[test]
+fn readme_install_command_names_the_binary_package() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let install = readme
+        .lines()
+        .find(|l| l.starts_with("cargo install --path "))
+        .expect("an install command");
+    let path = install["cargo install --path ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap();
+    let manifest = std::fs::read_to_string(root.join(path).join("Cargo.toml")).unwrap();
+    assert!(manifest.contains("name = \"lamdyn\""), "{path}");
+    if readme.contains("../shared/reference") {
+        assert!(readme.contains("not\nredistributed") || readme.contains("not redistributed"));
+    }
+}
