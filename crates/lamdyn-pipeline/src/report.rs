@@ -75,7 +75,7 @@ fn band_series(
         .collect();
     let mut poly: Vec<[f64; 2]> = pts.iter().map(|(x, b)| [*x, b[1] / scale]).collect();
     poly.extend(pts.iter().rev().map(|(x, b)| [*x, b[0] / scale]));
-    Series::new(name, color, Mark::Band, poly)
+    Series::new(name, color, Mark::Band, poly).not_scaling()
 }
 
 /// Renders each chart to SVG and PNG, adds it to the report and the files.
@@ -289,13 +289,6 @@ fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
     };
     c.series.push(modal("", BLUE, CorePoint::paper_g));
     c.series.push(modal("", ORANGE, CorePoint::exact_g));
-    if r.modal.iter().any(|p| p.layered_g().is_some()) {
-        c.series.push(modal(
-            "layered inverse (per mode)",
-            PURPLE,
-            CorePoint::layered_g,
-        ));
-    }
     let beyond: Vec<[f64; 2]> = r
         .modal
         .iter()
@@ -325,6 +318,16 @@ fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
                 .filter_map(|(f, g)| value(Some(*g)).map(|v| [*f, v / scale]))
                 .collect(),
         ));
+    }
+    // The answer last, on top of everything.
+    if r.modal.iter().any(|p| p.layered_g().is_some()) {
+        let mut layered = modal(
+            "layered inverse per mode (lamdyn's answer)",
+            PURPLE,
+            CorePoint::layered_g,
+        );
+        layered.mark = Mark::Highlight;
+        c.series.push(layered);
     }
     c
 }
@@ -482,6 +485,73 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
     (header, rows, csv)
 }
 
+/// Columns of a table by header name: `(name, k)` is the column `k` places after `name`'s
+/// first occurrence (a value's band follows it). Names not in the header are left out.
+fn pick_columns(
+    header: &[&'static str],
+    rows: &[Vec<String>],
+    names: &[(&'static str, usize)],
+) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let idx: Vec<usize> = names
+        .iter()
+        .filter_map(|(n, k)| header.iter().position(|h| h == n).map(|i| i + k))
+        .filter(|i| *i < header.len())
+        .collect();
+    (
+        idx.iter().map(|i| header[*i]).collect(),
+        rows.iter()
+            .map(|r| idx.iter().map(|i| r[*i].clone()).collect())
+            .collect(),
+    )
+}
+
+/// The report's opening: the core by the best route the run has — the layered inverse (each
+/// EMA pole matched by a layered model) where it ran, else the exact sandwich inverse with its
+/// Monte Carlo band — with the truth of a virtual test, and how far the paper's route is from
+/// it.
+fn lead_section(
+    html: &mut HtmlReport,
+    r: &ChainResult,
+    header: &[&'static str],
+    rows: &[Vec<String>],
+) {
+    let layered = r.modal.iter().any(|p| p.layered_g().is_some());
+    html.heading("The core: lamdyn's answer");
+    let mut cols: Vec<(&'static str, usize)> = if layered {
+        vec![("f [Hz]", 0), ("G'_layered [MPa]", 0), ("eta_layered", 0)]
+    } else {
+        vec![
+            ("f [Hz]", 0),
+            ("G'_exact [MPa]", 0),
+            ("G'_exact [MPa]", 1),
+            ("eta_exact", 0),
+            ("eta_exact", 1),
+        ]
+    };
+    if r.truth.is_some() {
+        cols.extend([("G'_true [MPa]", 0), ("eta_true", 0)]);
+        cols.extend(if layered {
+            [("err G'_layered [%]", 0), ("err eta_layered [%]", 0)]
+        } else {
+            [("err G'_exact [%]", 0), ("err eta_exact [%]", 0)]
+        });
+    }
+    let (h, mut t) = pick_columns(header, rows, &cols);
+    let mut h = h;
+    h.extend(["paper's G' vs this [%]", "paper's eta vs this [%]"]);
+    for (row, p) in t.iter_mut().zip(&r.modal) {
+        let best = if layered { p.layered_g() } else { p.exact_g() };
+        row.push(pct(rel_err(storage(p.paper_g()), storage(best))));
+        row.push(pct(rel_err(loss(p.paper_g()), loss(best))));
+    }
+    let caption = if layered {
+        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole (frequency and damping) matched by a layered solid model of the part. Its 95 % band is not computed yet (the Monte Carlo covers the paper's and the exact routes, below); the last columns show how far the paper's route lies from this answer"
+    } else {
+        "G*(f) of the core at each identified mode by the exact Mead-Markus inverse of the fitted effective modulus, with 95 % Monte Carlo bands (the layered inverse did not run); the last columns show how far the paper's route lies from it"
+    };
+    html.table(caption, &h, t);
+}
+
 fn curve_csv(r: &ChainResult) -> String {
     let mut s = String::from(
         "f_hz,e_storage_pa,e_loss_factor,phi_abs,g_paper_storage_pa,g_paper_loss_factor,g_exact_storage_pa,g_exact_loss_factor,causality_paper,causality_exact\n",
@@ -540,6 +610,22 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         r.layered_line.as_deref().unwrap_or("not run"),
         env!("CARGO_PKG_VERSION")
     ));
+    let (header, rows, modal_csv) = modal_table(r);
+    lead_section(&mut html, r, &header, &rows);
+    add_figure(
+        &mut html,
+        &mut files,
+        "core_storage",
+        "Core G'(f): the layered inverse per mode (large discs), the paper's and the exact inverse with their 95 % bands (paper Fig. 7); the axis is scaled to the estimates and bands beyond it are clipped (marked in the legend)",
+        &core_chart(r, false),
+    )?;
+    add_figure(
+        &mut html,
+        &mut files,
+        "core_loss",
+        "Core loss factor eta(f), as above",
+        &core_chart(r, true),
+    )?;
     html.heading("Warnings");
     if r.warnings.is_empty() {
         html.paragraph("None.");
@@ -547,12 +633,47 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         html.warnings(&r.warnings);
     }
 
-    html.heading("Core shear modulus at the modal frequencies");
-    let (header, rows, modal_csv) = modal_table(r);
+    html.heading("The reference methods at the modal frequencies");
+    let pick = |names: &[(&'static str, usize)]| pick_columns(&header, &rows, names);
+    let with_truth = |mut cols: Vec<(&'static str, usize)>, errs: [&'static str; 2]| {
+        if r.truth.is_some() {
+            cols.extend(errs.map(|e| (e, 0)));
+        }
+        cols
+    };
+    let (h, t) = pick(&with_truth(
+        vec![
+            ("f [Hz]", 0),
+            ("|phi|", 0),
+            ("valid (|phi|<=0.1)", 0),
+            ("G'_paper [MPa]", 0),
+            ("G'_paper [MPa]", 1),
+            ("eta_paper", 0),
+            ("eta_paper", 1),
+        ],
+        ["err G'_paper [%]", "err eta_paper [%]"],
+    ));
     html.table(
-        "G*(f) of the core by the paper's inverse (eqs. 33-45, eq. 41), the exact Mead-Markus inverse (95 % Monte Carlo bands) and the layered inverse (each EMA pole matched by a layered solid model; no band); |phi| > 0.1 marks the paper model's validity limit (NO: beyond it)",
-        &header,
-        rows,
+        "The paper's route: effective modulus E*(f) fitted to the FRFs, then the paper's inverse (eqs. 33-45, eq. 41), with 95 % Monte Carlo bands; |phi| > 0.1 is beyond the paper model's validity (NO)",
+        &h,
+        t,
+    );
+    let (h, t) = pick(&with_truth(
+        vec![
+            ("f [Hz]", 0),
+            ("E' [GPa]", 0),
+            ("eta_E", 0),
+            ("G'_exact [MPa]", 0),
+            ("G'_exact [MPa]", 1),
+            ("eta_exact", 0),
+            ("eta_exact", 1),
+        ],
+        ["err G'_exact [%]", "err eta_exact [%]"],
+    ));
+    html.table(
+        "The same effective modulus through the exact Mead-Markus sandwich inverse, with 95 % Monte Carlo bands (all columns: core_modal.csv)",
+        &h,
+        t,
     );
     files.push(("core_modal.csv".into(), modal_csv.into_bytes()));
     if let Some(t) = &r.truth {
@@ -561,20 +682,6 @@ pub fn build(r: &ChainResult) -> Result<Files> {
             t.source
         ));
     }
-    add_figure(
-        &mut html,
-        &mut files,
-        "core_storage",
-        "Core G'(f), both inverses, 95 % bands (paper Fig. 7)",
-        &core_chart(r, false),
-    )?;
-    add_figure(
-        &mut html,
-        &mut files,
-        "core_loss",
-        "Core loss factor eta(f), both inverses, 95 % bands (paper Fig. 7)",
-        &core_chart(r, true),
-    )?;
     html.heading("Causality");
     html.paragraph(&causality_verdict(r));
     files.push(("core_curve.csv".into(), curve_csv(r).into_bytes()));

@@ -97,6 +97,19 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
     ] {
         assert!(html.contains(text), "'{text}' missing from the report");
     }
+    // Issue 19.8: the report leads with the answer (the layered inverse), before the
+    // warnings and the reference methods, and no table is as wide as the old 23 columns.
+    let first_heading = html.split("<h2>").nth(1).unwrap_or("");
+    assert!(
+        first_heading.starts_with("The core: lamdyn&#39;s answer</h2>"),
+        "{first_heading:.80}"
+    );
+    let lead = &html[html.find("<table>").unwrap()..html.find("</table>").unwrap()];
+    assert!(lead.contains("G&#39;_layered [MPa]"), "{lead:.300}");
+    for table in html.split("<table>").skip(1) {
+        let header = &table[..table.find("</tr>").unwrap()];
+        assert!(header.matches("<th>").count() <= 12, "{header}");
+    }
     // The core at each modal frequency against the truth. The layered inverse matches each
     // EMA pole with the bench's own discretization, so what is left is the identification's
     // error: measured 2.5 % (G') and 3.3 % (eta) at worst on this coarse test (0.5 Hz lines,

@@ -119,6 +119,8 @@ pub enum Mark {
     Circle,
     /// Large filled circles.
     Disc,
+    /// Larger filled circles with a dark rim: the result a chart is about, drawn to stand out.
+    Highlight,
     /// A filled, translucent polygon through the points (an uncertainty band: the upper curve
     /// forwards, then the lower curve backwards).
     Band,
@@ -143,6 +145,10 @@ pub struct Series {
     pub mark: Mark,
     /// On the secondary y axis.
     pub secondary: bool,
+    /// Whether the series sets the y axis's extent (default true). An uncertainty band that
+    /// can be far wider than the estimates is drawn without scaling the axis, and clipped to it
+    /// (its legend entry then says so).
+    pub scales_axis: bool,
     /// (x, y) points in the axes' units.
     pub points: Vec<[f64; 2]>,
 }
@@ -155,8 +161,15 @@ impl Series {
             color,
             mark,
             secondary: false,
+            scales_axis: true,
             points,
         }
+    }
+
+    /// The same series, drawn within the axis the other series set (clipped to it).
+    pub fn not_scaling(mut self) -> Self {
+        self.scales_axis = false;
+        self
     }
 
     /// The same series on the secondary y axis.
@@ -254,10 +267,11 @@ impl Chart {
         // Both backends lay text out with the registered font.
         register_font();
         root.fill(&WHITE).map_err(draw_error)?;
-        let all = |secondary: bool, pick: fn(&[f64; 2]) -> f64| {
+        let any_scaling = self.series.iter().any(|s| s.scales_axis);
+        let all = move |secondary: bool, pick: fn(&[f64; 2]) -> f64| {
             self.series
                 .iter()
-                .filter(move |s| s.secondary == secondary)
+                .filter(move |s| s.secondary == secondary && (s.scales_axis || !any_scaling))
                 .flat_map(move |s| s.points.iter().map(pick))
         };
         let xr = self.x.extent(
@@ -265,7 +279,7 @@ impl Chart {
                 .iter()
                 .flat_map(|s| s.points.iter().map(|p| p[0])),
         );
-        let yr = self.y.extent(all(false, |p| p[1]));
+        let yr = self.with_headroom(self.y.extent(all(false, |p| p[1])));
         let mut builder = ChartBuilder::on(root);
         builder
             .caption(&self.title, ("sans-serif", 22))
@@ -308,7 +322,13 @@ impl Chart {
                 .map_err(draw_error)?;
         }
         for s in &self.series {
-            let pts = self.mapped(s);
+            let range = if s.secondary { y2r } else { yr };
+            let (pts, clipped) = clip(self.mapped(s), range, s.mark);
+            let name = if clipped && !s.name.is_empty() {
+                format!("{} (clipped at the axis)", s.name)
+            } else {
+                s.name.clone()
+            };
             let color = RGBColor(s.color[0], s.color[1], s.color[2]);
             let legend = move |(x, y): (i32, i32)| Circle::new((x + 10, y), 4, color.filled());
             macro_rules! put {
@@ -319,8 +339,8 @@ impl Chart {
                         chart.draw_series($series)
                     }
                     .map_err(draw_error)?;
-                    if !s.name.is_empty() {
-                        drawn.label(s.name.as_str()).legend(legend);
+                    if !name.is_empty() {
+                        drawn.label(name.as_str()).legend(legend);
                     }
                 }};
             }
@@ -333,10 +353,31 @@ impl Chart {
                         .map(|p| Circle::new(*p, 4, color.stroke_width(1)))
                 ),
                 Mark::Cross => put!(pts.iter().map(|p| Cross::new(*p, 4, color.stroke_width(1)))),
-                Mark::Band => put!(std::iter::once(Polygon::new(
-                    pts.clone(),
-                    color.mix(0.25).filled()
-                ))),
+                Mark::Highlight => {
+                    put!(pts.iter().map(|p| Circle::new(*p, 7, color.filled())));
+                    chart
+                        .draw_series(
+                            pts.iter()
+                                .map(|p| Circle::new(*p, 7, BLACK.stroke_width(1))),
+                        )
+                        .map_err(draw_error)?;
+                }
+                Mark::Band => {
+                    // A light fill and a thin rim of the band's colour, so that two
+                    // overlapping bands stay apart.
+                    put!(std::iter::once(Polygon::new(
+                        pts.clone(),
+                        color.mix(0.15).filled()
+                    )));
+                    let mut rim = pts.clone();
+                    rim.extend(pts.first().copied());
+                    chart
+                        .draw_series(std::iter::once(PathElement::new(
+                            rim,
+                            color.stroke_width(1),
+                        )))
+                        .map_err(draw_error)?;
+                }
                 Mark::Tile { width, height } => put!(pts.iter().map(|&(x, y)| {
                     let (hw, hh) = (width / 2.0, height / 2.0);
                     Rectangle::new([(x - hw, y - hh), (x + hw, y + hh)], color.filled())
@@ -355,6 +396,38 @@ impl Chart {
         }
         Ok(())
     }
+}
+
+impl Chart {
+    /// The y range with room above the data for the legend (upper left), so that it does not
+    /// cover them: about one legend line in twenty of the plot's height per entry.
+    fn with_headroom(&self, (lo, hi): (f64, f64)) -> (f64, f64) {
+        let entries = self.series.iter().filter(|s| !s.name.is_empty()).count();
+        let map = self
+            .series
+            .iter()
+            .any(|s| matches!(s.mark, Mark::Tile { .. }));
+        if entries == 0 || map {
+            return (lo, hi);
+        }
+        let pad = 0.04 * (hi - lo);
+        let head = (0.06 + 0.055 * entries as f64).min(0.6);
+        (lo - pad, hi + (hi - lo) * head / (1.0 - head))
+    }
+}
+
+/// Points of a series within the y range `(lo, hi)` (drawing coordinates): a band or a line is
+/// clamped to it, markers outside it are left out; `true` when anything was outside.
+fn clip(pts: Vec<(f64, f64)>, (lo, hi): (f64, f64), mark: Mark) -> (Vec<(f64, f64)>, bool) {
+    let outside = pts.iter().any(|p| p.1 < lo || p.1 > hi);
+    if !outside {
+        return (pts, false);
+    }
+    let kept = match mark {
+        Mark::Band | Mark::Line => pts.into_iter().map(|(x, y)| (x, y.clamp(lo, hi))).collect(),
+        _ => pts.into_iter().filter(|p| p.1 >= lo && p.1 <= hi).collect(),
+    };
+    (kept, true)
 }
 
 fn draw_error<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> ReportError {
@@ -425,6 +498,44 @@ mod tests {
         assert!(
             caption.iter().any(|b| *b < 128),
             "no text in the caption strip"
+        );
+    }
+
+    /// Issue 19.8: a band far wider than the estimates (eta bands to 6 for values 0.3-0.7)
+    /// set the axis; now the estimates set it, the band is clipped and its legend says so.
+    #[test]
+    fn bands_do_not_set_the_axis_and_say_when_clipped() {
+        let mut c = Chart::new("eta", Axis::linear("f (Hz)"), Axis::linear("eta"));
+        let xs = [10.0, 20.0, 30.0];
+        let mut band: Vec<[f64; 2]> = xs.iter().map(|x| [*x, 6.0]).collect();
+        band.extend(xs.iter().rev().map(|x| [*x, 0.01]));
+        c.series
+            .push(Series::new("95 % band", [0, 0, 200], Mark::Band, band).not_scaling());
+        c.series.push(Series::new(
+            "estimate",
+            [200, 0, 0],
+            Mark::Highlight,
+            vec![[10.0, 0.3], [20.0, 0.5], [30.0, 0.7]],
+        ));
+        let svg = c.render_svg().unwrap();
+        assert!(
+            svg.contains("95 % band (clipped at the axis)"),
+            "{svg:.200}"
+        );
+        // The axis runs over the estimates with room for the legend, far below 6.
+        let ticks: Vec<&str> = svg
+            .split("</text>")
+            .filter_map(|t| t.rsplit('>').next())
+            .collect();
+        assert!(
+            ticks.iter().any(|t| t.trim() == "0.5" || t.trim() == "0.6"),
+            "{ticks:?}"
+        );
+        assert!(
+            !ticks
+                .iter()
+                .any(|t| ["2", "4", "5", "6"].contains(&t.trim())),
+            "{ticks:?}"
         );
     }
 }

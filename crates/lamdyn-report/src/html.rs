@@ -47,9 +47,11 @@ pub fn escape(s: &str) -> String {
     out
 }
 
-const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}\
+const STYLE: &str = "body{font-family:sans-serif;max-width:1180px;margin:2em auto;padding:0 1em;color:#222}\
 h1{font-size:1.6em}h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ccc}\
-table{border-collapse:collapse;margin:1em 0;font-size:0.9em}\
+.table{overflow-x:auto;max-width:100%}\
+table{border-collapse:collapse;margin:1em 0;font-size:0.85em}\
+caption{caption-side:top;max-width:1100px}\
 th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}th{background:#f0f0f0}\
 caption{text-align:left;font-weight:bold;padding:4px 0}\
 figure{margin:1.5em 0}figure svg{max-width:100%;height:auto}\
@@ -141,7 +143,11 @@ impl HtmlReport {
                     header,
                     rows,
                 } => {
-                    let _ = write!(h, "<table>\n<caption>{}</caption>\n<tr>", escape(caption));
+                    let _ = write!(
+                        h,
+                        "<div class=\"table\"><table>\n<caption>{}</caption>\n<tr>",
+                        escape(caption)
+                    );
                     for c in header {
                         let _ = write!(h, "<th>{}</th>", escape(c));
                     }
@@ -153,7 +159,7 @@ impl HtmlReport {
                         }
                         h.push_str("</tr>\n");
                     }
-                    h.push_str("</table>\n");
+                    h.push_str("</table></div>\n");
                 }
                 Block::Figure { name, caption, svg } => {
                     figure_no += 1;
