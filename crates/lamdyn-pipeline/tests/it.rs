@@ -255,7 +255,7 @@ fn bad_job_files_name_the_field() {
         good.replace("frf = \"frf.csv\"", "frf = \"nothere.csv\""),
     )
     .unwrap();
-    let e = chain_text(&Job::read(&missing).err().expect("missing file"));
+    let e = chain_text(&Job::read(&missing).expect_err("missing file"));
     assert!(
         e.contains("measurement.frf: cannot read") && e.contains("nothere.csv"),
         "{e}"
