@@ -173,10 +173,12 @@ pub struct FitOptions {
 fn default_law() -> LawKind {
     LawKind::PerMode
 }
-fn default_prominence() -> f64 {
+/// Peak prominence of the fit's starts by default (ratio over the neighbouring valleys).
+pub fn default_prominence() -> f64 {
     1.5
 }
-fn default_misfit() -> MisfitSpec {
+/// The fit's misfit by default: log-RMS (docs/fit.md).
+pub fn default_misfit() -> MisfitSpec {
     MisfitSpec::new(MisfitKind::LogRms)
 }
 

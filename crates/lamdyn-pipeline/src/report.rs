@@ -536,8 +536,7 @@ fn lead_section(
             [("err G'_exact [%]", 0), ("err eta_exact [%]", 0)]
         });
     }
-    let (h, mut t) = pick_columns(header, rows, &cols);
-    let mut h = h;
+    let (mut h, mut t) = pick_columns(header, rows, &cols);
     h.extend(["paper's G' vs this [%]", "paper's eta vs this [%]"]);
     for (row, p) in t.iter_mut().zip(&r.modal) {
         let best = if layered { p.layered_g() } else { p.exact_g() };

@@ -24,7 +24,9 @@ use lamdyn_fit::synthetic::PaperPlateCase;
 use lamdyn_frf::FrfSet;
 use lamdyn_material::law::{FractionalZener, PaperEq7Law, ViscoelasticLaw};
 use lamdyn_pipeline::io::read_toml;
-use lamdyn_pipeline::job::{Measurement, ModelSource, base_of, relative};
+use lamdyn_pipeline::job::{
+    Measurement, ModelSource, base_of, default_misfit, default_prominence, relative,
+};
 use lamdyn_pipeline::measurement::read_measurement_section;
 use lamdyn_pipeline::output::OutputDir;
 use serde::Deserialize;
@@ -69,12 +71,6 @@ struct FitJob {
     truth: Option<toml::Value>,
 }
 
-/// The log-RMS misfit: calibrated intervals with either covariance and the fastest fit in the
-/// recovery study (docs/fit.md); the paper's eq. 10 is `kind = "rms"`.
-fn default_misfit() -> MisfitSpec {
-    MisfitSpec::new(MisfitKind::LogRms)
-}
-
 /// `[fit]` of a job: the run job's keys; the law defaults to the paper's eq. 7 here (`lamdyn
 /// run` defaults to `per_mode`).
 #[derive(Debug, Deserialize)]
@@ -104,9 +100,6 @@ impl Default for FitOptions {
 
 fn default_law() -> LawKind {
     LawKind::PaperEq7
-}
-fn default_prominence() -> f64 {
-    1.5
 }
 
 /// The job's model, misfit and their deprecation notes, in the current layout.

@@ -85,3 +85,17 @@ pub fn small_demo(dir: &Path) -> std::path::PathBuf {
     assert_eq!(code, 0, "{err}");
     out.join("input/job.toml")
 }
+
+/// `lamdyn run JOB --out OUT --samples 0 EXTRA...` (no Monte Carlo).
+pub fn run_into(job: &Path, out: &Path, extra: &[&str]) -> (u8, String, String) {
+    let mut args = vec![
+        "run",
+        job.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--samples",
+        "0",
+    ];
+    args.extend_from_slice(extra);
+    lamdyn(&args)
+}

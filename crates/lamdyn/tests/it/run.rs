@@ -2,7 +2,7 @@
 //! truth, and the demo in a terminal. The chain itself (report content, recovery, cache, job
 //! files) is tested in lamdyn-pipeline.
 
-use super::common::{lamdyn, small_demo, small_description, temp_dir};
+use super::common::{lamdyn, run_into, small_demo, small_description, temp_dir};
 
 /// `lamdyn demo --json` on the small laminate: exit 0, the summary names the report and has
 /// one row per mode with the three inverses' errors against the truth; `lamdyn run` on the
@@ -116,14 +116,7 @@ fn run_exits_1_when_no_inverse_has_a_core_at_a_mode() {
     );
     std::fs::write(&job, stiff).unwrap();
     let report = dir.join("stiff");
-    let (code, _, err) = lamdyn(&[
-        "run",
-        job.to_str().unwrap(),
-        "--out",
-        report.to_str().unwrap(),
-        "--samples",
-        "0",
-    ]);
+    let (code, _, err) = run_into(&job, &report, &[]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("no core at 78.04"), "{err}");
     assert!(report.join("report.html").is_file());

@@ -1,7 +1,7 @@
 //! Issue 19: lamdyn never destroys what it did not write, checks its outputs and inputs before
 //! the work, and trusts no cache entry blindly. Each test failed on the main of 2026-11-23.
 
-use super::common::{lamdyn, small_demo, temp_dir};
+use super::common::{lamdyn, run_into, small_demo, temp_dir};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -35,18 +35,8 @@ fn run_into_the_jobs_own_folder_is_refused_and_deletes_nothing() {
     let input = job.parent().unwrap();
     let before = snapshot(input);
     for force in [false, true] {
-        let mut args = vec![
-            "run",
-            job.to_str().unwrap(),
-            "--out",
-            input.to_str().unwrap(),
-            "--samples",
-            "0",
-        ];
-        if force {
-            args.push("--force");
-        }
-        let (code, _, err) = lamdyn(&args);
+        let force_flag: &[&str] = if force { &["--force"] } else { &[] };
+        let (code, _, err) = run_into(&job, input, force_flag);
         if force {
             // Written beside the inputs, none of them touched.
             assert_eq!(code, 0, "{err}");
@@ -105,14 +95,7 @@ fn a_rerun_replaces_its_own_results() {
     let job = small_demo(&dir);
     let out = dir.join("results");
     for _ in 0..2 {
-        let (code, _, err) = lamdyn(&[
-            "run",
-            job.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--samples",
-            "0",
-        ]);
+        let (code, _, err) = run_into(&job, &out, &[]);
         assert_eq!(code, 0, "{err}");
     }
     let manifest = std::fs::read_to_string(out.join(".lamdyn-manifest")).unwrap();
@@ -248,15 +231,7 @@ fn a_damaged_cache_entry_is_recomputed() {
     let cache = job.parent().unwrap().join(".lamdyn-cache");
     let run = || {
         let out = dir.join("r");
-        let (code, text, err) = lamdyn(&[
-            "run",
-            job.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--samples",
-            "0",
-            "--json",
-        ]);
+        let (code, text, err) = run_into(&job, &out, &["--json"]);
         assert_eq!(code, 0, "{err}");
         (
             serde_json::from_str::<serde_json::Value>(&text).unwrap(),
