@@ -29,6 +29,7 @@ mod error;
 pub mod fit;
 pub mod law;
 pub mod lm;
+pub mod master;
 pub mod misfit;
 pub mod modes;
 pub mod peaks;

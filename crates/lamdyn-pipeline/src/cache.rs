@@ -116,7 +116,12 @@ impl Cache {
         let dir = path.parent().unwrap_or(Path::new("."));
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the cache folder '{}'", dir.display()))?;
-        let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
+        // Unique per process and call: jobs of a batch share one cache folder from several
+        // processes and threads, and may store the same key at once (the last rename wins;
+        // both entries are the same bytes).
+        static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let serial = SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let tmp = path.with_extension(format!("tmp-{}-{serial}", std::process::id()));
         let mut entry = Vec::with_capacity(HEADER + bytes.len());
         entry.extend_from_slice(MAGIC);
         entry.extend_from_slice(&key.0.to_le_bytes());

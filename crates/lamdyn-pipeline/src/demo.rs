@@ -36,6 +36,32 @@ pub fn demo_roof() -> Description {
     d
 }
 
+/// The demo roof at `temperature_k` (K): its core's law (given at 20 °C = 293.15 K) moved there
+/// by a WLF shift with `c1` and `c2_k` (K), M*(ω; T) = M*_ref(a_T ω)
+/// ([`lamdyn_material::law::TemperatureShifted`]); everything else as [`demo_roof`]. The
+/// virtual tests of a master curve.
+///
+/// # Errors
+/// Non-physical WLF constants, or a temperature at or below the WLF pole.
+pub fn demo_roof_at(temperature_k: f64, c1: f64, c2_k: f64) -> Result<Description> {
+    use lamdyn_material::law::{LawSpec, WlfShift};
+    let reference_temperature_k = 293.15;
+    WlfShift::new(c1, c2_k, reference_temperature_k)?.shift_factor(temperature_k)?;
+    let mut d = demo_roof();
+    for l in &mut d.layers {
+        if let Some(law) = l.shear_law.take() {
+            l.shear_law = Some(LawSpec::Wlf {
+                c1,
+                c2_k,
+                reference_temperature_k,
+                temperature_k,
+                law: Box::new(law),
+            });
+        }
+    }
+    Ok(d)
+}
+
 /// The shell model of the chain for a bench description: the same plan and dome, MITC4 at
 /// twice the bench's in-plane division (the hexahedra's mid-side nodes are the shell's nodes,
 /// so sensors sit on nodes), the laminate's thickness and mean density, the faces' modulus as
@@ -87,7 +113,12 @@ fn toml_text<T: serde::Serialize>(v: &T) -> Result<String> {
 }
 
 /// The job of the demo (paths relative to `input/`).
-fn job_text(d: &Description, hits: usize, samples: usize, seed: u64) -> Result<String> {
+fn job_text(d: &Description, hits: usize, sampling: DemoSampling) -> Result<String> {
+    let DemoSampling {
+        samples,
+        seed,
+        temperature_k,
+    } = sampling;
     let mut stack = lamdyn_material::laminate::StackSpec {
         surface_density_kg_m2: None,
         layers: d.layers.clone(),
@@ -118,7 +149,7 @@ fn job_text(d: &Description, hits: usize, samples: usize, seed: u64) -> Result<S
         "# lamdyn run job written by `lamdyn demo`: the virtual roof's impact test.\n\
          # Re-run with `lamdyn run input/job.toml --out report` from the demo folder.\n\
          title = \"lamdyn demo: the core of a virtual laminated roof, recovered from its impact test\"\n\
-         truth = \"truth.csv\"\n\n\
+         truth = \"truth.csv\"\n{temperature}\n\
          [measurement]\nchannels = \"channels.csv\"\n{measurement}\ntolerance_m = {tol:e}\n\n\
          [model]\nmodes = 30\nresidual = true\n{model}\n\n\
          [fit]\nlaw = \"per_mode\"\ncovariance = \"robust_hc3\"\n\n\
@@ -129,6 +160,7 @@ fn job_text(d: &Description, hits: usize, samples: usize, seed: u64) -> Result<S
          # G' comes out 10-14 % low (that mesh is about 0.4 % stiffer in frequency).\nlayered_elements = [{ex}, {ey}]\n\n\
          [uncertainty]\nsamples = {samples}\nseed = {seed}\n\n{stack}\n",
         tol = h,
+        temperature = temperature_k.map_or(String::new(), |t| format!("temperature_k = {t}\n")),
         ex = d.mesh.elements[0],
         ey = d.mesh.elements[1],
         hi = d.test.max_hz,
@@ -142,8 +174,7 @@ fn input_files(
     d: &Description,
     frfs: &FrfSet,
     hits: Option<&lamdyn_testbench::impact::Hits>,
-    samples: usize,
-    seed: u64,
+    sampling: DemoSampling,
 ) -> Result<Vec<(String, Vec<u8>)>> {
     let mut files = vec![
         ("description.toml".to_string(), toml_text(d)?.into_bytes()),
@@ -171,18 +202,21 @@ fn input_files(
     let n_hits = hits.map_or(0, |h| h.records.len());
     files.push((
         "job.toml".to_string(),
-        job_text(d, n_hits, samples, seed)?.into_bytes(),
+        job_text(d, n_hits, sampling)?.into_bytes(),
     ));
     Ok(files)
 }
 
-/// The demo's Monte Carlo: samples and seed of the job it writes.
+/// What the demo's job says beside the test: the Monte Carlo's samples and seed, and the
+/// test's temperature.
 #[derive(Debug, Clone, Copy)]
 pub struct DemoSampling {
     /// Monte Carlo samples.
     pub samples: usize,
     /// Seed.
     pub seed: u64,
+    /// The test's temperature, K (the job's `temperature_k`), if stated.
+    pub temperature_k: Option<f64>,
 }
 
 impl Default for DemoSampling {
@@ -190,6 +224,7 @@ impl Default for DemoSampling {
         Self {
             samples: 400,
             seed: 1,
+            temperature_k: None,
         }
     }
 }
@@ -205,6 +240,25 @@ pub fn run_demo(
     spinner: &dyn Reporter,
 ) -> Result<(ChainResult, PathBuf, f64)> {
     let t = std::time::Instant::now();
+    let path = write_virtual_test(d, input, sampling, spinner)?;
+    let simulate_s = t.elapsed().as_secs_f64();
+    let job = Job::read(&path)?;
+    let result = run_job(job, &path, options, spinner)?;
+    Ok((result, path, simulate_s))
+}
+
+/// Simulates the test of `d` and writes its files into the folder `input` (prepared by the
+/// caller): the channels, the hits (or FRFs), the true core, the description and `job.toml`,
+/// whose path it returns.
+///
+/// # Errors
+/// The bench's and the writing's errors.
+pub fn write_virtual_test(
+    d: &Description,
+    input: &OutputDir,
+    sampling: DemoSampling,
+    spinner: &dyn Reporter,
+) -> Result<PathBuf> {
     spinner.stage("stage 'virtual test': building the layered roof");
     let bench = d
         .build(&mut |s: &str| spinner.stage(&format!("stage 'virtual test': {s}")))
@@ -212,18 +266,7 @@ pub fn run_demo(
     spinner.stage("stage 'virtual test': FRFs and hammer hits");
     let frfs = bench.frfs().context("stage 'virtual test' failed")?;
     let hits = bench.hit_records().context("stage 'virtual test' failed")?;
-    let files = input_files(
-        &bench,
-        d,
-        &frfs,
-        hits.as_ref(),
-        sampling.samples,
-        sampling.seed,
-    )?;
+    let files = input_files(&bench, d, &frfs, hits.as_ref(), sampling)?;
     input.write(&files)?;
-    let simulate_s = t.elapsed().as_secs_f64();
-    let path = input.path().join("job.toml");
-    let job = Job::read(&path)?;
-    let result = run_job(job, &path, options, spinner)?;
-    Ok((result, path, simulate_s))
+    Ok(input.path().join("job.toml"))
 }

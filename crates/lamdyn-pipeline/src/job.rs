@@ -42,7 +42,15 @@ pub struct Job {
     /// loss_pa (as `lamdyn simulate` writes truth.csv); the report then states the errors.
     #[serde(default)]
     pub truth: Option<PathBuf>,
+    /// The part's temperature during the test, K: the master-curve step
+    /// ([`lamdyn_fit::master`]) shifts the cores of jobs at several temperatures onto one
+    /// curve.
+    #[serde(default)]
+    pub temperature_k: Option<f64>,
 }
+
+/// Lowest and highest temperature of a test that a job may state, K (−123 °C to 227 °C).
+pub const TEMPERATURE_RANGE_K: [f64; 2] = [150.0, 500.0];
 
 fn default_title() -> String {
     "lamdyn: the core's shear modulus from an impact test".into()
@@ -376,6 +384,15 @@ impl Job {
 
     /// Range and unit checks; the error names the field.
     pub fn check(&self) -> Result<()> {
+        if let Some(t) = self.temperature_k {
+            let [lo, hi] = TEMPERATURE_RANGE_K;
+            if !(t.is_finite() && (lo..=hi).contains(&t)) {
+                return Err(err!(
+                    "temperature_k: {t} is outside [{lo}, {hi}]: temperatures are in K ({t} °C would be {:.2} K)",
+                    t + 273.15
+                ));
+            }
+        }
         let m = &self.measurement;
         positive("measurement.tolerance_m", m.tolerance_m)?;
         if m.tolerance_m > 0.1 {

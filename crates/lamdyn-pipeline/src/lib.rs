@@ -45,6 +45,7 @@
 pub mod cache;
 pub mod demo;
 pub mod error;
+pub mod fit_job;
 pub mod io;
 pub mod job;
 pub mod layered;

@@ -28,7 +28,11 @@ fn demo(dir: &Path, samples: usize) -> (ChainResult, PathBuf) {
     let options = RunOptions {
         cache_dir: Some(dir.join("input/.lamdyn-cache")),
     };
-    let sampling = DemoSampling { samples, seed: 1 };
+    let sampling = DemoSampling {
+        samples,
+        seed: 1,
+        temperature_k: None,
+    };
     let (result, job, _) = run_demo(&small(), &input, sampling, &options, &Silent).unwrap();
     let out = OutputDir::prepare(&dir.join("report"), &[], false).unwrap();
     out.write(&report::build(&result).unwrap()).unwrap();
@@ -216,6 +220,15 @@ fn bad_job_files_name_the_field() {
         good.replacen("young_pa = 70000000000.0", "young_pa = 70.0", 1),
         "young_pa = 70 is outside [1e8, 2e12]: moduli are in Pa",
     );
+    // A temperature in degrees Celsius: refused with the kelvin it probably meant; in K, read.
+    check(
+        "celsius.toml",
+        format!("temperature_k = 20.0\n{good}"),
+        "temperature_k: 20 is outside [150, 500]: temperatures are in K (20 °C would be 293.15 K)",
+    );
+    let p = input.join("kelvin.toml");
+    std::fs::write(&p, format!("temperature_k = 293.15\n{good}")).unwrap();
+    assert_eq!(Job::read(&p).unwrap().temperature_k, Some(293.15));
     // Channel counts: the job's count against the geometry, and an FRF table against it: these
     // are found by the measurement stage.
     let options = RunOptions::default();

@@ -19,6 +19,7 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let sampling = DemoSampling {
         samples: args.samples.unwrap_or(defaults.samples),
         seed: args.seed.unwrap_or(defaults.seed),
+        temperature_k: None,
     };
     if sampling.samples > MAX_SAMPLES {
         bail!("--samples: {} is more than {MAX_SAMPLES}", sampling.samples);

@@ -12,166 +12,22 @@ use crate::cli::{CovarianceArg, FitArgs, FitExample, LawArg, MisfitArg};
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report, Section, write_csv_table};
 use anyhow::{Context, Result, bail};
-use lamdyn_fem::assembly::Assembly;
-use lamdyn_fem::eigen::{ModalParams, Progress, solve_modes};
+use lamdyn_fem::eigen::Progress;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_fit::fit::{Covariance, FitResult, FitSettings, LawKind, fit};
 use lamdyn_fit::misfit::{MisfitKind, MisfitSpec, Objective};
 use lamdyn_fit::modes::{compare_peaks, modewise};
-use lamdyn_fit::probe::probes;
-use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_fit::synthetic::PaperPlateCase;
-use lamdyn_frf::FrfSet;
 use lamdyn_material::law::{FractionalZener, PaperEq7Law, ViscoelasticLaw};
-use lamdyn_pipeline::io::read_toml;
-use lamdyn_pipeline::job::{
-    Measurement, ModelSource, base_of, default_misfit, default_prominence, relative,
-};
-use lamdyn_pipeline::measurement::read_measurement_section;
+use lamdyn_pipeline::fit_job::{FitProblem, load_fit_job};
+use lamdyn_pipeline::job::default_misfit;
 use lamdyn_pipeline::output::OutputDir;
-use serde::Deserialize;
 use std::f64::consts::PI;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-/// A fit job file: the layout of a `lamdyn run` job (`[measurement]`, `[model]` with `file`
-/// or `spec`, `[fit]` with `[fit.misfit]`), so one file serves both commands; the run job's
-/// other sections are accepted and not used here. The layout before issue 19 (`model` as a
-/// path, top-level `modes`, `residual` and `[misfit]`) is still read, with a deprecation note.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-#[allow(dead_code)] // the run job's sections are read to be accepted, not used
-struct FitJob {
-    #[serde(default)]
-    title: Option<String>,
-    measurement: Measurement,
-    /// `[model]` (file or spec, modes, residual), or a path (deprecated).
-    model: toml::Value,
-    #[serde(default)]
-    fit: FitOptions,
-    /// Deprecated: `[model] modes`.
-    #[serde(default)]
-    modes: Option<usize>,
-    /// Deprecated: `[model] residual`.
-    #[serde(default)]
-    residual: Option<bool>,
-    /// Deprecated: `[fit.misfit]`.
-    #[serde(default)]
-    misfit: Option<MisfitSpec>,
-    // Sections of a run job that the fit does not use.
-    #[serde(default)]
-    stack: Option<toml::Value>,
-    #[serde(default)]
-    ema: Option<toml::Value>,
-    #[serde(default)]
-    inverse: Option<toml::Value>,
-    #[serde(default)]
-    uncertainty: Option<toml::Value>,
-    #[serde(default)]
-    truth: Option<toml::Value>,
-}
-
-/// `[fit]` of a job: the run job's keys; the law defaults to the paper's eq. 7 here (`lamdyn
-/// run` defaults to `per_mode`).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FitOptions {
-    #[serde(default = "default_law")]
-    law: LawKind,
-    #[serde(default)]
-    covariance: Covariance,
-    /// Peak prominence for the starts (ratio over the neighbouring valleys).
-    #[serde(default = "default_prominence")]
-    prominence: f64,
-    #[serde(default)]
-    misfit: Option<MisfitSpec>,
-}
-
-impl Default for FitOptions {
-    fn default() -> Self {
-        Self {
-            law: default_law(),
-            covariance: Covariance::default(),
-            prominence: default_prominence(),
-            misfit: None,
-        }
-    }
-}
-
-fn default_law() -> LawKind {
-    LawKind::PaperEq7
-}
-
-/// The job's model, misfit and their deprecation notes, in the current layout.
-struct Resolved {
-    model: ModelSource,
-    misfit: MisfitSpec,
-    notes: Vec<String>,
-}
-
-impl FitJob {
-    /// Reads the old spellings into the current layout, noting each; both spellings at once
-    /// is an error.
-    fn resolve(&self) -> std::result::Result<Resolved, String> {
-        let mut notes = Vec::new();
-        let mut model = match &self.model {
-            toml::Value::String(p) => {
-                notes.push(format!(
-                    "deprecated: model = \"{p}\" is the old layout; write [model] with file = \"{p}\" (as in a lamdyn run job)"
-                ));
-                ModelSource {
-                    file: Some(PathBuf::from(p)),
-                    spec: None,
-                    modes: None,
-                    residual: true,
-                }
-            }
-            v => ModelSource::deserialize(v.clone()).map_err(|e| format!("model: {e}"))?,
-        };
-        if let Some(n) = self.modes {
-            if model.modes.is_some() {
-                return Err("modes: give [model] modes only".into());
-            }
-            notes.push("deprecated: top-level modes; write it in [model]".into());
-            model.modes = Some(n);
-        }
-        if let Some(r) = self.residual {
-            notes.push("deprecated: top-level residual; write it in [model]".into());
-            model.residual = r;
-        }
-        let misfit = match (&self.misfit, &self.fit.misfit) {
-            (Some(_), Some(_)) => return Err("misfit: give [fit.misfit] only".into()),
-            (Some(m), None) => {
-                notes.push(
-                    "deprecated: [misfit]; write [fit.misfit] (as in a lamdyn run job)".into(),
-                );
-                m.clone()
-            }
-            (None, Some(m)) => m.clone(),
-            (None, None) => default_misfit(),
-        };
-        Ok(Resolved {
-            model,
-            misfit,
-            notes,
-        })
-    }
-}
-
-/// Everything a fit needs, validated.
-struct Problem {
-    source: String,
-    model_line: String,
-    model: ModalModel,
-    measured: FrfSet,
-    settings: FitSettings,
-    /// The law the data were made from and its parameters in the fit's order (built-in
-    /// examples).
-    truth: Option<(Box<dyn ViscoelasticLaw>, Vec<f64>)>,
-    model_seconds: f64,
-    /// Deprecated spellings met in the job or on the command line.
-    notes: Vec<String>,
-}
+/// Everything a fit needs ([`lamdyn_pipeline::fit_job`]).
+type Problem = FitProblem;
 
 /// Runs `lamdyn fit`.
 pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
@@ -184,7 +40,7 @@ pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     let example_dir = args.write_example.as_ref().map(prepare).transpose()?;
     let spinner = Spinner::new();
     let mut problem = match (&args.job, args.example) {
-        (Some(path), _) => from_job(path, &spinner)?,
+        (Some(path), _) => load_fit_job(path, &spinner)?,
         (None, Some(e)) => from_example(e, args.seed, args.noise)?,
         (None, None) => bail!("give a fit job file or --example"),
     };
@@ -331,116 +187,6 @@ fn from_example(e: FitExample, seed: u64, noise: f64) -> Result<Problem> {
         truth: Some((truth, truth_params)),
         model_seconds: built.model_seconds,
         notes: Vec::new(),
-    })
-}
-
-fn from_job(path: &Path, spinner: &Spinner) -> Result<Problem> {
-    let job: FitJob = read_toml(path)?;
-    let base = base_of(path);
-    let bad =
-        |field: &str, why: String| anyhow::anyhow!("error in '{}': {field}: {why}", path.display());
-    let Resolved {
-        model: source,
-        misfit,
-        notes,
-    } = job
-        .resolve()
-        .map_err(|e| anyhow::anyhow!("error in '{}': {e}", path.display()))?;
-    let tol = job.measurement.tolerance_m;
-    if !(tol.is_finite() && tol > 0.0) {
-        return Err(bad(
-            "measurement.tolerance_m",
-            format!("{tol} must be a positive length in m"),
-        ));
-    }
-    let prominence = job.fit.prominence;
-    if !(prominence.is_finite() && prominence > 1.0) {
-        return Err(bad(
-            "fit.prominence",
-            format!("{prominence} must be a ratio above 1"),
-        ));
-    }
-    let (spec, model_base, model_name) = match (&source.file, &source.spec) {
-        (Some(f), None) => {
-            let p = relative(&base, f);
-            let spec: ModelSpec = read_toml(&p)?;
-            (spec, base_of(&p), format!("'{}'", p.display()))
-        }
-        (None, Some(spec)) => (spec.clone(), base.clone(), "[model.spec]".to_string()),
-        _ => {
-            return Err(bad(
-                "model",
-                "give either file (a model TOML) or [model.spec], not both or neither".into(),
-            ));
-        }
-    };
-    if !spec.supports.is_empty() {
-        return Err(bad(
-            "model",
-            format!(
-                "{model_name} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and exclude their resonance bands with fit.misfit.exclude_hz",
-                spec.supports.len()
-            ),
-        ));
-    }
-    let modes = source.modes.unwrap_or(spec.solver.modes);
-    if modes < 7 {
-        return Err(bad(
-            "model.modes",
-            format!("{modes}: keep at least the 6 rigid-body modes and one elastic mode"),
-        ));
-    }
-    let measured = read_measurement_section(&job.measurement, misfit.band_hz, &base, path)?;
-    let set = measured.set;
-    if misfit.reference >= set.references().len() {
-        return Err(bad(
-            "fit.misfit.reference",
-            format!(
-                "{} but the measurement has {} reference(s), counted from 0",
-                misfit.reference,
-                set.references().len()
-            ),
-        ));
-    }
-    let clock = std::time::Instant::now();
-    let invalid = || format!("invalid model {model_name}");
-    let (mesh, _) = spec.build(&model_base).with_context(invalid)?;
-    let asm = Assembly::new(&mesh, &spec.material, &[]).with_context(invalid)?;
-    let channels = || format!("channels of {}", measured.source);
-    let resp = probes(&mesh, set.responses(), tol).with_context(channels)?;
-    let refs = probes(&mesh, set.references(), tol).with_context(channels)?;
-    let sol = solve_modes(&asm, &ModalParams::lowest(modes), spinner)?;
-    spinner.stage("projecting modes and residual terms");
-    let residual = if source.residual {
-        ResidualTerm::Static
-    } else {
-        ResidualTerm::None
-    };
-    let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, residual)?;
-    let mut settings = FitSettings::new(job.fit.law, misfit);
-    settings.covariance = job.fit.covariance;
-    settings.prominence = prominence;
-    let mut notes = notes;
-    notes.extend(measured.warnings);
-    Ok(Problem {
-        source: format!("job '{}': {}", path.display(), measured.source),
-        model_line: format!(
-            "{model_name}: {} nodes, {} MITC4, {modes} modes{}, E_ref = {:.4e} Pa",
-            mesh.nodes().len(),
-            mesh.elements().len(),
-            if source.residual {
-                " + residual term"
-            } else {
-                ""
-            },
-            spec.material.young_pa
-        ),
-        model,
-        measured: set,
-        settings,
-        truth: None,
-        model_seconds: clock.elapsed().as_secs_f64(),
-        notes,
     })
 }
 

@@ -1,0 +1,302 @@
+//! A fit job (`lamdyn fit JOB`, `lamdyn.fit_job` in Python): the measured FRFs of a job's
+//! `[measurement]`, the modal model of its `[model]` and the settings of its `[fit]`, validated
+//! and ready for [`lamdyn_fit::fit::fit`] (paper eqs. 2–10).
+//!
+//! A fit job file has the layout of a `lamdyn run` job (`[measurement]`, `[model]` with `file`
+//! or `spec`, `[fit]` with `[fit.misfit]`), so one file serves both; the run job's other
+//! sections are accepted and not used. The layout before issue 19 (`model` as a path,
+//! top-level `modes`, `residual` and `[misfit]`) is still read, with a deprecation note.
+
+use crate::error::{Context, Result};
+use crate::io::read_toml;
+use crate::job::{Measurement, ModelSource, base_of, default_misfit, default_prominence, relative};
+use crate::measurement::read_measurement_section;
+use crate::{Reporter, err};
+use lamdyn_fem::assembly::Assembly;
+use lamdyn_fem::eigen::{ModalParams, solve_modes};
+use lamdyn_fem::model::ModelSpec;
+use lamdyn_fit::fit::{Covariance, FitSettings, LawKind};
+use lamdyn_fit::misfit::MisfitSpec;
+use lamdyn_fit::probe::probes;
+use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
+use lamdyn_frf::FrfSet;
+use lamdyn_material::law::ViscoelasticLaw;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(dead_code)] // the run job's sections are read to be accepted, not used
+struct FitJob {
+    #[serde(default)]
+    title: Option<String>,
+    measurement: Measurement,
+    /// `[model]` (file or spec, modes, residual), or a path (deprecated).
+    model: toml::Value,
+    #[serde(default)]
+    fit: FitOptions,
+    /// Deprecated: `[model] modes`.
+    #[serde(default)]
+    modes: Option<usize>,
+    /// Deprecated: `[model] residual`.
+    #[serde(default)]
+    residual: Option<bool>,
+    /// Deprecated: `[fit.misfit]`.
+    #[serde(default)]
+    misfit: Option<MisfitSpec>,
+    // Sections of a run job that the fit does not use.
+    #[serde(default)]
+    stack: Option<toml::Value>,
+    #[serde(default)]
+    ema: Option<toml::Value>,
+    #[serde(default)]
+    inverse: Option<toml::Value>,
+    #[serde(default)]
+    uncertainty: Option<toml::Value>,
+    #[serde(default)]
+    truth: Option<toml::Value>,
+    #[serde(default)]
+    temperature_k: Option<f64>,
+}
+
+/// `[fit]` of a job: the run job's keys; the law defaults to the paper's eq. 7 here (`lamdyn
+/// run` defaults to `per_mode`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FitOptions {
+    #[serde(default = "default_law")]
+    law: LawKind,
+    #[serde(default)]
+    covariance: Covariance,
+    /// Peak prominence for the starts (ratio over the neighbouring valleys).
+    #[serde(default = "default_prominence")]
+    prominence: f64,
+    #[serde(default)]
+    misfit: Option<MisfitSpec>,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            law: default_law(),
+            covariance: Covariance::default(),
+            prominence: default_prominence(),
+            misfit: None,
+        }
+    }
+}
+
+fn default_law() -> LawKind {
+    LawKind::PaperEq7
+}
+
+/// The job's model, misfit and their deprecation notes, in the current layout.
+struct Resolved {
+    model: ModelSource,
+    misfit: MisfitSpec,
+    notes: Vec<String>,
+}
+
+impl FitJob {
+    /// Reads the old spellings into the current layout, noting each; both spellings at once
+    /// is an error.
+    fn resolve(&self) -> std::result::Result<Resolved, String> {
+        let mut notes = Vec::new();
+        let mut model = match &self.model {
+            toml::Value::String(p) => {
+                notes.push(format!(
+                    "deprecated: model = \"{p}\" is the old layout; write [model] with file = \"{p}\" (as in a lamdyn run job)"
+                ));
+                ModelSource {
+                    file: Some(PathBuf::from(p)),
+                    spec: None,
+                    modes: None,
+                    residual: true,
+                }
+            }
+            v => ModelSource::deserialize(v.clone()).map_err(|e| format!("model: {e}"))?,
+        };
+        if let Some(n) = self.modes {
+            if model.modes.is_some() {
+                return Err("modes: give [model] modes only".into());
+            }
+            notes.push("deprecated: top-level modes; write it in [model]".into());
+            model.modes = Some(n);
+        }
+        if let Some(r) = self.residual {
+            notes.push("deprecated: top-level residual; write it in [model]".into());
+            model.residual = r;
+        }
+        let misfit = match (&self.misfit, &self.fit.misfit) {
+            (Some(_), Some(_)) => return Err("misfit: give [fit.misfit] only".into()),
+            (Some(m), None) => {
+                notes.push(
+                    "deprecated: [misfit]; write [fit.misfit] (as in a lamdyn run job)".into(),
+                );
+                m.clone()
+            }
+            (None, Some(m)) => m.clone(),
+            (None, None) => default_misfit(),
+        };
+        Ok(Resolved {
+            model,
+            misfit,
+            notes,
+        })
+    }
+}
+
+/// Everything a fit needs, validated.
+pub struct FitProblem {
+    /// Where the measurement came from (for reports).
+    pub source: String,
+    /// A line describing the modal model.
+    pub model_line: String,
+    /// The modal model at the measurement's channels.
+    pub model: ModalModel,
+    /// The measured FRFs.
+    pub measured: FrfSet,
+    /// The fit's settings.
+    pub settings: FitSettings,
+    /// The law the data were made from and its parameters in the fit's order (built-in
+    /// examples).
+    pub truth: Option<(Box<dyn ViscoelasticLaw>, Vec<f64>)>,
+    /// Time to build the modal model, s.
+    pub model_seconds: f64,
+    /// Deprecated spellings met and the measurement's warnings.
+    pub notes: Vec<String>,
+}
+
+/// The modal model of a free shell model at the channels of `set`: mesh, assembly, the lowest
+/// `modes` modes, each channel located on the mesh within `tolerance_m` (m), and the static
+/// residual term when `residual` (paper eq. 4: K*(ω) = s(ω) K0). Returns the model and a line
+/// describing it; `name` names the model and `source` the measurement in messages.
+///
+/// # Errors
+/// An invalid model, fewer than 7 modes, elastic supports (the scaling holds for a free model
+/// only), channels off the mesh, and the solver's failures.
+#[allow(clippy::too_many_arguments)]
+pub fn modal_model(
+    spec: &ModelSpec,
+    base: &Path,
+    name: &str,
+    source: &str,
+    set: &FrfSet,
+    tolerance_m: f64,
+    modes: usize,
+    residual: bool,
+    progress: &dyn Reporter,
+) -> Result<(ModalModel, String)> {
+    if !spec.supports.is_empty() {
+        crate::bail!(
+            "model: {name} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and exclude their resonance bands with fit.misfit.exclude_hz",
+            spec.supports.len()
+        );
+    }
+    if modes < 7 {
+        crate::bail!(
+            "model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode"
+        );
+    }
+    if !(tolerance_m.is_finite() && tolerance_m > 0.0) {
+        crate::bail!("measurement.tolerance_m: {tolerance_m} must be a positive length in m");
+    }
+    let invalid = || format!("invalid model {name}");
+    let (mesh, _) = spec.build(base).with_context(invalid)?;
+    let asm = Assembly::new(&mesh, &spec.material, &[]).with_context(invalid)?;
+    let channels = || format!("channels of {source}");
+    let resp = probes(&mesh, set.responses(), tolerance_m).with_context(channels)?;
+    let refs = probes(&mesh, set.references(), tolerance_m).with_context(channels)?;
+    let sol = solve_modes(&asm, &ModalParams::lowest(modes), progress)?;
+    progress.stage("projecting modes and residual terms");
+    let term = if residual {
+        ResidualTerm::Static
+    } else {
+        ResidualTerm::None
+    };
+    let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, term)?;
+    let line = format!(
+        "{name}: {} nodes, {} MITC4, {modes} modes{}, E_ref = {:.4e} Pa",
+        mesh.nodes().len(),
+        mesh.elements().len(),
+        if residual { " + residual term" } else { "" },
+        spec.material.young_pa
+    );
+    Ok((model, line))
+}
+
+/// Reads and validates a fit job, builds its modal model (module docs).
+///
+/// # Errors
+/// The file's errors naming the field, the measurement's, the model's (see [`modal_model`]).
+pub fn load_fit_job(path: &Path, progress: &dyn Reporter) -> Result<FitProblem> {
+    let job: FitJob = read_toml(path)?;
+    let base = base_of(path);
+    let in_job = |why: String| err!("error in '{}': {why}", path.display());
+    let Resolved {
+        model: source,
+        misfit,
+        notes,
+    } = job.resolve().map_err(in_job)?;
+    let prominence = job.fit.prominence;
+    if !(prominence.is_finite() && prominence > 1.0) {
+        return Err(in_job(format!(
+            "fit.prominence: {prominence} must be a ratio above 1"
+        )));
+    }
+    let (spec, model_base, model_name) = match (&source.file, &source.spec) {
+        (Some(f), None) => {
+            let p = relative(&base, f);
+            let spec: ModelSpec = read_toml(&p)?;
+            (spec, base_of(&p), format!("'{}'", p.display()))
+        }
+        (None, Some(spec)) => (spec.clone(), base.clone(), "[model.spec]".to_string()),
+        _ => {
+            return Err(in_job(
+                "model: give either file (a model TOML) or [model.spec], not both or neither"
+                    .into(),
+            ));
+        }
+    };
+    let modes = source.modes.unwrap_or(spec.solver.modes);
+    let measured = read_measurement_section(&job.measurement, misfit.band_hz, &base, path)?;
+    let set = measured.set;
+    if misfit.reference >= set.references().len() {
+        return Err(in_job(format!(
+            "fit.misfit.reference: {} but the measurement has {} reference(s), counted from 0",
+            misfit.reference,
+            set.references().len()
+        )));
+    }
+    let clock = std::time::Instant::now();
+    let (model, model_line) = modal_model(
+        &spec,
+        &model_base,
+        &model_name,
+        &measured.source,
+        &set,
+        job.measurement.tolerance_m,
+        modes,
+        source.residual,
+        progress,
+    )
+    .map_err(|e| match e {
+        crate::PipelineError::Invalid(m) => in_job(m),
+        e => e,
+    })?;
+    let mut settings = FitSettings::new(job.fit.law, misfit);
+    settings.covariance = job.fit.covariance;
+    settings.prominence = prominence;
+    let mut notes = notes;
+    notes.extend(measured.warnings);
+    Ok(FitProblem {
+        source: format!("job '{}': {}", path.display(), measured.source),
+        model_line,
+        model,
+        measured: set,
+        settings,
+        truth: None,
+        model_seconds: clock.elapsed().as_secs_f64(),
+        notes,
+    })
+}

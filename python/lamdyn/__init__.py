@@ -1,0 +1,601 @@
+"""lamdyn: the viscoelastic core of a laminated plate from its impact test.
+
+The Rust library of the ``lamdyn`` command, with numpy arrays in and out. SI units
+throughout (Hz, m, Pa, kg/m^3, K); FRF arrays are complex, indexed ``frf[response,
+reference, line]``.
+
+Stages, as in the command line:
+
+- :func:`read_uff`, :func:`read_uff_functions`, :func:`write_uff`: universal files.
+- :func:`ema`: modal identification (PolyMAX / LSCF, stabilization, LSFD).
+- :func:`modes`: the lowest modes of a shell model (MITC4).
+- :func:`fit`, :func:`fit_job`: the laminate's effective modulus law E*(f) fitted to FRFs.
+- :func:`core_inverse`: the core's G*(f) from E*(f), by the paper's and the exact inverse.
+- :func:`run`: the whole chain on a job file (``lamdyn run``), report optional.
+- :func:`write_demo_job`: the demo roof's simulated test as a job folder, at a temperature.
+- :func:`master_curve`: one law and a WLF or Arrhenius shift over several temperatures.
+- :mod:`lamdyn.batch`: many job files as Dask tasks.
+
+Errors raise :class:`LamdynError` with lamdyn's message (the file, line or field at fault).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Optional, Sequence, Union
+
+import numpy as np
+
+from lamdyn import _native
+from lamdyn._native import LamdynError
+
+__all__ = [
+    "LamdynError",
+    "FrfData",
+    "version",
+    "read_uff",
+    "read_uff_functions",
+    "write_uff",
+    "ema",
+    "modes",
+    "fit",
+    "fit_job",
+    "core_inverse",
+    "run",
+    "write_demo_job",
+    "master_curve",
+    "DEMO_WLF",
+]
+
+PathLike = Union[str, os.PathLike]
+
+#: WLF constants of the demo core (:func:`write_demo_job`): C1, C2 in K, T_ref = 293.15 K
+#: (20 degC, where the demo roof's core law is given). Values of the order published for PVB.
+DEMO_WLF = {"c1": 12.0, "c2_k": 90.0, "reference_temperature_k": 293.15}
+
+
+def version() -> str:
+    """The version of the lamdyn crates the module was built from."""
+    return _native.version()
+
+
+@dataclass
+class FrfData:
+    """FRFs of responses x references on a frequency axis.
+
+    Attributes:
+        freqs_hz: frequency lines, Hz, shape (n_lines,).
+        frf: complex FRFs, shape (n_responses, n_references, n_lines), in the unit of
+            ``quantity`` (receptance m/N, mobility m/(s N), accelerance m/(s^2 N)).
+        responses, references: one dict per channel: ``name``, ``point_m`` (x, y, z in m)
+            and ``direction`` (unit vector).
+        quantity: ``"receptance"``, ``"mobility"`` or ``"accelerance"``.
+        notices: what the reader skipped (datasets of kinds lamdyn does not read).
+    """
+
+    freqs_hz: np.ndarray
+    frf: np.ndarray
+    responses: list = field(default_factory=list)
+    references: list = field(default_factory=list)
+    quantity: str = "accelerance"
+    notices: list = field(default_factory=list)
+
+
+def _channels_json(channels: Optional[Sequence[Any]]) -> Optional[str]:
+    if channels is None:
+        return None
+    out = []
+    for c in channels:
+        if isinstance(c, str):
+            out.append({"name": c})
+        else:
+            out.append({k: (list(map(float, v)) if k != "name" else v) for k, v in dict(c).items()})
+    return json.dumps(out)
+
+
+def _f64(a: Any, name: str) -> np.ndarray:
+    arr = np.ascontiguousarray(np.asarray(a, dtype=np.float64))
+    if arr.ndim != 1:
+        raise LamdynError(f"{name}: expected a 1-d array, got shape {arr.shape}")
+    return arr
+
+
+def _frf(a: Any) -> np.ndarray:
+    arr = np.asarray(a)
+    if arr.ndim == 2:  # one reference
+        arr = arr[:, None, :]
+    if arr.ndim != 3:
+        raise LamdynError(
+            f"frf: expected shape (responses, references, lines) or (responses, lines), got {arr.shape}"
+        )
+    return np.ascontiguousarray(arr, dtype=np.complex128)
+
+
+def _complex(v: Any) -> Any:
+    """num-complex's JSON ([re, im], or lists of them) as numpy complex."""
+    a = np.asarray(v, dtype=np.float64)
+    return a[..., 0] + 1j * a[..., 1]
+
+
+def read_uff(path: PathLike, lenient: bool = False) -> FrfData:
+    """The FRFs (datasets 58, function type 4) of a universal file as one :class:`FrfData`.
+
+    ASCII and binary (58b) records are read; units come from dataset 164 and are converted to
+    SI; the channels' positions from dataset 2411/15 (m). ``lenient`` accepts a record with
+    fewer points than announced, or a 58b header whose byte count disagrees with its records
+    (as pyuff 2.5.8 writes complex binary data), each with a notice.
+    """
+    freqs, frf, info = _native.read_uff(os.fspath(path), bool(lenient))
+    info = json.loads(info)
+    return FrfData(freqs, frf, info["responses"], info["references"], info["quantity"], info["notices"])
+
+
+def read_uff_functions(path: PathLike, lenient: bool = False) -> list:
+    """Every dataset 58 of a universal file as stored: one dict per record with the header
+    fields (``function_type``, ``response_node``, ``response_direction``, ``reference_node``,
+    ``reference_direction``, ``id_lines``, ...), ``x`` (the abscissa) and ``data`` (real or
+    complex ordinates, in the file's units). ``lenient`` as in :func:`read_uff`."""
+    out = []
+    for header, x, data in _native.read_uff_functions(os.fspath(path), bool(lenient)):
+        d = json.loads(header)
+        d["x"] = x
+        d["data"] = data
+        out.append(d)
+    return out
+
+
+def write_uff(
+    path: PathLike,
+    freqs_hz: Any,
+    frf: Any,
+    responses: Optional[Sequence[Any]] = None,
+    references: Optional[Sequence[Any]] = None,
+    quantity: str = "accelerance",
+    binary: bool = False,
+) -> None:
+    """Writes FRFs as a universal file: dataset 2411 (the channels' nodes, m), then one
+    dataset 58 (or 58b when ``binary``) per response/reference pair, complex double, SI units.
+
+    Channels are dicts (``name``, ``point_m``, ``direction``) or names; names like ``"12+Z"``
+    give node 12, direction +Z.
+    """
+    _native.write_uff(
+        os.fspath(path),
+        _f64(freqs_hz, "freqs_hz"),
+        _frf(frf),
+        _channels_json(responses),
+        _channels_json(references),
+        quantity,
+        bool(binary),
+    )
+
+
+def ema(
+    freqs_hz: Any,
+    frf: Any,
+    quantity: str = "accelerance",
+    responses: Optional[Sequence[Any]] = None,
+    references: Optional[Sequence[Any]] = None,
+    band_hz: Optional[Sequence[float]] = None,
+    orders: Sequence[int] = (2, 60, 2),
+    near_hz: Optional[Sequence[float]] = None,
+    reject_hz: Optional[Sequence[float]] = None,
+    window_hz: float = 1.0,
+    polymax: bool = True,
+    refine: bool = True,
+    driving: Optional[int] = None,
+) -> dict:
+    """Modal identification of FRFs, as ``lamdyn ema``.
+
+    Poles by PolyMAX (several references) or LSCF over ``orders`` (lowest, highest, step; the
+    default matches sdypy-EMA's ``pol_order_high=30``), the stable columns of the
+    stabilization diagram selected automatically (or the stable pole nearest each of
+    ``near_hz``), then LSFD residues and a Levenberg-Marquardt refinement of the poles
+    (``refine=False``: LSFD on the diagram's poles).
+
+    Returns a dict: ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,
+    ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses), ``mpc``,
+    ``mpd_deg``, ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
+    ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json).
+    """
+    options = {
+        "band_hz": None if band_hz is None else [float(b) for b in band_hz],
+        "orders": [int(o) for o in orders],
+        "near_hz": None if near_hz is None else [float(f) for f in near_hz],
+        "reject_hz": None if reject_hz is None else [float(f) for f in reject_hz],
+        "window_hz": float(window_hz),
+        "polymax": bool(polymax),
+        "refine": bool(refine),
+        "driving": driving,
+    }
+    r = json.loads(
+        _native.ema(
+            _f64(freqs_hz, "freqs_hz"),
+            _frf(frf),
+            _channels_json(responses),
+            _channels_json(references),
+            quantity,
+            json.dumps(options),
+        )
+    )
+    modes_ = r["modes"]
+    r["freq_hz"] = np.array([m["freq_hz"] for m in modes_])
+    r["damping_ratio"] = np.array([m["damping_ratio"] for m in modes_])
+    r["loss_factor"] = np.array([m["loss_factor"] for m in modes_])
+    r["poles"] = np.array([complex(*m["pole"]) for m in modes_])
+    r["shapes"] = np.array([_complex(m["shape"]) for m in modes_]) if modes_ else np.zeros((0, 0), complex)
+    r["mpc"] = np.array([m["mpc"] for m in modes_])
+    r["mpd_deg"] = np.array([m["mpd_deg"] for m in modes_])
+    r["auto_mac"] = np.array(r["auto_mac"])
+    r["cmif"] = np.array(r["cmif"])
+    return r
+
+
+def _model_json(model: Union[dict, PathLike]) -> tuple:
+    """A model given as a dict (the layout of a ``lamdyn modes`` model TOML) or a TOML file."""
+    if isinstance(model, dict):
+        return json.dumps(model), "."
+    path = Path(model)
+    try:
+        import tomllib  # Python >= 3.11
+    except ModuleNotFoundError as e:  # pragma: no cover
+        raise LamdynError("reading a model TOML needs Python >= 3.11; pass the model as a dict") from e
+    try:
+        spec = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise LamdynError(f"cannot read '{path}': {e}") from e
+    except tomllib.TOMLDecodeError as e:
+        raise LamdynError(f"error in '{path}': {e}") from e
+    return json.dumps(spec), os.fspath(path.parent)
+
+
+def modes(model: Union[dict, PathLike], n_modes: Optional[int] = None) -> dict:
+    """The lowest modes of a shell model (MITC4, Lanczos on the sparse Cholesky), as
+    ``lamdyn modes``.
+
+    ``model`` is a dict laid out as a model TOML (``mesh``, ``material``, ``solver``,
+    ``supports``) or the path of one. Returns ``freqs_hz`` (n_modes,), ``nodes`` (n_nodes, 3)
+    in m, ``shapes`` (n_modes, 6 n_nodes), mass normalised (phi^T M phi = 1; per node
+    u_x, u_y, u_z, theta_x, theta_y, theta_z), ``rigid`` (bool per mode) and ``residual``
+    (relative eigen-residual per mode).
+    """
+    text, base = _model_json(model)
+    if n_modes is not None:
+        spec = json.loads(text)
+        spec.setdefault("solver", {})["modes"] = int(n_modes)
+        text = json.dumps(spec)
+    freqs, nodes, shapes, info = _native.modes(text, base)
+    info = json.loads(info)
+    return {
+        "freqs_hz": freqs,
+        "nodes": nodes,
+        "shapes": shapes,
+        "rigid": np.array(info["rigid"]),
+        "residual": np.array(info["residual"]),
+        "elements": info["elements"],
+    }
+
+
+def _fit_out(text: str) -> dict:
+    r = json.loads(text)
+    for k in ("freqs_hz", "e_storage_pa", "e_loss_factor", "e_storage_sd_pa", "e_loss_factor_sd"):
+        r[k] = np.array([np.nan if v is None else v for v in r[k]], dtype=float)
+    r["parameters"] = {p["name"]: p for p in r["result"]["parameters"]}
+    r["peaks_hz"] = np.array([p["freq_hz"] for p in r["result"]["peaks"]])
+    return r
+
+
+def fit_job(job: PathLike) -> dict:
+    """``lamdyn fit JOB``: the job's measurement, model and ``[fit]`` settings; returns the
+    fitted law (``parameters`` by name with value, sd and 95 % interval), ``result`` (the
+    CLI's full result), and E'(f) (Pa), eta(f) with standard deviations on the measured
+    lines."""
+    return _fit_out(_native.fit_job(os.fspath(job)))
+
+
+def fit(
+    freqs_hz: Any,
+    frf: Any,
+    responses: Sequence[Any],
+    references: Sequence[Any],
+    model: Union[dict, PathLike],
+    quantity: str = "accelerance",
+    law: str = "per_mode",
+    band_hz: Optional[Sequence[float]] = None,
+    misfit: str = "log_rms",
+    reference: int = 0,
+    exclude_hz: Optional[Sequence[Sequence[float]]] = None,
+    covariance: str = "robust_hc3",
+    n_modes: Optional[int] = None,
+    residual: bool = True,
+    tolerance_m: float = 1e-3,
+) -> dict:
+    """The effective modulus law E*(f) of the laminate fitted to FRF arrays (paper eqs. 2-10):
+    the shell ``model`` (free, E_ref in its material) scaled by the law, modes projected on the
+    channels (each located on the mesh within ``tolerance_m``, m), compared with the
+    measurement over ``band_hz`` by ``misfit`` (``rms``, ``log_rms`` or ``complex``) for
+    reference ``reference``. ``law`` is ``paper_eq7``, ``fractional_zener`` or ``per_mode``.
+
+    Returns as :func:`fit_job`.
+    """
+    text, base = _model_json(model)
+    spec = {"kind": misfit, "reference": int(reference)}
+    if band_hz is not None:
+        spec["band_hz"] = [float(b) for b in band_hz]
+    if exclude_hz is not None:
+        spec["exclude_hz"] = [[float(a), float(b)] for a, b in exclude_hz]
+    options = {
+        "law": law,
+        "misfit": spec,
+        "covariance": covariance,
+        "modes": n_modes,
+        "residual": bool(residual),
+        "tolerance_m": float(tolerance_m),
+    }
+    return _fit_out(
+        _native.fit_frf(
+            _f64(freqs_hz, "freqs_hz"),
+            _frf(frf),
+            _channels_json(responses),
+            _channels_json(references),
+            quantity,
+            text,
+            base,
+            json.dumps(options),
+        )
+    )
+
+
+def _stack_json(stack: Union[dict, PathLike]) -> str:
+    if isinstance(stack, dict):
+        return json.dumps(stack)
+    import tomllib
+
+    path = Path(stack)
+    try:
+        return json.dumps(tomllib.loads(path.read_text(encoding="utf-8")))
+    except (OSError, tomllib.TOMLDecodeError) as e:
+        raise LamdynError(f"cannot read the stack '{path}': {e}") from e
+
+
+def core_inverse(
+    freqs_hz: Any,
+    e_storage_pa: Any,
+    e_loss_factor: Any,
+    stack: Union[dict, PathLike],
+    kinematics: str = "beam",
+    core_formula: str = "eq41",
+    face_shear: str = "neglect",
+    bending: str = "faces",
+) -> dict:
+    """The core's G*(f) from the laminate's effective E*(f) (``lamdyn core``, same defaults):
+    by the paper's inverse (eqs. 33-45: ``core_formula`` eq41, eq43 or eq26; ``face_shear``
+    neglect (eq. 40) or include (eq. 39); ``bending`` faces (eq. 35) or full (eq. 14)) and by
+    the exact Mead-Markus inverse. ``stack`` is a dict laid out as a stack TOML (``layers``:
+    faces with ``young_pa``, the core without a modulus) or its path; ``kinematics``
+    ``beam`` (the paper's equations per unit width) or ``plate`` (cylindrical bending, as
+    ``lamdyn run``).
+
+    Returns arrays (NaN where an inverse has no solution, with the reason in ``*_error``):
+    ``paper_storage_pa``, ``paper_loss_factor``, ``paper_phi_abs`` (|phi|, eq. 37),
+    ``exact_storage_pa``, ``exact_loss_factor``.
+    """
+    r = json.loads(
+        _native.core_inverse(
+            _f64(freqs_hz, "freqs_hz"),
+            _f64(e_storage_pa, "e_storage_pa"),
+            _f64(e_loss_factor, "e_loss_factor"),
+            _stack_json(stack),
+            kinematics,
+            core_formula,
+            face_shear,
+            bending,
+        )
+    )
+    for k, v in list(r.items()):
+        if not k.endswith("_error"):
+            r[k] = np.array([np.nan if x is None else x for x in v], dtype=float)
+    return r
+
+
+_MODAL_COLUMNS = (
+    "f_hz",
+    "e_storage_pa",
+    "e_loss_factor",
+    "phi_abs",
+    "g_paper_storage_pa",
+    "g_paper_loss_factor",
+    "g_exact_storage_pa",
+    "g_exact_loss_factor",
+    "g_layered_storage_pa",
+    "g_layered_loss_factor",
+    "g_true_storage_pa",
+    "g_true_loss_factor",
+)
+
+
+def _run_out(text: str) -> dict:
+    r = json.loads(text)
+    rows = r.pop("modal")
+    r["modal"] = {
+        c: np.array([np.nan if row[c] is None else row[c] for row in rows], dtype=float)
+        for c in _MODAL_COLUMNS
+    }
+    r["ema_freq_hz"] = np.array([m[0] for m in r["ema_modes"]])
+    r["ema_damping_ratio"] = np.array([m[1] for m in r["ema_modes"]])
+    return r
+
+
+def run(
+    job: PathLike,
+    out: Optional[PathLike] = None,
+    cache: Union[PathLike, None, str] = "beside",
+    samples: Optional[int] = None,
+    seed: Optional[int] = None,
+    force: bool = False,
+) -> dict:
+    """``lamdyn run JOB``: the whole chain on a job file.
+
+    The report (HTML, figures, CSV/JSON tables) is written to ``out`` when given, under the
+    CLI's folder rules (only files lamdyn wrote are replaced; a folder holding other files or
+    the inputs is refused unless ``force``). ``cache`` is the cache folder: ``"beside"`` (the
+    default, ``.lamdyn-cache`` next to the job, as the CLI), a path, or None (no cache).
+    ``samples``/``seed`` override the job's Monte Carlo.
+
+    Returns a dict: ``modal`` (arrays per column at the modal frequencies: ``f_hz``, E', eta of
+    the laminate, |phi|, G' and eta of the core by the paper's, the exact and the layered
+    inverse, and the truth when the job names one), ``temperature_k``, ``ema_freq_hz``,
+    ``ema_damping_ratio``, ``modes_without_core``, ``warnings``, ``timings``, ``report``.
+    """
+    job = Path(job)
+    if cache == "beside":
+        cache = job.parent / ".lamdyn-cache"
+    return _run_out(
+        _native.run(
+            os.fspath(job),
+            None if out is None else os.fspath(out),
+            None if cache is None else os.fspath(cache),
+            samples,
+            seed,
+            bool(force),
+        )
+    )
+
+
+def write_demo_job(
+    out: PathLike,
+    temperature_k: Optional[float] = None,
+    c1: float = DEMO_WLF["c1"],
+    c2_k: float = DEMO_WLF["c2_k"],
+    samples: int = 0,
+    seed: int = 1,
+    force: bool = False,
+) -> str:
+    """Simulates the demo roof's impact test (``lamdyn demo``'s virtual test: five hammer hits
+    on the free laminated roof, 243 channels) and writes it as a job folder ``out``; returns
+    the path of ``job.toml``.
+
+    With ``temperature_k`` the core's law (given at 293.15 K) is moved to that temperature by
+    a WLF shift with ``c1`` and ``c2_k`` (K), and the job states its ``temperature_k``: the
+    virtual tests of a master curve. ``samples`` is the job's Monte Carlo size (0: none).
+    """
+    return _native.write_demo_job(
+        os.fspath(out),
+        None if temperature_k is None else float(temperature_k),
+        float(c1),
+        float(c2_k),
+        int(samples),
+        int(seed),
+        bool(force),
+    )
+
+
+def master_curve(
+    results: Optional[Sequence[dict]] = None,
+    *,
+    temperature_k: Any = None,
+    freq_hz: Any = None,
+    storage_pa: Any = None,
+    loss_factor: Any = None,
+    reference_temperature_k: float = 293.15,
+    shift: str = "wlf",
+    inverse: str = "layered",
+    curve_freqs_hz: Any = None,
+    curve_temperatures_k: Any = None,
+) -> dict:
+    """One core law and its temperature shift fitted to cores identified at several
+    temperatures (time-temperature superposition): G*(f; T) = G*_ref(a_T f), with a
+    fractional Zener G*_ref and a_T by WLF (``shift="wlf"``: C1, C2 in K) or Arrhenius
+    (``"arrhenius"``: activation energy in J/mol), a_T = 1 at ``reference_temperature_k``.
+
+    The points come from ``results`` (dicts returned by :func:`run` or by
+    :func:`lamdyn.batch.run_batch`, each with its ``temperature_k``; the ``inverse``'s core:
+    ``layered``, ``exact`` or ``paper``) or from the arrays ``temperature_k``, ``freq_hz``,
+    ``storage_pa`` and ``loss_factor``.
+
+    Returns a dict: ``parameters`` (by name: value, sd, 95 % profile-likelihood interval
+    ``ci95``, infinite on a side the data do not bound), ``undetermined`` (parameter
+    combinations the data do not fix), ``correlation``, ``residual_sd`` (relative scatter of G'
+    and of eta about the curve), ``shift_factors`` (log10 a_T with its 95 % band at each
+    temperature), and arrays of the curve at ``curve_freqs_hz`` (reduced, Hz; default 60
+    points over the data's reduced band): ``reduced_freq_hz``, ``storage_pa``,
+    ``storage_ci95`` (2 x n), ``loss_factor``, ``loss_factor_ci95``; and ``log10_a_t`` at
+    ``curve_temperatures_k`` (default: 40 points over the data's temperatures).
+    """
+    if results is not None:
+        t, f, g, eta = [], [], [], []
+        for r in results:
+            if r.get("temperature_k") is None:
+                raise LamdynError(f"result of '{r.get('job')}' has no temperature_k: state it in the job")
+            m = r["modal"]
+            s, e = m[f"g_{inverse}_storage_pa"], m[f"g_{inverse}_loss_factor"]
+            ok = np.isfinite(s) & np.isfinite(e) & (s > 0) & (e > 0)
+            t.extend([r["temperature_k"]] * int(ok.sum()))
+            f.extend(m["f_hz"][ok])
+            g.extend(s[ok])
+            eta.extend(e[ok])
+        temperature_k, freq_hz, storage_pa, loss_factor = t, f, g, eta
+    t = _f64(temperature_k, "temperature_k")
+    f = _f64(freq_hz, "freq_hz")
+    if curve_temperatures_k is None:
+        curve_temperatures_k = np.linspace(t.min(), t.max(), 40) if t.size else np.zeros(0)
+    fixed_curve = curve_freqs_hz is not None
+    text = _native.master_curve(
+        t,
+        f,
+        _f64(storage_pa, "storage_pa"),
+        _f64(loss_factor, "loss_factor"),
+        float(reference_temperature_k),
+        shift,
+        _f64(curve_freqs_hz if fixed_curve else [], "curve_freqs_hz"),
+        _f64(curve_temperatures_k, "curve_temperatures_k"),
+    )
+    r = json.loads(text)
+    fit_ = r["fit"]
+    if not fixed_curve:
+        # The data's reduced band, then the curve on it.
+        log_a = {round(p["temperature_k"], 9): p["log10_a_t"] for p in fit_["shift_factors"]}
+        reduced = f * 10 ** np.array([log_a[round(x, 9)] for x in t])
+        grid = np.geomspace(reduced.min(), reduced.max(), 60)
+        r = json.loads(
+            _native.master_curve(
+                t,
+                f,
+                _f64(storage_pa, "storage_pa"),
+                _f64(loss_factor, "loss_factor"),
+                float(reference_temperature_k),
+                shift,
+                grid,
+                _f64(curve_temperatures_k, "curve_temperatures_k"),
+            )
+        )
+        fit_ = r["fit"]
+    for p in fit_["parameters"]:
+        # JSON has no infinity: an open side of an interval comes as null.
+        lo, hi = p["ci95"]
+        p["ci95"] = [-np.inf if lo is None else lo, np.inf if hi is None else hi]
+    out = {
+        "parameters": {p["name"]: p for p in fit_["parameters"]},
+        "undetermined": fit_["undetermined"],
+        "correlation": np.array(fit_["correlation"]),
+        "residual_sd": fit_["residual_sd"],
+        "points": fit_["points"],
+        "t95": fit_["t95"],
+        "shift": fit_["shift"],
+        "reference_temperature_k": fit_["reference_temperature_k"],
+        "shift_factors": fit_["shift_factors"],
+    }
+    c = r["curve"]
+    out["reduced_freq_hz"] = np.array([p["reduced_freq_hz"] for p in c])
+    out["storage_pa"] = np.array([p["storage_pa"] for p in c])
+    out["storage_ci95"] = np.array([p["storage_ci95"] for p in c]).T.reshape(2, -1)
+    out["loss_factor"] = np.array([p["loss_factor"] for p in c])
+    out["loss_factor_ci95"] = np.array([p["loss_factor_ci95"] for p in c]).T.reshape(2, -1)
+    sc = r["shift_curve"]
+    out["temperatures_k"] = np.array([p["temperature_k"] for p in sc])
+    out["log10_a_t"] = np.array([p["log10_a_t"] for p in sc])
+    out["log10_a_t_ci95"] = np.array([p["log10_a_t_ci95"] for p in sc]).T.reshape(2, -1)
+    return out

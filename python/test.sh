@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The Python package's tests as on a fresh machine: a virtual environment, the package built
+# and installed by pip exactly as the README says (`pip install "./python[test]"`: maturin
+# builds the abi3 wheel), the lamdyn binary the results are compared with, then pytest.
+# LAMDYN_VENV chooses the environment's folder (default target/python-venv).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+VENV=${LAMDYN_VENV:-target/python-venv}
+python3 -m venv "$VENV"
+"$VENV/bin/python" -m pip install -q --upgrade pip
+"$VENV/bin/python" -m pip install -q "./python[test]"
+cargo build --release -p lamdyn
+"$VENV/bin/python" -m pytest python/tests -q -rA --durations=5

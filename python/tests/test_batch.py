@@ -1,0 +1,120 @@
+"""lamdyn.batch on a Dask LocalCluster with two workers: the demo roof at five temperatures
+(14-26 degC, WLF core) gives the serial run's numbers and a master curve that recovers the
+WLF constants; bad batches end with a report per job and nothing lost."""
+
+import os
+import shutil
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import lamdyn
+import lamdyn.batch
+from conftest import TEMPERATURES_K
+
+
+@pytest.fixture(scope="module")
+def shared_cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.fixture(scope="module")
+def batch(temperature_jobs, shared_cache, tmp_path_factory):
+    out = tmp_path_factory.mktemp("batch")
+    t = time.perf_counter()
+    b = lamdyn.batch.run_batch(temperature_jobs, out=out, cache=shared_cache, n_workers=2)
+    b.wall_s = time.perf_counter() - t
+    b.out = out
+    return b
+
+
+@pytest.fixture(scope="module")
+def serial(temperature_jobs):
+    return [lamdyn.run(j, cache=None) for j in temperature_jobs]
+
+
+def test_batch_equals_serial(batch, serial):
+    print("\n" + batch.table() + f"\nwall {batch.wall_s:.1f} s on {os.cpu_count()} cores")
+    assert batch.ok
+    assert [r["status"] for r in batch.rows] == ["ok"] * len(TEMPERATURES_K)
+    assert [r["temperature_k"] for r in batch.rows] == TEMPERATURES_K
+    for got, want in zip(batch.ordered_results(), serial):
+        for col, values in want["modal"].items():
+            # The same code on the same data and thread count: the same doubles, whether a
+            # stage came from the shared cache or not (entries hold the doubles' bytes).
+            np.testing.assert_array_equal(got["modal"][col], values, err_msg=col)
+    # One table at the end, beside each job's report.
+    text = (batch.out / "batch.csv").read_text()
+    assert text.count("\n") == 1 + len(TEMPERATURES_K)
+    assert all((batch.out / r["name"] / "report.html").exists() for r in batch.rows)
+
+
+def test_master_curve_recovers_the_wlf_constants(batch):
+    m = lamdyn.master_curve(batch.ordered_results(), reference_temperature_k=293.15)
+    truth = lamdyn.DEMO_WLF
+    for name in ("c1", "c2_k"):
+        p = m["parameters"][name]
+        print(f"{name}: {p['value']:.3f}, 95 % [{p['ci95'][0]:.3f}, {p['ci95'][1]:.3f}], truth {truth[name]}")
+        assert p["ci95"][0] <= truth[name] <= p["ci95"][1]
+    # The demo core at 20 degC: fractional Zener G0 0.8 MPa, Ginf 1 GPa, tau 3e-7 s, alpha 0.4.
+    assert m["parameters"]["alpha"]["ci95"][0] <= 0.4 <= m["parameters"]["alpha"]["ci95"][1]
+    assert m["points"] >= 4 * len(TEMPERATURES_K)
+    # The layered inverse recovers each mode within ~1-2 %: the scatter about the curve says so.
+    assert m["residual_sd"][0] < 0.02 and m["residual_sd"][1] < 0.04
+    assert np.all(m["storage_ci95"][0] <= m["storage_pa"]) and np.all(m["storage_pa"] <= m["storage_ci95"][1])
+
+
+def test_bad_batch_reports_each_job_and_keeps_the_others(temperature_jobs, shared_cache, tmp_path):
+    bad = tmp_path / "bad" / "job.toml"
+    bad.parent.mkdir()
+    for f in temperature_jobs[0].parent.iterdir():
+        if f.is_file():
+            shutil.copy(f, bad.parent / f.name)
+    text = bad.read_text()
+    bad.write_text(text.replace("tolerance_m = ", "tolerance_m = -"))
+    jobs = [temperature_jobs[0], tmp_path / "missing" / "job.toml", bad]
+    lines = []
+    b = lamdyn.batch.run_batch(jobs, out=tmp_path / "out", cache=shared_cache, progress=lines.append)
+    print("\n" + b.table())
+    assert [r["status"] for r in b.rows] == ["ok", "failed", "failed"]
+    assert "does not exist" in b.rows[1]["error"]
+    assert "tolerance_m" in b.rows[2]["error"]
+    assert b.rows[0]["name"] in b.results and len(b.results) == 1
+    assert len([line for line in lines if "failed" in line]) == 2
+    assert (tmp_path / "out" / "batch.csv").read_text().count("failed") == 2
+
+
+def test_a_killed_worker_s_job_is_rerun(temperature_jobs, batch, tmp_path):
+    from distributed import Client, LocalCluster
+
+    jobs = temperature_jobs[:2]
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster, Client(cluster) as client:
+        done = {}
+        th = threading.Thread(
+            target=lambda: done.setdefault(
+                "b", lamdyn.batch.run_batch(jobs, cache=None, client=client, progress=False)
+            )
+        )
+        th.start()
+        victim = None
+        deadline = time.time() + 60
+        while victim is None and time.time() < deadline:
+            busy = {w: ks for w, ks in client.processing().items() if any("lamdyn-" in str(k) for k in ks)}
+            if busy:
+                time.sleep(2.0)  # well inside the job (about 9 s)
+                victim = next(iter(busy))
+            else:
+                time.sleep(0.2)
+        assert victim is not None, "no job started"
+        pid = client.run(os.getpid, workers=[victim])[victim]
+        os.kill(pid, signal.SIGKILL)
+        th.join(timeout=300)
+        b = done["b"]
+    print("\n" + b.table())
+    assert b.ok, b.table()
+    assert max(r["attempts"] for r in b.rows) >= 2
+    for name, want in zip([r["name"] for r in b.rows], batch.ordered_results()[:2]):
+        np.testing.assert_array_equal(b.results[name]["modal"]["g_layered_storage_pa"], want["modal"]["g_layered_storage_pa"])
