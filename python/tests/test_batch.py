@@ -118,3 +118,21 @@ def test_a_killed_worker_s_job_is_rerun(temperature_jobs, batch, tmp_path):
     assert max(r["attempts"] for r in b.rows) >= 2
     for name, want in zip([r["name"] for r in b.rows], batch.ordered_results()[:2]):
         np.testing.assert_array_equal(b.results[name]["modal"]["g_layered_storage_pa"], want["modal"]["g_layered_storage_pa"])
+
+
+def test_the_master_curve_example_runs(repo, tmp_path):
+    """python/examples/master_curve.py as the README runs it (three temperatures here, to keep
+    the suite short): tests simulated and run on its own LocalCluster, the curve written."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "m"
+    p = subprocess.run(
+        [sys.executable, str(repo / "python/examples/master_curve.py"), str(out), "--temperatures", "14,20,26"],
+        capture_output=True, text=True, timeout=900,
+    )
+    print(p.stdout[-3000:])
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "c1" in p.stdout and "inside" in p.stdout
+    assert (out / "master_curve.csv").read_text().count("\n") == 61
+    assert (out / "shift_factors.csv").exists() and (out / "reports" / "batch.csv").exists()
