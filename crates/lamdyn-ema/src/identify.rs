@@ -119,8 +119,51 @@ pub struct EmaResult {
     /// The modal model (poles as identified, before the window correction).
     #[serde(skip)]
     pub fit: Option<ModalFit>,
+    /// What the identification noticed (refined poles that left their column, ...).
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Wall time: poles and diagram, then refinement and residues, s.
     pub seconds: [f64; 2],
+}
+
+/// Each refined pole that left its column in the diagram ([`SelectedPole::holds`]) is
+/// replaced by the diagram's pole and the residues fitted again (`refit`); one warning per
+/// replaced pole.
+fn keep_poles_in_their_columns(
+    fit: ModalFit,
+    selected: &[SelectedPole],
+    c: &StabilityCriteria,
+    refit: impl Fn(&[Complex64]) -> Result<ModalFit, EmaError>,
+) -> Result<(ModalFit, Vec<String>), EmaError> {
+    let mut warnings = Vec::new();
+    let poles: Vec<Complex64> = fit
+        .poles
+        .iter()
+        .zip(selected)
+        .map(|(&p, col)| {
+            let (f, z) = (pole_freq_hz(p), pole_damping(p));
+            if col.holds(f, z, c) {
+                p
+            } else {
+                warnings.push(format!(
+                    "the refinement moved the pole at {:.3} Hz (zeta {:.3} %) to {f:.3} Hz (zeta {:.3} %), out of its column in the diagram ({:.3}-{:.3} Hz, zeta {:.3}-{:.3} %): the diagram's pole is kept",
+                    col.freq_hz,
+                    100.0 * col.damping,
+                    100.0 * z,
+                    col.freq_range_hz[0],
+                    col.freq_range_hz[1],
+                    100.0 * col.damping_range[0],
+                    100.0 * col.damping_range[1],
+                ));
+                col.pole
+            }
+        })
+        .collect();
+    if warnings.is_empty() {
+        Ok((fit, warnings))
+    } else {
+        Ok((refit(&poles)?, warnings))
+    }
 }
 
 /// Participation factors of mode r (see [`Mode::participation`]): power iteration on RᴴR with
@@ -274,6 +317,9 @@ pub fn identify_with(
         on_stage("residues (LSFD)");
         lsfd(freqs, &curves, set.quantity(), &poles, band)?
     };
+    let (fit, warnings) = keep_poles_in_their_columns(fit, &selected, &s.criteria, |p| {
+        lsfd(freqs, &curves, set.quantity(), p, band)
+    })?;
     let lines: Vec<usize> = (0..freqs.len())
         .filter(|&k| freqs[k] >= band[0] && freqs[k] <= band[1])
         .collect();
@@ -341,6 +387,7 @@ pub fn identify_with(
         cmif_peaks: band_peaks,
         missing_hz,
         fit: Some(fit),
+        warnings,
         seconds: [t_poles, clock.elapsed().as_secs_f64() - t_poles],
     })
 }

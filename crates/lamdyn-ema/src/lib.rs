@@ -22,5 +22,6 @@ pub mod lsfd;
 pub mod shapes;
 pub mod spectra;
 pub mod stabilization;
+pub mod welch;
 
 pub use error::EmaError;

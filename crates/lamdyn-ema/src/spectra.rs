@@ -79,7 +79,7 @@ pub struct Spectra {
     pub warnings: Vec<String>,
 }
 
-fn clipped(x: &[f64]) -> bool {
+pub(crate) fn clipped(x: &[f64]) -> bool {
     let m = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     if m == 0.0 {
         return false;
@@ -107,6 +107,42 @@ fn double_hit(f: &[f64], threshold: f64) -> bool {
         return false;
     };
     f[at + fall..].iter().any(|v| v.abs() > threshold * peak)
+}
+
+/// A hit or record (`noun` number `k`, from 1) against the first one's `n_resp` responses:
+/// the same channel count, every channel as long as the force, every sample finite.
+pub(crate) fn check_shape(hit: &Hit, noun: &str, k: usize, n_resp: usize) -> Result<(), EmaError> {
+    let n = hit.force.len();
+    if hit.responses.len() != n_resp {
+        return Err(invalid(
+            "time data",
+            format!(
+                "{noun} {k} has {} response channels, {noun} 1 has {n_resp}",
+                hit.responses.len()
+            ),
+        ));
+    }
+    if let Some(c) = hit.responses.iter().position(|r| r.len() != n) {
+        return Err(invalid(
+            "time data",
+            format!(
+                "{noun} {k}: response {c} has {} samples, the force {n}",
+                hit.responses[c].len()
+            ),
+        ));
+    }
+    if hit
+        .force
+        .iter()
+        .chain(hit.responses.iter().flatten())
+        .any(|v| !v.is_finite())
+    {
+        return Err(invalid(
+            "time data",
+            format!("{noun} {k} holds a sample that is not finite"),
+        ));
+    }
+    Ok(())
 }
 
 /// The first sample whose |force| reaches `trigger` × the peak.
@@ -175,36 +211,8 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
     let mut spectrum = fft.make_output_vec();
     for (h, hit) in hits.iter().enumerate() {
         let hn = h + 1;
-        if hit.responses.len() != n_resp {
-            return Err(invalid(
-                "time data",
-                format!(
-                    "hit {hn} has {} response channels, hit 1 has {n_resp}",
-                    hit.responses.len()
-                ),
-            ));
-        }
+        check_shape(hit, "hit", hn, n_resp)?;
         let n = hit.force.len();
-        if let Some(c) = hit.responses.iter().position(|r| r.len() != n) {
-            return Err(invalid(
-                "time data",
-                format!(
-                    "hit {hn}: response {c} has {} samples, the force {n}",
-                    hit.responses[c].len()
-                ),
-            ));
-        }
-        if hit
-            .force
-            .iter()
-            .chain(hit.responses.iter().flatten())
-            .any(|v| !v.is_finite())
-        {
-            return Err(invalid(
-                "time data",
-                format!("hit {hn} holds a sample that is not finite"),
-            ));
-        }
         let peak = hit.force.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         if peak == 0.0 {
             return Err(invalid("time data", format!("hit {hn}: the force is zero")));
@@ -271,7 +279,20 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
     let freqs_hz = (0..nl)
         .map(|k| k as f64 * s.rate_hz / length as f64)
         .collect();
-    let channels = (0..n_resp)
+    Ok(from_sums(freqs_hz, &sxx, &syx, &syy, warnings))
+}
+
+/// H1, H2, Hv and coherence of every response from the summed auto- and cross-spectra
+/// Σ|X|², Σ Y X*, Σ|Y|² (module docs; the scaling of the sums cancels).
+pub(crate) fn from_sums(
+    freqs_hz: Vec<f64>,
+    sxx: &[f64],
+    syx: &[Vec<Complex64>],
+    syy: &[Vec<f64>],
+    warnings: Vec<String>,
+) -> Spectra {
+    let nl = sxx.len();
+    let channels = (0..syx.len())
         .map(|c| {
             let h1: Vec<Complex64> = (0..nl)
                 .map(|k| syx[c][k] / sxx[k].max(f64::MIN_POSITIVE))
@@ -293,11 +314,11 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
             }
         })
         .collect();
-    Ok(Spectra {
+    Spectra {
         freqs_hz,
         channels,
         warnings,
-    })
+    }
 }
 
 /// Removes the exponential window's damping from a pole: Re λ + 1/τ (module docs).

@@ -147,6 +147,34 @@ pub struct SelectedPole {
     pub count: usize,
     /// Spread of the cluster's frequencies (max − min), Hz.
     pub spread_hz: f64,
+    /// Lowest and highest frequency of the cluster's poles, Hz.
+    pub freq_range_hz: [f64; 2],
+    /// Lowest and highest damping ratio of the cluster's poles.
+    pub damping_range: [f64; 2],
+}
+
+impl SelectedPole {
+    /// Whether a pole (Hz, damping ratio) lies in this pole's column: inside its ranges of
+    /// frequency and damping, each widened by its own spread or by the stability tolerance
+    /// (`c.freq_tol`, `c.damping_tol`), whichever is larger. A refined pole outside it has left
+    /// the column: the refinement ran away (noise, a neighbouring mode) and is not to be kept.
+    pub fn holds(&self, freq_hz: f64, damping: f64, c: &StabilityCriteria) -> bool {
+        let [f0, f1] = self.freq_range_hz;
+        let [d0, d1] = self.damping_range;
+        let wf = (f1 - f0).max(c.freq_tol * self.freq_hz);
+        let wd = (d1 - d0).max(c.damping_tol * self.damping);
+        (f0 - wf..=f1 + wf).contains(&freq_hz) && (d0 - wd..=d1 + wd).contains(&damping)
+    }
+}
+
+/// (min, max) of `key` over `poles`.
+fn range_of<'a>(
+    poles: impl Iterator<Item = &'a DiagramPole>,
+    key: fn(&DiagramPole) -> f64,
+) -> [f64; 2] {
+    poles.fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], p| {
+        [a.min(key(p)), b.max(key(p))]
+    })
 }
 
 fn median_by<T: Copy>(v: &mut [T], key: impl Fn(&T) -> f64) -> T {
@@ -184,8 +212,8 @@ pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<Select
             if (distinct.len() as f64) < c.min_fraction * available as f64 || distinct.len() < 3 {
                 return None;
             }
-            let fmin = cl.iter().map(|p| p.freq_hz).fold(f64::INFINITY, f64::min);
-            let fmax = cl.iter().map(|p| p.freq_hz).fold(0.0, f64::max);
+            let freq_range_hz = range_of(cl.iter(), |p| p.freq_hz);
+            let damping_range = range_of(cl.iter(), |p| p.damping);
             let count = cl.len();
             let m = median_by(&mut cl, |p| p.freq_hz);
             Some(SelectedPole {
@@ -193,7 +221,9 @@ pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<Select
                 freq_hz: m.freq_hz,
                 damping: m.damping,
                 count,
-                spread_hz: fmax - fmin,
+                spread_hz: freq_range_hz[1] - freq_range_hz[0],
+                freq_range_hz,
+                damping_range,
             })
         })
         .collect();
@@ -214,8 +244,11 @@ pub fn select_near(
             let stable = diagram
                 .iter()
                 .filter(|p| p.stability != Stability::New && (p.freq_hz - t).abs() <= window_hz);
-            let top = stable.clone().map(|p| p.order).max()?;
-            let p = stable
+            // Its column: the stable poles within the window at every order.
+            let column: Vec<&DiagramPole> = stable.collect();
+            let top = column.iter().map(|p| p.order).max()?;
+            let p = column
+                .iter()
                 .filter(|p| p.order == top)
                 .min_by(|a, b| (a.freq_hz - t).abs().total_cmp(&(b.freq_hz - t).abs()))?;
             Some(SelectedPole {
@@ -224,7 +257,47 @@ pub fn select_near(
                 damping: p.damping,
                 count: 1,
                 spread_hz: 0.0,
+                freq_range_hz: range_of(column.iter().copied(), |p| p.freq_hz),
+                damping_range: range_of(column.iter().copied(), |p| p.damping),
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn column(f: [f64; 2], z: [f64; 2]) -> SelectedPole {
+        let (fm, zm) = (0.5 * (f[0] + f[1]), 0.5 * (z[0] + z[1]));
+        SelectedPole {
+            pole: Complex64::new(0.0, 0.0),
+            freq_hz: fm,
+            damping: zm,
+            count: 10,
+            spread_hz: f[1] - f[0],
+            freq_range_hz: f,
+            damping_range: z,
+        }
+    }
+
+    #[test]
+    fn a_runaway_refinement_leaves_its_column() {
+        let c = StabilityCriteria::default();
+        // Issue 17's cases: 75.0 Hz refined to 135.7 Hz at zeta 73 %; a pick at 66.5 Hz to
+        // 100.8 Hz at 72 %.
+        let col = column([74.95, 75.05], [0.010, 0.012]);
+        assert!(!col.holds(135.7, 0.73, &c));
+        assert!(!column([66.4, 66.6], [0.01, 0.02]).holds(100.8, 0.72, &c));
+        // A refined pole a little outside a tight column, by less than the stability
+        // tolerance (1 % in f, 5 % in zeta), stays.
+        assert!(col.holds(75.5, 0.0115, &c));
+        assert!(col.holds(75.0, 0.0125, &c));
+        // Beyond the tolerance or the column's own spread, whichever is larger: out.
+        assert!(!col.holds(76.0, 0.011, &c));
+        assert!(!col.holds(75.0, 0.020, &c));
+        // A column with a wide damping scatter allows as much again.
+        let wide = column([74.9, 75.1], [0.01, 0.03]);
+        assert!(wide.holds(75.0, 0.045, &c) && !wide.holds(75.0, 0.06, &c));
+    }
 }

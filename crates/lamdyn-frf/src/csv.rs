@@ -131,7 +131,39 @@ pub fn parse_time(
     responses: &[Channel],
     reference: &Channel,
 ) -> Result<TimeRecord, FrfError> {
-    let quantity = declared_quantity(path, text)?;
+    parse_time_as(path, text, responses, reference, None)
+}
+
+/// [`parse_time`] for a file that may lack the `# quantity` line, the caller stating the
+/// quantity (`lamdyn ema --quantity`: an instrument's export has no such line). A file that
+/// states another quantity than `quantity` is refused.
+///
+/// # Errors
+/// As [`parse_time`], and the disagreement.
+pub fn parse_time_as(
+    path: &str,
+    text: &str,
+    responses: &[Channel],
+    reference: &Channel,
+    quantity: Option<Quantity>,
+) -> Result<TimeRecord, FrfError> {
+    let quantity = match (declared_quantity(path, text), quantity) {
+        (Ok(q), None) => q,
+        (Ok(q), Some(given)) if q == given => q,
+        (Ok(q), Some(given)) => {
+            return Err(err(
+                path,
+                1,
+                format!(
+                    "the file says quantity = {}, but {} was given",
+                    q.name(),
+                    given.name()
+                ),
+            ));
+        }
+        (Err(_), Some(given)) => given,
+        (Err(e), None) => return Err(e),
+    };
     let (d, mut it) = lines(text);
     let Some((hl, header)) = it.next() else {
         return Err(err(path, 0, "empty: expected a header t_s,NAME,...".into()));

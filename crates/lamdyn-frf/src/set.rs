@@ -58,6 +58,15 @@ impl Quantity {
         }
     }
 
+    /// The name written in files (`receptance`, `mobility`, `accelerance`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Receptance => "receptance",
+            Self::Mobility => "mobility",
+            Self::Accelerance => "accelerance",
+        }
+    }
+
     /// SI unit.
     pub fn unit(self) -> &'static str {
         match self {

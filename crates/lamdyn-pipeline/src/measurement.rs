@@ -45,6 +45,34 @@ pub struct TimeOptions {
     pub force_window_s: f64,
     pub record_s: Option<f64>,
     pub exp_tau_s: Option<f64>,
+    /// Hammer hits (the trigger, force and exponential windows above), or continuous
+    /// excitation by Welch averaging ([`lamdyn_ema::welch`]; the hammer settings unused).
+    pub excitation: Excitation,
+    /// What the responses are, for files without a `# quantity` line.
+    pub quantity: Option<lamdyn_frf::Quantity>,
+}
+
+/// How the structure was excited.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Excitation {
+    /// Hammer hits, one per file.
+    Impact,
+    /// Random, burst random, periodic chirp or swept sine: each file a record, Welch-averaged.
+    Continuous(ContinuousOptions),
+}
+
+/// Welch settings in seconds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContinuousOptions {
+    /// The window.
+    pub window: lamdyn_ema::welch::Window,
+    /// Segment length, s (None: each record whole with the rectangular window; else the power
+    /// of two of samples nearest 1/8 of the shortest record).
+    pub segment_s: Option<f64>,
+    /// Overlap of consecutive segments, fraction of a segment in [0, 1).
+    pub overlap: f64,
+    /// Band where the force must carry energy, Hz.
+    pub band_hz: Option<[f64; 2]>,
 }
 
 /// FRFs (the chosen estimator) from hit files and the channels table, with the spectra
@@ -66,11 +94,12 @@ pub fn time_frfs(
     let mut hits = Vec::with_capacity(files.len());
     let (mut rate, mut quantity) = (None, None);
     for f in files {
-        let rec = lamdyn_frf::csv::parse_time(
+        let rec = lamdyn_frf::csv::parse_time_as(
             &f.display().to_string(),
             &read_text(f)?,
             &responses,
             hammer,
+            options.quantity,
         )?;
         let r0 = *rate.get_or_insert(rec.rate_hz);
         if (rec.rate_hz - r0).abs() > 1e-6 * r0 {
@@ -94,6 +123,75 @@ pub fn time_frfs(
         });
     }
     let rate_hz = rate.ok_or_else(|| err!("no time file given"))?;
+    let spectra = match options.excitation {
+        Excitation::Impact => impact_spectra(&hits, rate_hz, options)?,
+        Excitation::Continuous(c) => continuous_spectra(&hits, rate_hz, &c, files)?,
+    };
+    let data = spectra
+        .channels
+        .iter()
+        .flat_map(|c| match options.estimator {
+            Estimator::H1 => c.h1.clone(),
+            Estimator::H2 => c.h2.clone(),
+            Estimator::Hv => c.hv.clone(),
+        })
+        .collect();
+    let set = FrfSet::new(
+        spectra.freqs_hz.clone(),
+        responses,
+        references,
+        quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
+        data,
+    )?;
+    Ok((set, spectra, hits.len()))
+}
+
+/// Welch spectra of continuous-excitation records (each file one record).
+fn continuous_spectra(
+    hits: &[Hit],
+    rate_hz: f64,
+    c: &ContinuousOptions,
+    files: &[PathBuf],
+) -> Result<Spectra> {
+    if !(c.overlap.is_finite() && (0.0..1.0).contains(&c.overlap)) {
+        bail!("overlap {} must be a fraction in [0, 1)", c.overlap);
+    }
+    let shortest = hits.iter().map(|h| h.force.len()).min().unwrap_or(0);
+    let segment = match c.segment_s {
+        // Whole records for the rectangular window (bursts, sweeps, periods inside them);
+        // with a window, about 8 segments per record, a power of two of samples.
+        None if c.window == lamdyn_ema::welch::Window::Rectangular => 0,
+        None => {
+            let eighth = (shortest / 8).max(8) as f64;
+            2f64.powf(eighth.log2().round()) as usize
+        }
+        Some(t) if t.is_finite() && t > 0.0 => (t * rate_hz).round() as usize,
+        Some(t) => bail!("segment {t} s must be a positive time"),
+    };
+    let settings = lamdyn_ema::welch::WelchSettings {
+        rate_hz,
+        segment,
+        overlap: (c.overlap * segment as f64).round() as usize,
+        window: c.window,
+        detrend: true,
+        band_hz: c.band_hz,
+    };
+    // Messages say "record N": name the files.
+    lamdyn_ema::welch::welch(hits, &settings).map_err(|e| {
+        let names: Vec<String> = files
+            .iter()
+            .enumerate()
+            .map(|(k, f)| format!("record {} = '{}'", k + 1, f.display()))
+            .collect();
+        err!(
+            "FRF estimation from the time data failed: {e} ({})",
+            names.join(", ")
+        )
+    })
+}
+
+/// H1/H2/Hv of hammer hits (triggered records, force and exponential windows).
+fn impact_spectra(hits: &[Hit], rate_hz: f64, options: &TimeOptions) -> Result<Spectra> {
     for (name, v) in [
         ("trigger", options.trigger),
         ("pretrigger", options.pretrigger_s),
@@ -114,24 +212,7 @@ pub fn time_frfs(
         exp_tau_s: options.exp_tau_s,
         double_hit: 0.2,
     };
-    let spectra = estimate(&hits, &settings).context("FRF estimation from the time data failed")?;
-    let data = spectra
-        .channels
-        .iter()
-        .flat_map(|c| match options.estimator {
-            Estimator::H1 => c.h1.clone(),
-            Estimator::H2 => c.h2.clone(),
-            Estimator::Hv => c.hv.clone(),
-        })
-        .collect();
-    let set = FrfSet::new(
-        spectra.freqs_hz.clone(),
-        responses,
-        references,
-        quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
-        data,
-    )?;
-    Ok((set, spectra, hits.len()))
+    estimate(hits, &settings).context("FRF estimation from the time data failed")
 }
 
 /// The FRF set named by the arguments.
@@ -213,6 +294,8 @@ pub fn read_measurement_section(
                 force_window_s: m.force_window_s,
                 record_s: None,
                 exp_tau_s: None,
+                excitation: Excitation::Impact,
+                quantity: None,
             };
             let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
                 format!(

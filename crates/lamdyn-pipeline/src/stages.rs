@@ -612,6 +612,7 @@ fn collect_warnings(
     for f in &ema.missing_hz {
         out.push(format!("EMA: no stable pole near {f:.3} Hz"));
     }
+    out.extend(ema.warnings.iter().map(|w| format!("EMA: {w}")));
     let fe: Vec<f64> = r.peaks.iter().map(|p| p.freq_hz).collect();
     for m in &ema.modes {
         if !fe.iter().any(|f| (f / m.freq_hz - 1.0).abs() < 0.02) {

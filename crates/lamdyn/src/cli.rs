@@ -153,11 +153,34 @@ pub struct EmaArgs {
         conflicts_with = "time"
     )]
     pub frf: Option<PathBuf>,
-    /// Hammer-test time data, one CSV per hit (t_s,FORCE,RESPONSE,...; optional first line
-    /// `# quantity = accelerance`), with --channels naming one reference (the hammer). Repeat
-    /// for several hits: they are averaged.
-    #[arg(long, value_name = "FILE", requires = "channels")]
+    /// Time data, one CSV per hammer hit or per record of continuous excitation
+    /// (t_s,FORCE,RESPONSE,...; a line `# quantity = accelerance` before the header, or
+    /// --quantity), with --channels naming one reference (the force). Several files after one
+    /// --time (or --time repeated) are averaged.
+    #[arg(long, value_name = "FILE", requires = "channels", num_args = 1..)]
     pub time: Vec<PathBuf>,
+    /// How the time data were excited: impact (hammer hits: trigger, force window, exponential
+    /// window), or continuous, estimated by Welch averaging over segments of every file with
+    /// no force window: random, burst (burst random), periodic (periodic chirp, multisine) or
+    /// sweep (swept sine).
+    #[arg(long, value_enum, default_value_t = ExcitationArg::Impact)]
+    pub excitation: ExcitationArg,
+    /// Window of each Welch segment [default: hann for random; rect for burst, periodic and
+    /// sweep, whose signal starts and ends inside the segment or repeats whole in it].
+    #[arg(long, value_enum)]
+    pub window: Option<WindowArg>,
+    /// Welch segment length, s [default: each record whole with the rectangular window; else
+    /// the power of two of samples nearest 1/8 of the shortest record].
+    #[arg(long, value_name = "S", value_parser = finite)]
+    pub segment_s: Option<f64>,
+    /// Overlap of consecutive Welch segments, fraction of a segment [default: 0.5 with a
+    /// window, 0 with the rectangular window].
+    #[arg(long, value_parser = finite)]
+    pub overlap: Option<f64>,
+    /// What the responses of time files are, for files without a `# quantity` line (an
+    /// instrument's export): receptance (m), mobility (m/s) or accelerance (m/s^2).
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
     /// FRF estimator for time data.
     #[arg(long, value_enum, default_value_t = Estimator::H1)]
     pub estimator: Estimator,
@@ -221,6 +244,43 @@ pub struct EmaArgs {
     /// Output format (JSON adds the diagram, shapes and auto-MAC).
     #[command(flatten)]
     pub output: OutputArgs,
+}
+
+/// How time data were excited.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ExcitationArg {
+    /// Hammer hits.
+    Impact,
+    /// Random noise (Hann window, overlapping segments).
+    Random,
+    /// Burst random: each burst dies out inside its segment.
+    Burst,
+    /// Periodic chirp or multisine: whole periods in a segment.
+    Periodic,
+    /// Swept sine starting and ending inside the record.
+    Sweep,
+}
+
+/// Welch windows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WindowArg {
+    /// Hann.
+    Hann,
+    /// Flat-top (five terms).
+    Flattop,
+    /// Rectangular (none).
+    Rect,
+}
+
+/// What responses are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum QuantityArg {
+    /// Displacement, m.
+    Receptance,
+    /// Velocity, m/s.
+    Mobility,
+    /// Acceleration, m/s^2.
+    Accelerance,
 }
 
 /// FRF estimators from time data.

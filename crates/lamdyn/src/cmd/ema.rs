@@ -4,15 +4,18 @@
 //! (lamdyn-report draws them).
 
 use crate::Outcome;
-use crate::cli::{EmaArgs, Estimator};
+use crate::cli::{EmaArgs, Estimator, ExcitationArg, QuantityArg, WindowArg};
 use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify_with};
 use lamdyn_ema::spectra::Spectra;
+use lamdyn_ema::welch::Window;
 use lamdyn_fem::eigen::Progress;
 use lamdyn_frf::FrfSet;
-use lamdyn_pipeline::measurement::{TimeOptions, read_frfs, time_frfs};
+use lamdyn_pipeline::measurement::{
+    ContinuousOptions, Excitation, TimeOptions, read_frfs, time_frfs,
+};
 use lamdyn_pipeline::output::OutputDir;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -40,9 +43,50 @@ fn frfs_from_time(
         force_window_s: args.force_window_s,
         record_s: args.record_s,
         exp_tau_s: args.exp_tau_s,
+        excitation: excitation(args)?,
+        quantity: args.quantity.map(|q| match q {
+            QuantityArg::Receptance => lamdyn_frf::Quantity::Receptance,
+            QuantityArg::Mobility => lamdyn_frf::Quantity::Mobility,
+            QuantityArg::Accelerance => lamdyn_frf::Quantity::Accelerance,
+        }),
     };
     let (set, spectra, hits) = time_frfs(channels, files, &options)?;
     Ok((set, TimeInfo { hits, spectra }))
+}
+
+/// The excitation's estimator settings from the flags (defaults as `--help` states).
+fn excitation(args: &EmaArgs) -> Result<Excitation> {
+    if args.excitation == ExcitationArg::Impact {
+        if args.window.is_some() || args.segment_s.is_some() || args.overlap.is_some() {
+            bail!(
+                "--window, --segment-s and --overlap are for continuous excitation: give --excitation random|burst|periodic|sweep"
+            );
+        }
+        return Ok(Excitation::Impact);
+    }
+    let window = match (args.window, args.excitation) {
+        (Some(WindowArg::Hann), _) | (None, ExcitationArg::Random) => Window::Hann,
+        (Some(WindowArg::Flattop), _) => Window::FlatTop,
+        (Some(WindowArg::Rect), _) | (None, _) => Window::Rectangular,
+    };
+    if args.exp_tau_s.is_some() {
+        bail!("--exp-tau-s is a hammer-test window: continuous excitation takes --window");
+    }
+    let overlap = args.overlap.unwrap_or(if window == Window::Rectangular {
+        0.0
+    } else {
+        0.5
+    });
+    let band_hz = match args.band_hz.as_deref() {
+        Some(&[lo, hi]) => Some([lo, hi]),
+        _ => None,
+    };
+    Ok(Excitation::Continuous(ContinuousOptions {
+        window,
+        segment_s: args.segment_s,
+        overlap,
+        band_hz,
+    }))
 }
 
 fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
@@ -145,11 +189,12 @@ pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     spinner.finish();
     let r = r.context("identification failed")?;
     let mut report = build_report(&set, &source, &s, &r);
+    report.warnings.extend(r.warnings.iter().cloned());
     if let Some(info) = &time {
         add_time_info(&mut report, &set, &r, info);
     }
     if let Some(dir) = &out_dir {
-        write_results(dir, &set, &r, &report)?;
+        write_results(dir, &set, &r, &report, time.as_ref())?;
         report.notes.push(format!(
             "results and charts written to '{}'",
             dir.path().display()
@@ -333,8 +378,46 @@ fn add_time_info(report: &mut Report, set: &FrfSet, r: &EmaResult, info: &TimeIn
         .extend(info.spectra.warnings.iter().cloned());
 }
 
-/// Writes modes.csv, diagram.csv, result.json and the charts into `dir` atomically.
-fn write_results(dir: &OutputDir, set: &FrfSet, r: &EmaResult, report: &Report) -> Result<()> {
+/// The FRFs estimated from time data as files: frf.csv with channels.csv (lamdyn's CSV set,
+/// read back by `lamdyn ema --channels --frf`), frf.uff (datasets 2411 and 58) and
+/// coherence.csv (f_hz, one column per response).
+fn estimated_frf_files(set: &FrfSet, info: &TimeInfo) -> Result<Vec<(&'static str, Vec<u8>)>> {
+    let mut coherence = String::from("f_hz");
+    for c in set.responses() {
+        coherence += &format!(",{}", c.name);
+    }
+    coherence.push('\n');
+    for (k, f) in info.spectra.freqs_hz.iter().enumerate() {
+        coherence += &f.to_string();
+        for c in &info.spectra.channels {
+            coherence += &format!(",{}", c.coherence[k]);
+        }
+        coherence.push('\n');
+    }
+    let uff = lamdyn_uff::write(
+        &lamdyn_uff::frf::from_frf_set(set)?,
+        lamdyn_uff::Encoding::Ascii,
+    )?;
+    Ok(vec![
+        ("frf.csv", lamdyn_frf::csv::write_frf(set).into_bytes()),
+        (
+            "channels.csv",
+            lamdyn_frf::csv::write_channels(set).into_bytes(),
+        ),
+        ("coherence.csv", coherence.into_bytes()),
+        ("frf.uff", uff),
+    ])
+}
+
+/// Writes modes.csv, diagram.csv, result.json and the charts into `dir` atomically, and the
+/// estimated FRFs for time data.
+fn write_results(
+    dir: &OutputDir,
+    set: &FrfSet,
+    r: &EmaResult,
+    report: &Report,
+    time: Option<&TimeInfo>,
+) -> Result<()> {
     use lamdyn_report::ema::{cmif_chart, stabilization_chart};
     let mut modes =
         String::from("mode,freq_hz,damping_ratio,loss_factor,mpc,mpd_deg,stable_poles\n");
@@ -367,7 +450,7 @@ fn write_results(dir: &OutputDir, set: &FrfSet, r: &EmaResult, report: &Report) 
         stabilization_chart(r, set.freqs_hz()),
         cmif_chart(r, set.freqs_hz()),
     );
-    let files: Vec<(&str, Vec<u8>)> = vec![
+    let mut files: Vec<(&str, Vec<u8>)> = vec![
         ("modes.csv", modes.into_bytes()),
         ("diagram.csv", diagram.into_bytes()),
         ("result.json", json),
@@ -376,5 +459,8 @@ fn write_results(dir: &OutputDir, set: &FrfSet, r: &EmaResult, report: &Report) 
         ("cmif.svg", cmif.render_svg()?.into_bytes()),
         ("cmif.png", cmif.render_png()?),
     ];
+    if let Some(info) = time {
+        files.extend(estimated_frf_files(set, info)?);
+    }
     Ok(dir.write(&files)?)
 }

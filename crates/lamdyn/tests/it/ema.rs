@@ -381,3 +381,146 @@ fn ema_reports_its_steps_as_plain_lines_when_piped() {
         "{err}"
     );
 }
+
+/// The measured plate sweep (fixture of lamdyn-ema, MIT licence beside it): its folder, the
+/// channels path and the four runs.
+fn plate_sweep() -> (PathBuf, String, Vec<String>) {
+    let dir =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../lamdyn-ema/tests/fixtures/plate-sweep");
+    let runs = (1..=4)
+        .map(|i| dir.join(format!("run{i}.csv")).display().to_string())
+        .collect();
+    let channels = dir.join("channels.csv").display().to_string();
+    (dir, channels, runs)
+}
+
+#[test]
+fn a_swept_sine_gives_scipys_h1_its_coherence_and_the_six_modes() {
+    let (fixture, channels, runs) = plate_sweep();
+    let out = temp_dir("ema-sweep");
+    let out_dir = out.join("out");
+    let mut args = vec!["ema", "--channels", &channels, "--time"];
+    args.extend(runs.iter().map(String::as_str));
+    let out_s = out_dir.display().to_string();
+    args.extend([
+        "--excitation",
+        "sweep",
+        "--quantity",
+        "accelerance",
+        "--band-hz",
+        "60,500",
+        "--out",
+        &out_s,
+        "--json",
+    ]);
+    let (code, stdout, stderr) = lamdyn(&args);
+    assert_eq!(code, 0, "{stderr}");
+    // H1 and coherence against scipy's Welch with the same settings (fixture h1_scipy.csv,
+    // tools/ema/plate_sweep_h1.py): the same sums in another FFT; 1e-9 leaves four orders
+    // for the round-off of two 51 200-point transforms (measured: 5e-15).
+    let reference = csv_rows(&std::fs::read_to_string(fixture.join("h1_scipy.csv")).unwrap());
+    let text = std::fs::read_to_string(out_dir.join("frf.csv")).unwrap();
+    let ours: Vec<Vec<f64>> = text
+        .lines()
+        .skip(2)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let coherence: Vec<Vec<f64>> = std::fs::read_to_string(out_dir.join("coherence.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let df = ours[1][0] - ours[0][0];
+    for row in &reference {
+        let k = (num(row, "f_hz") / df).round() as usize;
+        let (re, im) = (num(row, "h1_re"), num(row, "h1_im"));
+        let err = ((ours[k][1] - re).powi(2) + (ours[k][2] - im).powi(2)).sqrt() / re.hypot(im);
+        assert!(err < 1e-9, "{} Hz: H1 off by {err:e}", num(row, "f_hz"));
+        assert!((coherence[k][1] - num(row, "coherence")).abs() < 1e-9);
+    }
+    // The six modes the data's README names (77, 126, 215, 263, 348, 450 Hz; damping 1.5-3 %).
+    let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let modes = doc["rows"].as_array().unwrap();
+    let f: Vec<f64> = modes
+        .iter()
+        .map(|m| m["freq_hz"].as_f64().unwrap())
+        .collect();
+    assert_eq!(f.len(), 6, "{f:?}");
+    for (got, want) in f.iter().zip([77.0, 126.0, 215.0, 263.0, 348.0, 450.0]) {
+        assert!((got / want - 1.0).abs() < 0.01, "{got} vs {want}");
+    }
+    for m in modes {
+        let z = m["damping_ratio"].as_f64().unwrap();
+        assert!((0.012..0.035).contains(&z), "{m}");
+    }
+    // The estimated FRFs read back as a measurement.
+    let frf = out_dir.join("frf.csv").display().to_string();
+    let ch = out_dir.join("channels.csv").display().to_string();
+    let (code, _, stderr) = lamdyn(&[
+        "ema",
+        "--channels",
+        &ch,
+        "--frf",
+        &frf,
+        "--band-hz",
+        "60,500",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+}
+
+#[test]
+fn continuous_excitation_errors_name_the_record_and_the_flag() {
+    let (_, channels, runs) = plate_sweep();
+    let run = |extra: &[&str]| {
+        let mut a = vec!["ema", "--channels", channels.as_str(), "--time"];
+        a.extend(runs.iter().take(2).map(String::as_str));
+        a.extend(extra);
+        lamdyn(&a)
+    };
+    // No quantity line and no --quantity: refused, saying how.
+    let (code, _, e) = run(&["--excitation", "sweep"]);
+    assert_eq!(code, 2);
+    assert!(e.contains("no '# quantity = ...' line"), "{e}");
+    // A segment longer than the record.
+    let (code, _, e) = run(&[
+        "--excitation",
+        "random",
+        "--quantity",
+        "accelerance",
+        "--segment-s",
+        "3",
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        e.contains("is longer than record 1") && e.contains("run1.csv"),
+        "{e}"
+    );
+    // Welch flags on a hammer test, a hammer window on a sweep.
+    let (code, _, e) = run(&["--window", "hann", "--quantity", "accelerance"]);
+    assert_eq!(code, 2);
+    assert!(
+        e.contains("--excitation random|burst|periodic|sweep"),
+        "{e}"
+    );
+    let (code, _, e) = run(&[
+        "--excitation",
+        "sweep",
+        "--quantity",
+        "accelerance",
+        "--exp-tau-s",
+        "0.5",
+    ]);
+    assert_eq!(code, 2);
+    assert!(e.contains("--exp-tau-s is a hammer-test window"), "{e}");
+    // Random excitation with the default Hann window and segments: still the six modes.
+    let (code, _, e) = run(&[
+        "--excitation",
+        "random",
+        "--quantity",
+        "accelerance",
+        "--band-hz",
+        "60,500",
+    ]);
+    assert_eq!(code, 0, "{e}");
+}
