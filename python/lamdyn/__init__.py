@@ -187,6 +187,7 @@ def ema(
     polymax: bool = True,
     refine: bool = True,
     driving: Optional[int] = None,
+    cmif_prominence: float = 2.0,
 ) -> dict:
     """Modal identification of FRFs, as ``lamdyn ema``.
 
@@ -199,7 +200,9 @@ def ema(
     Returns a dict: ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,
     ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses), ``mpc``,
     ``mpd_deg``, ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
-    ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json).
+    ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json). The CMIF peaks
+    listed are those whose topographic prominence in the band (as ``scipy.signal.find_peaks``
+    on log sigma_1) is at least the factor ``cmif_prominence``.
     """
     options = {
         "band_hz": None if band_hz is None else [float(b) for b in band_hz],
@@ -210,6 +213,7 @@ def ema(
         "polymax": bool(polymax),
         "refine": bool(refine),
         "driving": driving,
+        "cmif_prominence": float(cmif_prominence),
     }
     r = json.loads(
         _native.ema(

@@ -48,3 +48,28 @@ def test_poles_agree_with_sdypy(repo):
     # Shapes: one per mode over the three responses, MPC of a real bending mode near 1.
     assert ours["shapes"].shape == (len(f_ours), 3)
     assert np.all(ours["mpc"] > 0.9)
+
+
+@pytest.mark.parametrize("ratio", [1.2, 2.0, 5.0])
+def test_cmif_peaks_are_scipys_prominent_peaks(repo, ratio):
+    """The CMIF peak list against scipy.signal.find_peaks with the prominence taken on log
+    sigma_1 (an independent implementation of the same definition), on the measured beam."""
+    signal = pytest.importorskip("scipy.signal")
+    frf = np.array([np.loadtxt(repo / "crates/lamdyn-ema/tests/fixtures/free-free-beam" / f"meas_point_{i}.txt",
+                               dtype=complex) for i in (1, 2, 3)])
+    freq = np.arange(frf.shape[1]) * 1.0
+    ours = lamdyn.ema(freq[1:], frf[:, 1:], band_hz=(10, 1000), cmif_prominence=ratio)
+    band = (freq[1:] >= 10) & (freq[1:] <= 1000)
+    log_sigma = np.log(ours["cmif"][band, 0])
+    peaks, _ = signal.find_peaks(log_sigma, prominence=np.log(ratio))
+    want = freq[1:][band][peaks]
+    got = np.array([p["freq_hz"] for p in ours["cmif_peaks"]])
+    assert len(want) >= 4
+    np.testing.assert_array_equal(got, want)
+
+
+def test_cmif_prominence_below_one_is_refused():
+    f = np.linspace(1, 100, 200)
+    frf = (1 / (1 - (f / 50) ** 2 + 0.02j))[None, :]
+    with pytest.raises(Exception, match="CMIF prominence"):
+        lamdyn.ema(f, frf, cmif_prominence=0.5)

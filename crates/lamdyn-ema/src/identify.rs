@@ -5,7 +5,7 @@
 
 use crate::error::{EmaError, invalid};
 use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz};
-use crate::lsfd::{ModalFit, frac, lsfd, refine_with};
+use crate::lsfd::{ModalFit, RefineLines, frac, lsfd, refine_with};
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
@@ -42,11 +42,17 @@ pub struct EmaSettings {
     pub reject_hz: Vec<f64>,
     /// Levenberg–Marquardt iterations of the pole refinement (0: LSFD on the diagram's poles).
     pub refine_iterations: usize,
+    /// The lines the refinement's iterations fit (long records: the poles' neighbourhoods and
+    /// a thinned band; the residues always on every line).
+    pub refine_lines: RefineLines,
     /// Index of the driving-point response (mass-normalised shapes), if any.
     pub driving: Option<usize>,
     /// Time constant of an exponential window applied to the data, s: its damping is removed
     /// from the identified poles.
     pub exp_tau_s: Option<f64>,
+    /// The CMIF peaks listed are those whose topographic prominence within the band is at
+    /// least this ratio (2: 6 dB; `shapes::cmif_peaks`).
+    pub cmif_prominence: f64,
 }
 
 impl Default for EmaSettings {
@@ -61,8 +67,10 @@ impl Default for EmaSettings {
             window_hz: 1.0,
             reject_hz: vec![],
             refine_iterations: 30,
+            refine_lines: RefineLines::default(),
             driving: None,
             exp_tau_s: None,
+            cmif_prominence: 2.0,
         }
     }
 }
@@ -80,7 +88,8 @@ pub struct Mode {
     pub pole: Complex64,
     /// Stable poles in its column of the diagram (0 for a pole picked near a given frequency).
     pub stable_count: usize,
-    /// Complex shape over the responses (reference 0; mass-normalised with a driving point).
+    /// Complex shape over the responses (reference 0; mass-normalised with a driving point), or
+    /// over the references when there is one response and several (a roving hammer).
     pub shape: Vec<Complex64>,
     /// Modal participation factors over the references: the dominant right singular vector of
     /// the mode's residue matrix (responses × references), largest component 1.
@@ -244,6 +253,15 @@ pub fn identify_with(
             ));
         }
     }
+    if s.cmif_prominence.is_nan() || s.cmif_prominence < 1.0 {
+        return Err(invalid(
+            "CMIF prominence",
+            format!(
+                "{} must be at least 1 (a factor above the peak's bases)",
+                s.cmif_prominence
+            ),
+        ));
+    }
     let band = s.band_hz.unwrap_or([
         freqs.iter().copied().find(|f| *f > 0.0).unwrap_or(0.0),
         freqs[freqs.len() - 1],
@@ -306,6 +324,7 @@ pub fn identify_with(
             set.quantity(),
             &poles,
             band,
+            s.refine_lines,
             s.refine_iterations,
             &|k, max| {
                 on_stage(&format!(
@@ -320,9 +339,7 @@ pub fn identify_with(
     let (fit, warnings) = keep_poles_in_their_columns(fit, &selected, &s.criteria, |p| {
         lsfd(freqs, &curves, set.quantity(), p, band)
     })?;
-    let lines: Vec<usize> = (0..freqs.len())
-        .filter(|&k| freqs[k] >= band[0] && freqs[k] <= band[1])
-        .collect();
+    let lines = crate::band::lines(freqs, band);
     let correlation = (0..curves.len())
         .map(|o| {
             let syn: Vec<Complex64> = freqs.iter().map(|f| fit.synthesize(o, *f)).collect();
@@ -330,10 +347,23 @@ pub fn identify_with(
         })
         .collect();
     // Shapes over the responses for reference 0 (curve index i·nf).
+    // A roving-hammer test (one response, several references): the shapes are over the
+    // references — by reciprocity the residues of the response to each hammer point.
+    let roving = nr == 1 && nf > 1;
+    let mut warnings = warnings;
+    if roving {
+        warnings.push(format!(
+            "one response and {nf} references (a roving-hammer test): the shapes, MPC, MPD and auto-MAC are over the references (by reciprocity, the residues of the response to each hammer point)"
+        ));
+    }
     let all_modes: Vec<Mode> = (0..fit.poles.len())
         .map(|r| {
             let all = fit.shape(r, s.driving.map(|d| d * nf));
-            let shape: Vec<Complex64> = (0..nr).map(|i| all[i * nf]).collect();
+            let shape: Vec<Complex64> = if roving {
+                all[..nf].to_vec()
+            } else {
+                (0..nr).map(|i| all[i * nf]).collect()
+            };
             let pole = s.exp_tau_s.map_or(fit.poles[r], |tau| {
                 correct_exponential_window(fit.poles[r], tau)
             });
@@ -371,10 +401,11 @@ pub fn identify_with(
         })
         .collect();
     let first: Vec<f64> = cmif.iter().map(|v| v[0]).collect();
-    let band_peaks = cmif_peaks(freqs, &first, 1.5)
-        .into_iter()
-        .filter(|p| p.freq_hz >= band[0] && p.freq_hz <= band[1])
-        .collect();
+    let in_band = crate::band::lines(freqs, band);
+    let band_peaks = match (in_band.first(), in_band.last()) {
+        (Some(&a), Some(&b)) => cmif_peaks(&freqs[a..=b], &first[a..=b], s.cmif_prominence),
+        _ => vec![],
+    };
     Ok(EmaResult {
         band_hz: band,
         diagram: diag,

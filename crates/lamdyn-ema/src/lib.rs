@@ -10,10 +10,13 @@
 //! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
 //! | [`spectra`] | H1/H2/Hv and coherence from hammer hits, force and exponential windows |
+//! | [`welch`] | H1/H2/Hv and coherence from continuous excitation (Welch averaging) |
+//! | [`band`] | the lines of a band, edges with a slack for rounded frequency axes |
 
 #![deny(missing_docs)]
 #![allow(clippy::needless_range_loop)]
 
+pub mod band;
 mod companion;
 mod error;
 pub mod identify;

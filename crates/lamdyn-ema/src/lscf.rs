@@ -280,9 +280,7 @@ pub fn lscf(
         ));
     }
     check_curves(freqs_hz, curves)?;
-    let lines: Vec<usize> = (0..freqs_hz.len())
-        .filter(|&k| freqs_hz[k] >= lo && freqs_hz[k] <= hi)
-        .collect();
+    let lines = crate::band::lines(freqs_hz, [lo, hi]);
     let (min_o, max_o, step) = (
         settings.min_order.max(1),
         settings.max_order,

@@ -73,13 +73,34 @@ pub fn lsfd(
     poles: &[Complex64],
     band_hz: [f64; 2],
 ) -> Result<ModalFit, EmaError> {
+    check_curves(freqs_hz, curves)?;
+    lsfd_on(
+        freqs_hz,
+        curves,
+        quantity,
+        poles,
+        &band_lines(freqs_hz, band_hz),
+    )
+}
+
+/// The lines of `band_hz` above 0 Hz.
+fn band_lines(freqs_hz: &[f64], band_hz: [f64; 2]) -> Vec<usize> {
+    let mut lines = crate::band::lines(freqs_hz, band_hz);
+    lines.retain(|&k| freqs_hz[k] > 0.0);
+    lines
+}
+
+/// [`lsfd`] over the given lines (indices into `freqs_hz`; the curves already checked).
+fn lsfd_on(
+    freqs_hz: &[f64],
+    curves: &[&[Complex64]],
+    quantity: Quantity,
+    poles: &[Complex64],
+    lines: &[usize],
+) -> Result<ModalFit, EmaError> {
     if poles.is_empty() {
         return Err(invalid("poles", "no pole to fit residues for".into()));
     }
-    check_curves(freqs_hz, curves)?;
-    let lines: Vec<usize> = (0..freqs_hz.len())
-        .filter(|&k| freqs_hz[k] > 0.0 && freqs_hz[k] >= band_hz[0] && freqs_hz[k] <= band_hz[1])
-        .collect();
     let unknowns = 2 * poles.len() + 2;
     if 2 * lines.len() < unknowns + 1 {
         return Err(invalid(
@@ -233,9 +254,61 @@ pub fn refine(
         quantity,
         poles,
         band_hz,
+        RefineLines::default(),
         iterations,
         &|_, _| {},
     )
+}
+
+/// Which lines the refinement's iterations fit (the final residues always use every line of
+/// the band).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RefineLines {
+    /// Every line of the band.
+    All,
+    /// When the band holds more than this many lines: the lines around each pole (±(5 ζ f +
+    /// 20 Δf): two and a half half-power bandwidths each side, where its frequency and damping
+    /// are decided) and an even thinning of the band to about half this many (the residual
+    /// terms and the poles' far field); every line otherwise.
+    AtMost(usize),
+}
+
+impl Default for RefineLines {
+    /// At most 4000 lines: below that, every line. Measured on 9 accelerance FRFs × 50 001
+    /// lines, four modes, 40 dB noise (`tests/it.rs`): the refined poles agree with the
+    /// refinement on every line within 2.7e-7 in frequency and 2.6e-5 in damping, their errors
+    /// against the truth alike, and `identify` takes 0.39 s instead of 2.88 s (2 cores).
+    fn default() -> Self {
+        Self::AtMost(4000)
+    }
+}
+
+/// The lines the refinement fits (see [`RefineLines`]).
+fn refinement_lines(
+    freqs_hz: &[f64],
+    band: &[usize],
+    poles: &[Complex64],
+    choice: RefineLines,
+) -> Vec<usize> {
+    let RefineLines::AtMost(max) = choice else {
+        return band.to_vec();
+    };
+    if band.len() <= max || band.len() < 2 {
+        return band.to_vec();
+    }
+    let df = (freqs_hz[band[band.len() - 1]] - freqs_hz[band[0]]) / (band.len() - 1) as f64;
+    let step = (2 * band.len()).div_ceil(max).max(1);
+    let near = |f: f64| {
+        poles.iter().any(|p| {
+            let (fp, z) = (p.norm() / (2.0 * PI), -p.re / p.norm());
+            (f - fp).abs() <= 5.0 * z * fp + 20.0 * df
+        })
+    };
+    band.iter()
+        .enumerate()
+        .filter(|(i, k)| i % step == 0 || near(freqs_hz[**k]))
+        .map(|(_, k)| *k)
+        .collect()
 }
 
 /// [`refine`], calling `on_iteration(k, max)` as iteration k of at most `max` starts (for
@@ -243,25 +316,26 @@ pub fn refine(
 ///
 /// # Errors
 /// As [`lsfd`].
+#[allow(clippy::too_many_arguments)]
 pub fn refine_with(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     quantity: Quantity,
     poles: &[Complex64],
     band_hz: [f64; 2],
+    fit_lines: RefineLines,
     iterations: usize,
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<ModalFit, EmaError> {
-    let lines: Vec<usize> = (0..freqs_hz.len())
-        .filter(|&k| freqs_hz[k] > 0.0 && freqs_hz[k] >= band_hz[0] && freqs_hz[k] <= band_hz[1])
-        .collect();
+    check_curves(freqs_hz, curves)?;
+    let lines = refinement_lines(freqs_hz, &band_lines(freqs_hz, band_hz), poles, fit_lines);
     let to_poles = |u: &[f64]| -> Vec<Complex64> {
         u.chunks(2)
             .map(|c| Complex64::new(-c[0].exp(), c[1]))
             .collect()
     };
     let residuals = |u: &[f64]| -> Option<Vec<f64>> {
-        let fit = lsfd(freqs_hz, curves, quantity, &to_poles(u), band_hz).ok()?;
+        let fit = lsfd_on(freqs_hz, curves, quantity, &to_poles(u), &lines).ok()?;
         let mut r = Vec::with_capacity(2 * lines.len() * curves.len());
         for (o, c) in curves.iter().enumerate() {
             for &k in &lines {

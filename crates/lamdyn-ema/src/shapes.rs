@@ -100,8 +100,13 @@ pub struct CmifPeak {
     pub value: f64,
 }
 
-/// Local maxima of the first CMIF curve that stand `prominence` times above the lower of the
-/// neighbouring minima.
+/// Local maxima of the first CMIF curve whose topographic prominence, as a ratio, is at least
+/// `prominence`: for a peak σ_k the base on each side is the lowest value between it and the
+/// nearest higher point on that side (or the band's end), and the peak is kept when
+/// σ_k ≥ prominence · max(base_left, base_right) — the definition of `scipy.signal.peak_prominences`
+/// taken on log σ. A ripple on a resonance's flank has a base just below it and is dropped,
+/// however many local maxima noise puts there; a resonance's own base is the trough to the
+/// next higher peak. A plateau counts once, at its first line.
 pub fn cmif_peaks(freqs_hz: &[f64], first: &[f64], prominence: f64) -> Vec<CmifPeak> {
     let n = first.len();
     let mut out = Vec::new();
@@ -109,15 +114,14 @@ pub fn cmif_peaks(freqs_hz: &[f64], first: &[f64], prominence: f64) -> Vec<CmifP
         if !(first[k] > first[k - 1] && first[k] >= first[k + 1]) {
             continue;
         }
-        let left = (0..k)
-            .rev()
-            .take_while(|&j| j == k - 1 || first[j] <= first[j + 1])
-            .map(|j| first[j])
-            .fold(f64::INFINITY, f64::min);
-        let right = (k + 1..n)
-            .take_while(|&j| j == k + 1 || first[j] <= first[j - 1])
-            .map(|j| first[j])
-            .fold(f64::INFINITY, f64::min);
+        let base = |range: &mut dyn Iterator<Item = usize>| {
+            range
+                .take_while(|&j| first[j] <= first[k])
+                .map(|j| first[j])
+                .fold(f64::INFINITY, f64::min)
+        };
+        let left = base(&mut (0..k).rev());
+        let right = base(&mut (k + 1..n));
         if first[k] >= prominence * left.max(right) {
             out.push(CmifPeak {
                 freq_hz: freqs_hz[k],
@@ -150,5 +154,38 @@ mod tests {
             Complex64::new(0.0, 0.0),
         ];
         assert!(mac(&real, &other) < 1.0);
+    }
+
+    /// Two resonances (|1/(1 − (f/f_r)² + iη)|) with a 5 % ripple of period 2 Hz on them: the
+    /// ripple's many local maxima go, the two resonances stay, the higher one's base being the
+    /// edge of the band and the lower one's the trough between them.
+    #[test]
+    fn cmif_peaks_keep_resonances_and_drop_ripple() {
+        let f: Vec<f64> = (0..4000).map(|k| 1.0 + 0.1 * f64::from(k)).collect();
+        let sigma: Vec<f64> = f
+            .iter()
+            .map(|&f| {
+                let r = |fr: f64, eta: f64| {
+                    let x = 1.0 - (f / fr).powi(2);
+                    1.0 / x.hypot(eta)
+                };
+                (r(100.0, 0.02) + 0.3 * r(250.0, 0.03))
+                    * (1.0 + 0.05 * (std::f64::consts::PI * f).sin())
+            })
+            .collect();
+        let maxima = (1..f.len() - 1)
+            .filter(|&k| sigma[k] > sigma[k - 1] && sigma[k] >= sigma[k + 1])
+            .count();
+        assert!(maxima > 100, "{maxima}");
+        let peaks = cmif_peaks(&f, &sigma, 2.0);
+        let at: Vec<f64> = peaks.iter().map(|p| p.freq_hz).collect();
+        assert_eq!(at.len(), 2, "{at:?}");
+        assert!(
+            (at[0] - 100.0).abs() < 0.5 && (at[1] - 250.0).abs() < 0.5,
+            "{at:?}"
+        );
+        // A higher threshold than the weaker resonance's prominence keeps the stronger one.
+        let lower = peaks[1].value / sigma[990..2490].iter().cloned().fold(f64::MAX, f64::min);
+        assert_eq!(cmif_peaks(&f, &sigma, 1.01 * lower).len(), 1);
     }
 }

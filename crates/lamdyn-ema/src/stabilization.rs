@@ -8,12 +8,14 @@
 //! *stable* when it passes every criterion the diagram has data for (the vector one only when
 //! mode vectors were computed).
 //!
-//! **Automatic selection.** Stable poles are clustered across orders
-//! by frequency (a pole joins the cluster whose median frequency is within `freq_tol`); a
-//! cluster holding stable poles at no fewer than `min_fraction` of the orders above its first
-//! appearance is a physical mode, represented by its pole at the median frequency (spurious
-//! poles of over-modelled noise wander and do not build long columns). Clusters closer than
-//! `freq_tol` merge, so two modes must be further apart than that to be told apart.
+//! **Automatic selection.** Stable poles are clustered across orders into columns by frequency
+//! (a pole joins the nearest column whose median frequency is within `freq_tol`), a column
+//! holding at most one pole per order: two stable poles of one order are two modes however
+//! close (a pair 0.14 % apart with different shapes comes out as two; before, every pole within
+//! `freq_tol` of a column joined it and the pair was one mode). A column holding stable poles at
+//! no fewer than `min_fraction` of the orders above its first appearance is a physical mode,
+//! represented by its pole at the median frequency (spurious poles of over-modelled noise
+//! wander and do not build long columns).
 //!
 //! **Selection near given frequencies.** For each given frequency, the stable pole nearest to
 //! it at the highest order where one exists within `window_hz`.
@@ -154,15 +156,17 @@ pub struct SelectedPole {
 }
 
 impl SelectedPole {
-    /// Whether a pole (Hz, damping ratio) lies in this pole's column: inside its ranges of
-    /// frequency and damping, each widened by its own spread or by the stability tolerance
-    /// (`c.freq_tol`, `c.damping_tol`), whichever is larger. A refined pole outside it has left
-    /// the column: the refinement ran away (noise, a neighbouring mode) and is not to be kept.
+    /// Whether a pole (Hz, damping ratio) lies in this pole's column: inside its frequency
+    /// range widened by its spread or the stability tolerance `c.freq_tol` (whichever is
+    /// larger), and inside its damping range widened by its spread or half its median damping.
+    /// The damping allowance is wide because removing the linearised LSCF's damping bias (tens
+    /// of per cent on a close pair) is what the refinement is for; a refined pole outside this
+    /// has run away (noise, a neighbouring mode) and is not to be kept.
     pub fn holds(&self, freq_hz: f64, damping: f64, c: &StabilityCriteria) -> bool {
         let [f0, f1] = self.freq_range_hz;
         let [d0, d1] = self.damping_range;
         let wf = (f1 - f0).max(c.freq_tol * self.freq_hz);
-        let wd = (d1 - d0).max(c.damping_tol * self.damping);
+        let wd = (d1 - d0).max(0.5 * self.damping);
         (f0 - wf..=f1 + wf).contains(&freq_hz) && (d0 - wd..=d1 + wd).contains(&damping)
     }
 }
@@ -189,13 +193,27 @@ pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<Select
         o.dedup();
         o
     };
+    // A column holds at most one pole per order: two stable poles of one order near one
+    // frequency are two modes (a close pair), never merged. Each pole joins the column nearest
+    // its frequency (median within freq_tol) that has no pole of its order yet.
     let mut clusters: Vec<Vec<DiagramPole>> = Vec::new();
     for p in diagram.iter().filter(|p| p.is_stable()) {
-        let hit = clusters.iter_mut().find(|cl| {
+        let median = |cl: &Vec<DiagramPole>| {
             let mut f: Vec<f64> = cl.iter().map(|q| q.freq_hz).collect();
             f.sort_by(f64::total_cmp);
-            (f[f.len() / 2] - p.freq_hz).abs() <= c.freq_tol * p.freq_hz
-        });
+            f[f.len() / 2]
+        };
+        let hit = clusters
+            .iter_mut()
+            .filter(|cl| {
+                (median(cl) - p.freq_hz).abs() <= c.freq_tol * p.freq_hz
+                    && cl.iter().all(|q| q.order != p.order)
+            })
+            .min_by(|a, b| {
+                (median(a) - p.freq_hz)
+                    .abs()
+                    .total_cmp(&(median(b) - p.freq_hz).abs())
+            });
         match hit {
             Some(cl) => cl.push(*p),
             None => clusters.push(vec![*p]),
@@ -289,13 +307,13 @@ mod tests {
         let col = column([74.95, 75.05], [0.010, 0.012]);
         assert!(!col.holds(135.7, 0.73, &c));
         assert!(!column([66.4, 66.6], [0.01, 0.02]).holds(100.8, 0.72, &c));
-        // A refined pole a little outside a tight column, by less than the stability
-        // tolerance (1 % in f, 5 % in zeta), stays.
+        // A refined pole a little outside a tight column, by less than the frequency tolerance
+        // (1 %) or half the damping (the LSCF's damping bias), stays.
         assert!(col.holds(75.5, 0.0115, &c));
-        assert!(col.holds(75.0, 0.0125, &c));
-        // Beyond the tolerance or the column's own spread, whichever is larger: out.
+        assert!(col.holds(75.0, 0.016, &c));
+        // Beyond the allowance or the column's own spread, whichever is larger: out.
         assert!(!col.holds(76.0, 0.011, &c));
-        assert!(!col.holds(75.0, 0.020, &c));
+        assert!(!col.holds(75.0, 0.018, &c));
         // A column with a wide damping scatter allows as much again.
         let wide = column([74.9, 75.1], [0.01, 0.03]);
         assert!(wide.holds(75.0, 0.045, &c) && !wide.holds(75.0, 0.06, &c));

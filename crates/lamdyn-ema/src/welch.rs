@@ -31,14 +31,17 @@ use num_complex::Complex64;
 use realfft::RealFftPlanner;
 use std::f64::consts::PI;
 
-/// The window applied to each segment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The window applied to each segment (in job files `hann`, `flattop`, `rect`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Window {
     /// Periodic Hann, 0.5 − 0.5 cos(2πk/N) (scipy `'hann'`, `sym=False`).
     Hann,
     /// Periodic flat-top, five cosine terms (scipy `'flattop'`, `sym=False`).
+    #[serde(rename = "flattop", alias = "flat_top")]
     FlatTop,
     /// No window.
+    #[serde(rename = "rect", alias = "rectangular")]
     Rectangular,
 }
 
@@ -154,9 +157,8 @@ fn check_records(records: &[Hit], s: &WelchSettings) -> Result<usize, EmaError> 
 /// Ranges (Hz) in the band where the force's autospectrum is 40 dB below its 90th percentile
 /// there (module docs).
 fn weak_force(sxx: &[f64], freqs: &[f64], band: [f64; 2]) -> Vec<[f64; 2]> {
-    let idx: Vec<usize> = (0..sxx.len())
-        .filter(|&k| freqs[k] >= band[0] && freqs[k] <= band[1] && freqs[k] > 0.0)
-        .collect();
+    let mut idx = crate::band::lines(freqs, band);
+    idx.retain(|&k| freqs[k] > 0.0);
     if idx.is_empty() {
         return Vec::new();
     }

@@ -106,6 +106,43 @@ fn mean_step(t: &[f64]) -> f64 {
 /// Largest deviation of a time step from the mean step, as a fraction of it (module docs).
 pub const TIME_STEP_TOLERANCE: f64 = 0.01;
 
+/// The time step of a sampled time axis: the least-squares step, every step within
+/// [`TIME_STEP_TOLERANCE`] of it (printing precision of the stamps).
+///
+/// # Errors
+/// `(k, message)`: the step from sample k to k + 1 is not positive, is a gap or is uneven.
+pub fn uniform_step(t: &[f64]) -> Result<f64, (usize, String)> {
+    // Each step is judged against the median step, which a gap or a repeated stamp does not
+    // move; the step returned is the least-squares one (printing errors averaged out).
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let typical = steps.get(steps.len() / 2).copied().unwrap_or(f64::NAN);
+    match t.windows(2).position(|w| {
+        !(w[1] - w[0] > 0.0 && ((w[1] - w[0]) - typical).abs() <= TIME_STEP_TOLERANCE * typical)
+    }) {
+        None => Ok(mean_step(t)),
+        Some(k) => {
+            let step = t[k + 1] - t[k];
+            let why = if step <= 0.0 {
+                "the time must increase (a repeated or reversed time stamp)"
+            } else if step > typical {
+                "a gap (a missing sample?)"
+            } else {
+                "the sampling must be uniform"
+            };
+            Err((
+                k,
+                format!(
+                    "time step {} s after {} s, the usual step is {} s: {why}",
+                    short(step),
+                    short(t[k]),
+                    short(typical)
+                ),
+            ))
+        }
+    }
+}
+
 /// One hammer hit read from a time file: the force and the responses sampled at `rate_hz`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimeRecord {
@@ -207,29 +244,7 @@ pub fn parse_time_as(
             format!("{} samples: at least 2 needed", t.len()),
         ));
     }
-    let dt = mean_step(&t);
-    if let Some(k) = t.windows(2).position(|w| {
-        !(w[1] - w[0] > 0.0 && ((w[1] - w[0]) - dt).abs() <= TIME_STEP_TOLERANCE * dt)
-    }) {
-        let step = t[k + 1] - t[k];
-        let why = if step <= 0.0 {
-            "the time must increase (a repeated or reversed time stamp)"
-        } else if step > dt {
-            "a gap (a missing sample?)"
-        } else {
-            "the sampling must be uniform"
-        };
-        return Err(err(
-            path,
-            line_of[k + 1],
-            format!(
-                "time step {} s after {} s, the mean step is {} s: {why}",
-                short(step),
-                short(t[k]),
-                short(dt)
-            ),
-        ));
-    }
+    let dt = uniform_step(&t).map_err(|(k, why)| err(path, line_of[k + 1], why))?;
     Ok(TimeRecord {
         rate_hz: 1.0 / dt,
         quantity,

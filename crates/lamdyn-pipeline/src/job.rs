@@ -6,6 +6,7 @@
 
 use crate::err;
 use crate::error::Result;
+use crate::measurement::ExcitationKind;
 use lamdyn_fem::model::ModelSpec;
 use lamdyn_fit::fit::{Covariance, LawKind};
 use lamdyn_fit::misfit::{MisfitKind, MisfitSpec};
@@ -67,9 +68,29 @@ pub struct Measurement {
     /// FRF table (CSV: f_hz, then re/im per channel pair).
     #[serde(default)]
     pub frf: Option<PathBuf>,
-    /// Hammer hits, one CSV per hit (t_s, force, responses); H1 is estimated and averaged.
+    /// Time data, one file per hammer hit or per run (a CSV t_s, force, responses, or UFF 58
+    /// time responses); H1 is estimated and averaged.
     #[serde(default)]
     pub time: Vec<PathBuf>,
+    /// Time data: how the part was excited (`impact`, `random`, `burst`, `periodic`, `sweep`).
+    #[serde(default)]
+    pub excitation: ExcitationKind,
+    /// Continuous excitation: Welch window (`hann`, `flattop`, `rect`; default hann for random,
+    /// rect otherwise).
+    #[serde(default)]
+    pub window: Option<lamdyn_ema::welch::Window>,
+    /// Continuous excitation: Welch segment, s (default: each record whole with the rect
+    /// window, else the power of two of samples nearest 1/8 of the shortest record).
+    #[serde(default)]
+    pub segment_s: Option<f64>,
+    /// Continuous excitation: overlap of segments, fraction (default 0.5 with a window, 0 with
+    /// rect).
+    #[serde(default)]
+    pub overlap: Option<f64>,
+    /// Time data: what the responses are (`receptance`, `mobility`, `accelerance`) for files
+    /// that do not say it.
+    #[serde(default)]
+    pub quantity: Option<lamdyn_frf::Quantity>,
     /// A UFF file with FRFs (58) and nodes (15/2411) instead of the CSV files.
     #[serde(default)]
     pub uff: Option<PathBuf>,
@@ -405,6 +426,8 @@ impl Job {
         fraction("measurement.min_coherence", m.min_coherence)?;
         non_negative("measurement.pretrigger_s", m.pretrigger_s)?;
         positive("measurement.force_window_s", m.force_window_s)?;
+        crate::measurement::Excitation::new(m.excitation, m.window, m.segment_s, m.overlap, None)
+            .map_err(|e| err!("measurement.excitation: {e}"))?;
         match (&m.channels, &m.frf, m.time.is_empty(), &m.uff) {
             (Some(_), Some(_), true, None) | (Some(_), None, false, None) => {}
             (None, None, true, Some(_)) => {}

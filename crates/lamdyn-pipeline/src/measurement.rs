@@ -1,12 +1,14 @@
 //! The measurement: FRFs from CSV (`lamdyn_frf::csv`) or UFF files, or H1/H2/Hv estimated from
-//! hammer-hit time files, as the chain and the commands read them; and the job's measurement
+//! time files (CSV or UFF time responses; hammer hits or continuous excitation), as the chain
+//! and the commands read them; and the job's measurement
 //! ([`read_measurement`]) with its coherence and the estimator's warnings.
 
 use crate::error::{Context, Result};
 use crate::job::{Job, Measurement, relative};
 use crate::{bail, err};
 use lamdyn_ema::spectra::{Hit, Spectra, SpectraSettings, estimate};
-use lamdyn_frf::FrfSet;
+use lamdyn_frf::csv::TimeRecord;
+use lamdyn_frf::{Channel, FrfSet, Quantity};
 use std::path::{Path, PathBuf};
 
 /// FRF estimators from time data.
@@ -37,6 +39,41 @@ fn read_text(p: &Path) -> Result<String> {
     crate::io::read_text(p)
 }
 
+/// Whether a file is a universal file: its first non-blank line is the delimiter `-1`.
+fn is_uff(path: &Path) -> Result<bool> {
+    use std::io::Read;
+    let mut head = [0u8; 512];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .with_context(|| format!("cannot read '{}'", path.display()))?;
+    Ok(String::from_utf8_lossy(&head[..n])
+        .lines()
+        .find(|l| !l.trim().is_empty())
+        .is_some_and(|l| l.trim() == "-1"))
+}
+
+/// One run or hit of time data: a time CSV (`lamdyn_frf::csv` module docs) or a universal file
+/// of time responses (`lamdyn_uff::time`), told apart by content.
+fn read_time_file(
+    path: &Path,
+    responses: &[Channel],
+    hammer: &Channel,
+    quantity: Option<Quantity>,
+) -> Result<TimeRecord> {
+    if is_uff(path)? {
+        let file = lamdyn_uff::read_path(path, Default::default()).map_err(|e| err!("{e}"))?;
+        return lamdyn_uff::time::time_record(&file, responses, hammer, quantity)
+            .map_err(|e| err!("'{}': {e}", path.display()));
+    }
+    Ok(lamdyn_frf::csv::parse_time_as(
+        &path.display().to_string(),
+        &read_text(path)?,
+        responses,
+        hammer,
+        quantity,
+    )?)
+}
+
 /// How time data become FRFs: the estimator and the record settings (rate from the files).
 pub struct TimeOptions {
     pub estimator: Estimator,
@@ -50,6 +87,72 @@ pub struct TimeOptions {
     pub excitation: Excitation,
     /// What the responses are, for files without a `# quantity` line.
     pub quantity: Option<lamdyn_frf::Quantity>,
+}
+
+/// How the structure was excited, by name (`--excitation`, `measurement.excitation`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExcitationKind {
+    /// Hammer hits: trigger, force window, exponential window.
+    #[default]
+    Impact,
+    /// Random noise (Hann window, overlapping segments by default).
+    Random,
+    /// Burst random: each burst dies out inside its segment.
+    Burst,
+    /// Periodic chirp or multisine: whole periods in a segment.
+    Periodic,
+    /// Swept sine starting and ending inside the record.
+    Sweep,
+}
+
+impl Excitation {
+    /// The estimator settings of an excitation kind: Welch with `window` (default Hann for
+    /// random noise, rectangular for the others), `segment_s` and `overlap` (default 0.5 with a
+    /// tapered window, 0 with the rectangular one) over every record; impact takes none of
+    /// them.
+    ///
+    /// # Errors
+    /// Welch settings given for impact, an overlap outside [0, 1), a non-positive segment.
+    pub fn new(
+        kind: ExcitationKind,
+        window: Option<lamdyn_ema::welch::Window>,
+        segment_s: Option<f64>,
+        overlap: Option<f64>,
+        band_hz: Option<[f64; 2]>,
+    ) -> Result<Self> {
+        use lamdyn_ema::welch::Window;
+        if kind == ExcitationKind::Impact {
+            if window.is_some() || segment_s.is_some() || overlap.is_some() {
+                bail!(
+                    "window, segment and overlap are for continuous excitation (random, burst, periodic, sweep), not impact"
+                );
+            }
+            return Ok(Self::Impact);
+        }
+        let window = window.unwrap_or(if kind == ExcitationKind::Random {
+            Window::Hann
+        } else {
+            Window::Rectangular
+        });
+        let overlap = overlap.unwrap_or(if window == Window::Rectangular {
+            0.0
+        } else {
+            0.5
+        });
+        if !(0.0..1.0).contains(&overlap) {
+            bail!("overlap {overlap} must be a fraction of a segment in [0, 1)");
+        }
+        if let Some(s) = segment_s.filter(|s| !(s.is_finite() && *s > 0.0)) {
+            bail!("segment {s} s must be a positive time");
+        }
+        Ok(Self::Continuous(ContinuousOptions {
+            window,
+            segment_s,
+            overlap,
+            band_hz,
+        }))
+    }
 }
 
 /// How the structure was excited.
@@ -94,13 +197,7 @@ pub fn time_frfs(
     let mut hits = Vec::with_capacity(files.len());
     let (mut rate, mut quantity) = (None, None);
     for f in files {
-        let rec = lamdyn_frf::csv::parse_time_as(
-            &f.display().to_string(),
-            &read_text(f)?,
-            &responses,
-            hammer,
-            options.quantity,
-        )?;
+        let rec = read_time_file(f, &responses, hammer, options.quantity)?;
         let r0 = *rate.get_or_insert(rec.rate_hz);
         if (rec.rate_hz - r0).abs() > 1e-6 * r0 {
             bail!(
@@ -294,8 +391,15 @@ pub fn read_measurement_section(
                 force_window_s: m.force_window_s,
                 record_s: None,
                 exp_tau_s: None,
-                excitation: Excitation::Impact,
-                quantity: None,
+                excitation: Excitation::new(
+                    m.excitation,
+                    m.window,
+                    m.segment_s,
+                    m.overlap,
+                    band_hz,
+                )
+                .context("measurement.excitation")?,
+                quantity: m.quantity,
             };
             let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
                 format!(

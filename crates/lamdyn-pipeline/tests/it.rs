@@ -275,3 +275,52 @@ fn bad_job_files_name_the_field() {
     );
     assert!(!e.contains("geometry"), "{e}");
 }
+
+/// A job's `[measurement]` with continuous excitation: the measured plate sweep (fixture of
+/// lamdyn-ema, MIT) read as `lamdyn ema --excitation sweep` reads it, its H1 equal to scipy's
+/// Welch (h1_scipy.csv, tools/ema/plate_sweep_h1.py; 1e-9 as in the CLI test), and the Welch
+/// settings checked by `Job::check`.
+#[test]
+fn a_job_measures_a_swept_sine() {
+    use lamdyn_pipeline::job::Measurement;
+    use lamdyn_pipeline::measurement::read_measurement_section;
+    let fixture =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lamdyn-ema/tests/fixtures/plate-sweep");
+    let section = |extra: &str| -> Measurement {
+        toml::from_str(&format!(
+            "channels = \"channels.csv\"\ntime = [\"run1.csv\", \"run2.csv\", \"run3.csv\", \"run4.csv\"]\nquantity = \"accelerance\"\n{extra}"
+        ))
+        .unwrap()
+    };
+    let m = read_measurement_section(
+        &section("excitation = \"sweep\""),
+        Some([60.0, 500.0]),
+        &fixture,
+        &fixture.join("job.toml"),
+    )
+    .unwrap();
+    let reference = std::fs::read_to_string(fixture.join("h1_scipy.csv")).unwrap();
+    let df = m.set.freqs_hz()[1];
+    for row in reference.lines().skip(1) {
+        let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();
+        let h = m.set.curve(0, 0)[(v[0] / df).round() as usize];
+        let err = (h - num_complex::Complex64::new(v[1], v[2])).norm() / v[1].hypot(v[2]);
+        assert!(err < 1e-9, "{} Hz: {err:e}", v[0]);
+    }
+    // Welch settings that do not fit the excitation are refused, naming the section.
+    for (extra, expect) in [
+        ("window = \"hann\"", "not impact"),
+        ("excitation = \"random\"\noverlap = 1.5", "overlap 1.5"),
+        ("excitation = \"sweep\"\nsegment_s = -1.0", "segment -1 s"),
+    ] {
+        let e =
+            read_measurement_section(&section(extra), None, &fixture, &fixture.join("job.toml"))
+                .err()
+                .map(|e| chain_text(&e))
+                .unwrap_or_default();
+        assert!(
+            e.contains("measurement.excitation") && e.contains(expect),
+            "{extra}: {e}"
+        );
+    }
+}

@@ -250,6 +250,7 @@ struct EmaOptions {
     polymax: Option<bool>,
     refine: Option<bool>,
     driving: Option<usize>,
+    cmif_prominence: Option<f64>,
 }
 
 /// Modal identification (PolyMAX / LSCF, stabilization, LSFD) of an FRF set; the result as JSON.
@@ -281,6 +282,7 @@ fn ema(
             0
         },
         driving: o.driving,
+        cmif_prominence: o.cmif_prominence.unwrap_or(d.cmif_prominence),
         ..d
     };
     if s.orders.0 < 1 || s.orders.1 < s.orders.0 || s.orders.2 < 1 {

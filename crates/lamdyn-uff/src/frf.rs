@@ -118,6 +118,16 @@ pub fn dof_name(d: &Dof) -> String {
     format!("{}{}{a}", d.node, if d.direction < 0 { '-' } else { '+' })
 }
 
+/// The channel name of a DOF: [`dof_name`], or for a scalar DOF (direction 0) its entity when
+/// the file names one.
+pub fn channel_name(d: &Dof) -> String {
+    if d.direction == 0 && !(d.entity.is_empty() || d.entity == "NONE") {
+        d.entity.clone()
+    } else {
+        dof_name(d)
+    }
+}
+
 struct Geometry<'a> {
     nodes: HashMap<i64, &'a Node>,
     systems: HashMap<i64, &'a CoordinateSystem>,
@@ -129,11 +139,7 @@ impl Geometry<'_> {
         let k = d.direction.unsigned_abs() as usize;
         if k == 0 {
             // A scalar DOF: the file says nothing about the direction.
-            let name = if d.entity.is_empty() || d.entity == "NONE" {
-                dof_name(d)
-            } else {
-                d.entity.clone()
-            };
+            let name = channel_name(d);
             let point = self
                 .nodes
                 .get(&d.node)

@@ -35,6 +35,7 @@ pub mod frf;
 pub mod geometry;
 pub mod meta;
 pub mod scan;
+pub mod time;
 pub mod vtu;
 
 pub use error::UffError;

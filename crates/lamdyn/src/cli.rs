@@ -153,10 +153,11 @@ pub struct EmaArgs {
         conflicts_with = "time"
     )]
     pub frf: Option<PathBuf>,
-    /// Time data, one CSV per hammer hit or per record of continuous excitation
+    /// Time data, one file per hammer hit or per record of continuous excitation: a CSV
     /// (t_s,FORCE,RESPONSE,...; a line `# quantity = accelerance` before the header, or
-    /// --quantity), with --channels naming one reference (the force). Several files after one
-    /// --time (or --time repeated) are averaged.
+    /// --quantity) or a universal file of UFF 58 time responses (one per channel, named
+    /// node+dir, e.g. 12+Z), with --channels naming one reference (the force). Several files
+    /// after one --time (or --time repeated) are averaged.
     #[arg(long, value_name = "FILE", requires = "channels", num_args = 1..)]
     pub time: Vec<PathBuf>,
     /// How the time data were excited: impact (hammer hits: trigger, force window, exponential
@@ -190,7 +191,9 @@ pub struct EmaArgs {
     /// Time kept before the trigger, s.
     #[arg(long, default_value_t = 0.001, value_parser = finite)]
     pub pretrigger_s: f64,
-    /// Force window after the record start, s.
+    /// Impact only: force window after the record start, s. The force is kept unchanged
+    /// inside it, tapered by a half cosine over the window's last 10 % and zero after it; the
+    /// responses are not windowed by it. Continuous excitation never applies it.
     #[arg(long, default_value_t = 0.05, value_parser = finite)]
     pub force_window_s: f64,
     /// Record length, s [default: the longest every hit holds].
@@ -241,6 +244,10 @@ pub struct EmaArgs {
     /// Skip the refinement of the poles (LSFD on the diagram's poles only).
     #[arg(long)]
     pub no_refine: bool,
+    /// CMIF peaks listed: those standing at least this factor above the lower of their two
+    /// bases (topographic prominence within the band; 2 = 6 dB).
+    #[arg(long, default_value_t = 2.0, value_parser = finite)]
+    pub cmif_prominence: f64,
     /// Output format (JSON adds the diagram, shapes and auto-MAC).
     #[command(flatten)]
     pub output: OutputArgs,

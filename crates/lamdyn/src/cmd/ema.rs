@@ -13,9 +13,7 @@ use lamdyn_ema::spectra::Spectra;
 use lamdyn_ema::welch::Window;
 use lamdyn_fem::eigen::Progress;
 use lamdyn_frf::FrfSet;
-use lamdyn_pipeline::measurement::{
-    ContinuousOptions, Excitation, TimeOptions, read_frfs, time_frfs,
-};
+use lamdyn_pipeline::measurement::{Excitation, ExcitationKind, TimeOptions, read_frfs, time_frfs};
 use lamdyn_pipeline::output::OutputDir;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -56,37 +54,33 @@ fn frfs_from_time(
 
 /// The excitation's estimator settings from the flags (defaults as `--help` states).
 fn excitation(args: &EmaArgs) -> Result<Excitation> {
-    if args.excitation == ExcitationArg::Impact {
+    let kind = match args.excitation {
+        ExcitationArg::Impact => ExcitationKind::Impact,
+        ExcitationArg::Random => ExcitationKind::Random,
+        ExcitationArg::Burst => ExcitationKind::Burst,
+        ExcitationArg::Periodic => ExcitationKind::Periodic,
+        ExcitationArg::Sweep => ExcitationKind::Sweep,
+    };
+    if kind == ExcitationKind::Impact {
         if args.window.is_some() || args.segment_s.is_some() || args.overlap.is_some() {
             bail!(
                 "--window, --segment-s and --overlap are for continuous excitation: give --excitation random|burst|periodic|sweep"
             );
         }
-        return Ok(Excitation::Impact);
-    }
-    let window = match (args.window, args.excitation) {
-        (Some(WindowArg::Hann), _) | (None, ExcitationArg::Random) => Window::Hann,
-        (Some(WindowArg::Flattop), _) => Window::FlatTop,
-        (Some(WindowArg::Rect), _) | (None, _) => Window::Rectangular,
-    };
-    if args.exp_tau_s.is_some() {
+    } else if args.exp_tau_s.is_some() {
         bail!("--exp-tau-s is a hammer-test window: continuous excitation takes --window");
     }
-    let overlap = args.overlap.unwrap_or(if window == Window::Rectangular {
-        0.0
-    } else {
-        0.5
+    let window = args.window.map(|w| match w {
+        WindowArg::Hann => Window::Hann,
+        WindowArg::Flattop => Window::FlatTop,
+        WindowArg::Rect => Window::Rectangular,
     });
     let band_hz = match args.band_hz.as_deref() {
         Some(&[lo, hi]) => Some([lo, hi]),
         _ => None,
     };
-    Ok(Excitation::Continuous(ContinuousOptions {
-        window,
-        segment_s: args.segment_s,
-        overlap,
-        band_hz,
-    }))
+    Excitation::new(kind, window, args.segment_s, args.overlap, band_hz)
+        .map_err(|e| anyhow!("--excitation: {e}"))
 }
 
 fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
@@ -101,6 +95,7 @@ fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
         polymax: !args.single_reference,
         window_hz: args.window_hz,
         exp_tau_s: args.exp_tau_s,
+        cmif_prominence: args.cmif_prominence,
         ..Default::default()
     };
     if let Some(b) = &args.band_hz {
