@@ -281,6 +281,10 @@ fn bad_time_data() {
     let mut lines: Vec<&str> = text.lines().collect();
     lines.remove(100);
     let gap = write("gap.csv", lines.join("\n"));
+    // A repeated time stamp: one line written twice.
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.insert(150, lines[150]);
+    let repeated = write("repeated.csv", lines.join("\n"));
     let missing = write(
         "missing.csv",
         text.replace("t_s,hammer,a1,a2,a3", "t_s,hammer,a1,a2,a4"),
@@ -292,16 +296,30 @@ fn bad_time_data() {
         "channels2.csv",
         std::fs::read_to_string(&c).unwrap() + "hammer2,reference,1,0,0,0,0,-1\n",
     );
-    let cases: [(String, String, &str); 4] = [
-        (c.clone(), gap, "line 101"),
-        (c.clone(), nan, "line 201"),
-        (c.clone(), missing, "no column for channel 'a3'"),
-        (two_refs, hits[0].clone(), "exactly one reference channel"),
+    let cases: [(String, String, &[&str]); 5] = [
+        (c.clone(), gap, &["line 101: time step", "a gap"]),
+        (
+            c.clone(),
+            repeated,
+            &[
+                "line 152: time step 0 s after",
+                "a repeated or reversed time stamp",
+            ],
+        ),
+        (c.clone(), nan, &["line 201"]),
+        (c.clone(), missing, &["no column for channel 'a3'"]),
+        (
+            two_refs,
+            hits[0].clone(),
+            &["exactly one reference channel"],
+        ),
     ];
-    for (chan, file, needle) in &cases {
+    for (chan, file, needles) in &cases {
         let (code, _, err) = lamdyn(&["ema", "--channels", chan, "--time", file]);
-        assert_eq!(code, 2, "{needle}: {err}");
-        assert!(err.contains(needle), "expected {needle:?} in {err}");
+        assert_eq!(code, 2, "{needles:?}: {err}");
+        for needle in *needles {
+            assert!(err.contains(needle), "expected {needle:?} in {err}");
+        }
     }
 }
 
