@@ -316,10 +316,13 @@ def fit(
     n_modes: Optional[int] = None,
     residual: bool = True,
     tolerance_m: float = 1e-3,
+    sensor_mapping: str = "surface",
 ) -> dict:
     """The effective modulus law E*(f) of the laminate fitted to FRF arrays (paper eqs. 2-10):
     the shell ``model`` (free, E_ref in its material) scaled by the law, modes projected on the
-    channels (each located on the mesh within ``tolerance_m``, m), compared with the
+    channels (each placed within ``tolerance_m``, m, on the nearest point of the mid-surface and
+    interpolated there with the element's shape functions, or with
+    ``sensor_mapping="nearest_node"`` on the nearest node), compared with the
     measurement over ``band_hz`` by ``misfit`` (``rms``, ``log_rms`` or ``complex``) for
     reference ``reference``. ``law`` is ``paper_eq7``, ``fractional_zener`` or ``per_mode``.
 
@@ -338,6 +341,7 @@ def fit(
         "modes": n_modes,
         "residual": bool(residual),
         "tolerance_m": float(tolerance_m),
+        "sensor_mapping": sensor_mapping,
     }
     return _fit_out(
         _native.fit_frf(

@@ -47,7 +47,7 @@ pub mod mesh;
 pub mod model;
 pub mod output;
 pub mod sparse;
-mod vec3;
+pub mod vec3;
 
 pub use error::FemError;
 pub use vec3::V3;

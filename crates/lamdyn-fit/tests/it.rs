@@ -5,5 +5,6 @@ mod it {
     mod errors;
     mod misfit;
     mod recovery;
+    mod sensors;
     mod synthesis;
 }

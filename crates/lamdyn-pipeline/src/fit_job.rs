@@ -17,7 +17,7 @@ use lamdyn_fem::eigen::{ModalParams, solve_modes};
 use lamdyn_fem::model::ModelSpec;
 use lamdyn_fit::fit::{Covariance, FitSettings, LawKind};
 use lamdyn_fit::misfit::MisfitSpec;
-use lamdyn_fit::probe::probes;
+use lamdyn_fit::probe::{SensorPlacement, placement_line, probes_with};
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_frf::FrfSet;
 use lamdyn_material::law::ViscoelasticLaw;
@@ -168,7 +168,7 @@ pub struct FitProblem {
 }
 
 /// The modal model of a free shell model at the channels of `set`: mesh, assembly, the lowest
-/// `modes` modes, each channel located on the mesh within `tolerance_m` (m), and the static
+/// `modes` modes, each channel placed on the mesh as `placement` says, and the static
 /// residual term when `residual` (paper eq. 4: K*(ω) = s(ω) K0). Returns the model and a line
 /// describing it; `name` names the model and `source` the measurement in messages.
 ///
@@ -182,7 +182,7 @@ pub fn modal_model(
     name: &str,
     source: &str,
     set: &FrfSet,
-    tolerance_m: f64,
+    placement: SensorPlacement,
     modes: usize,
     residual: bool,
     progress: &dyn Reporter,
@@ -198,6 +198,10 @@ pub fn modal_model(
             "model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode"
         );
     }
+    let SensorPlacement {
+        tolerance_m,
+        mapping,
+    } = placement;
     if !(tolerance_m.is_finite() && tolerance_m > 0.0) {
         crate::bail!("measurement.tolerance_m: {tolerance_m} must be a positive length in m");
     }
@@ -205,8 +209,8 @@ pub fn modal_model(
     let (mesh, _) = spec.build(base).with_context(invalid)?;
     let asm = Assembly::new(&mesh, &spec.material, &[]).with_context(invalid)?;
     let channels = || format!("channels of {source}");
-    let resp = probes(&mesh, set.responses(), tolerance_m).with_context(channels)?;
-    let refs = probes(&mesh, set.references(), tolerance_m).with_context(channels)?;
+    let resp = probes_with(&mesh, set.responses(), tolerance_m, mapping).with_context(channels)?;
+    let refs = probes_with(&mesh, set.references(), tolerance_m, mapping).with_context(channels)?;
     let sol = solve_modes(&asm, &ModalParams::lowest(modes), progress)?;
     progress.stage("projecting modes and residual terms");
     let term = if residual {
@@ -216,11 +220,12 @@ pub fn modal_model(
     };
     let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, term)?;
     let line = format!(
-        "{name}: {} nodes, {} MITC4, {modes} modes{}, E_ref = {:.4e} Pa",
+        "{name}: {} nodes, {} MITC4, {modes} modes{}, E_ref = {:.4e} Pa; {}",
         mesh.nodes().len(),
         mesh.elements().len(),
         if residual { " + residual term" } else { "" },
-        spec.material.young_pa
+        spec.material.young_pa,
+        placement_line(mapping, &[resp.as_slice(), refs.as_slice()].concat())
     );
     Ok((model, line))
 }
@@ -275,7 +280,10 @@ pub fn load_fit_job(path: &Path, progress: &dyn Reporter) -> Result<FitProblem> 
         &model_name,
         &measured.source,
         &set,
-        job.measurement.tolerance_m,
+        SensorPlacement {
+            tolerance_m: job.measurement.tolerance_m,
+            mapping: job.measurement.sensor_mapping,
+        },
         modes,
         source.residual,
         progress,

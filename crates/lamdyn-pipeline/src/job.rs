@@ -94,9 +94,14 @@ pub struct Measurement {
     /// A UFF file with FRFs (58) and nodes (15/2411) instead of the CSV files.
     #[serde(default)]
     pub uff: Option<PathBuf>,
-    /// Largest distance from a channel to its model node, m.
+    /// Largest distance from a channel to where it is placed on the model (the mid-surface, or
+    /// the node with `sensor_mapping = "nearest_node"`), m.
     #[serde(default = "default_tolerance")]
     pub tolerance_m: f64,
+    /// How channels are placed on the model: `surface` (the nearest point of the mid-surface,
+    /// the shapes interpolated there with the element's shape functions) or `nearest_node`.
+    #[serde(default)]
+    pub sensor_mapping: lamdyn_fit::probe::SensorMapping,
     /// Number of response channels the test had; a file with another count is an error.
     #[serde(default)]
     pub responses: Option<usize>,

@@ -19,7 +19,7 @@ use lamdyn_fem::model::{MeshSpec, ModelSpec};
 use lamdyn_fit::fit::{FitResult, FitSettings, fit};
 use lamdyn_fit::misfit::Objective;
 use lamdyn_fit::modes::{PeakComparison, compare_peaks};
-use lamdyn_fit::probe::probes;
+use lamdyn_fit::probe::{placement_line, probes_with};
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_frf::{Channel, FrfSet};
 use lamdyn_material::causality::{CausalityParams, CausalityVerdict};
@@ -407,7 +407,8 @@ fn build_model(
         .bytes(format!("{spec:?}").as_bytes())
         .bytes(&(modes as u64).to_le_bytes())
         .bytes(&[u8::from(job.model.residual)])
-        .f64(tol);
+        .f64(tol)
+        .bytes(format!("{:?}", job.measurement.sensor_mapping).as_bytes());
     if let MeshSpec::Gmsh { file, .. } = &spec.mesh {
         let p = relative(&spec_dir, Path::new(file));
         key = key
@@ -438,9 +439,10 @@ fn build_model(
         .with_context(|| format!("invalid model {label}"))?;
     let asm = Assembly::new(&mesh, &spec.material, &[])
         .with_context(|| format!("invalid model {label}"))?;
-    let resp = probes(&mesh, set.responses(), tol)
+    let mapping = job.measurement.sensor_mapping;
+    let resp = probes_with(&mesh, set.responses(), tol, mapping)
         .context("the response channels do not lie on the model (measurement.channels vs model; see measurement.tolerance_m)")?;
-    let refs = probes(&mesh, set.references(), tol).context(
+    let refs = probes_with(&mesh, set.references(), tol, mapping).context(
         "the reference channels do not lie on the model (measurement.channels vs model)",
     )?;
     let sol = solve_modes(&asm, &ModalParams::lowest(modes), spinner)?;
@@ -451,9 +453,13 @@ fn build_model(
     };
     let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, residual)?;
     cache.put("model", key, &model.to_cache_bytes())?;
-    let text = line(
-        mesh.nodes().len().to_string(),
-        mesh.elements().len().to_string(),
+    let text = format!(
+        "{}; {}",
+        line(
+            mesh.nodes().len().to_string(),
+            mesh.elements().len().to_string(),
+        ),
+        placement_line(mapping, &[resp.as_slice(), refs.as_slice()].concat())
     );
     Ok(((model, text), false))
 }

@@ -153,6 +153,8 @@ struct FitOptions {
     residual: bool,
     tolerance_m: f64,
     prominence: Option<f64>,
+    #[serde(default)]
+    sensor_mapping: lamdyn_fit::probe::SensorMapping,
 }
 
 fn yes() -> bool {
@@ -186,7 +188,10 @@ fn fit_frf(
             "model",
             "the arrays",
             &set,
-            o.tolerance_m,
+            lamdyn_fit::probe::SensorPlacement {
+                tolerance_m: o.tolerance_m,
+                mapping: o.sensor_mapping,
+            },
             modes,
             o.residual,
             &Silent,

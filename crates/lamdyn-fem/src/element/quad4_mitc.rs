@@ -39,6 +39,21 @@ pub const DRILLING_FACTOR: f64 = 1e-3;
 const GAUSS: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
 const NODE_RS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
 
+/// Bilinear shape functions h_k = ¼(1 + r r_k)(1 + s s_k) of the 4-node quadrilateral (nodes
+/// at (r_k, s_k) = (−1, −1), (1, −1), (1, 1), (−1, 1)) and their r and s derivatives.
+pub fn bilinear_shape(r: f64, s: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
+    let mut h = [0.0; 4];
+    let mut hr = [0.0; 4];
+    let mut hs = [0.0; 4];
+    for k in 0..4 {
+        let [rk, sk] = NODE_RS[k];
+        h[k] = 0.25 * (1.0 + r * rk) * (1.0 + s * sk);
+        hr[k] = 0.25 * rk * (1.0 + s * sk);
+        hs[k] = 0.25 * sk * (1.0 + r * rk);
+    }
+    (h, hr, hs)
+}
+
 /// Local dofs per node: u_x, u_y, u_z, α, β.
 const LOCAL: usize = 5;
 
@@ -78,18 +93,8 @@ impl Quad4Mitc {
         }
     }
 
-    /// Bilinear shape functions and their r and s derivatives.
     fn shape(r: f64, s: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
-        let mut h = [0.0; 4];
-        let mut hr = [0.0; 4];
-        let mut hs = [0.0; 4];
-        for k in 0..4 {
-            let [rk, sk] = NODE_RS[k];
-            h[k] = 0.25 * (1.0 + r * rk) * (1.0 + s * sk);
-            hr[k] = 0.25 * rk * (1.0 + s * sk);
-            hs[k] = 0.25 * sk * (1.0 + r * rk);
-        }
-        (h, hr, hs)
+        bilinear_shape(r, s)
     }
 
     fn base(&self, r: f64, s: f64, t: f64) -> Base {

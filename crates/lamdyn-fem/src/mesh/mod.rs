@@ -8,13 +8,14 @@
 //!
 //! - [`structured`]: rectangular plates and doubly curved shallow shells over a rectangle.
 //! - [`gmsh`]: Gmsh MSH 2.2 and 4.1 ASCII files.
-//! - [`Locator`]: measurement points → nearest nodes within a tolerance.
+//! - [`Locator`]: measurement points → nearest nodes, or points of the mid-surface with their
+//!   shape-function weights ([`SurfacePoint`]).
 
 pub mod gmsh;
 mod locate;
 pub mod structured;
 
-pub use locate::Locator;
+pub use locate::{Locator, SurfacePoint};
 
 use crate::element::{ElementDefect, Quad4Mitc};
 use crate::error::FemError;

@@ -20,7 +20,7 @@ fn inconsistent_inputs() {
     let off = vec![Channel::new("far", [2.0, 0.0, 0.0], [0.0, 0.0, 1.0]).unwrap()];
     let e = probes(&mesh, &off, 1e-3).unwrap_err().to_string();
     assert!(
-        e.starts_with("channel 'far': point 0 at (2, 0, 0) m: nearest node"),
+        e.starts_with("channel 'far': point at (2, 0, 0) m: 1.5385e0 m from the mid-surface"),
         "{e}"
     );
     assert!(e.ends_with("(sensor off the mesh?)"), "{e}");
