@@ -226,7 +226,8 @@ mod tests {
     fn surface_probes_reproduce_rotations_and_cubic_bending() {
         let mesh = flat(6);
         let loc = Locator::new(&mesh, 1.0);
-        let cases: [(&dyn Fn(f64, f64) -> [f64; 3], &str); 2] = [
+        type Field<'a> = &'a dyn Fn(f64, f64) -> [f64; 3];
+        let cases: [(Field, &str); 2] = [
             (&|x, y| [0.3 * x - 0.2 * y + 0.1, 0.3, -0.2], "rigid"),
             (
                 &|x, y| {
