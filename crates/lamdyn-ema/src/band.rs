@@ -13,6 +13,13 @@ pub fn lines(freqs_hz: &[f64], [lo, hi]: [f64; 2]) -> Vec<usize> {
         .collect()
 }
 
+/// [`lines`] without the 0 Hz line (or any non-positive one).
+pub fn positive_lines(freqs_hz: &[f64], band_hz: [f64; 2]) -> Vec<usize> {
+    let mut out = lines(freqs_hz, band_hz);
+    out.retain(|&k| freqs_hz[k] > 0.0);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

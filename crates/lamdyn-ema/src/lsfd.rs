@@ -79,15 +79,8 @@ pub fn lsfd(
         curves,
         quantity,
         poles,
-        &band_lines(freqs_hz, band_hz),
+        &crate::band::positive_lines(freqs_hz, band_hz),
     )
-}
-
-/// The lines of `band_hz` above 0 Hz.
-fn band_lines(freqs_hz: &[f64], band_hz: [f64; 2]) -> Vec<usize> {
-    let mut lines = crate::band::lines(freqs_hz, band_hz);
-    lines.retain(|&k| freqs_hz[k] > 0.0);
-    lines
 }
 
 /// [`lsfd`] over the given lines (indices into `freqs_hz`; the curves already checked).
@@ -328,7 +321,12 @@ pub fn refine_with(
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<ModalFit, EmaError> {
     check_curves(freqs_hz, curves)?;
-    let lines = refinement_lines(freqs_hz, &band_lines(freqs_hz, band_hz), poles, fit_lines);
+    let lines = refinement_lines(
+        freqs_hz,
+        &crate::band::positive_lines(freqs_hz, band_hz),
+        poles,
+        fit_lines,
+    );
     let to_poles = |u: &[f64]| -> Vec<Complex64> {
         u.chunks(2)
             .map(|c| Complex64::new(-c[0].exp(), c[1]))

@@ -157,8 +157,7 @@ fn check_records(records: &[Hit], s: &WelchSettings) -> Result<usize, EmaError> 
 /// Ranges (Hz) in the band where the force's autospectrum is 40 dB below its 90th percentile
 /// there (module docs).
 fn weak_force(sxx: &[f64], freqs: &[f64], band: [f64; 2]) -> Vec<[f64; 2]> {
-    let mut idx = crate::band::lines(freqs, band);
-    idx.retain(|&k| freqs[k] > 0.0);
+    let idx = crate::band::positive_lines(freqs, band);
     if idx.is_empty() {
         return Vec::new();
     }

@@ -15,7 +15,7 @@
 //! N_sk = ⅛ s_k (1 + r₀)(1 + s₀)²(s₀ − 1), with r₀ = r r_k, s₀ = s s_k.
 
 use crate::error::{FitError, inconsistent};
-use lamdyn_fem::element::bilinear_shape;
+use lamdyn_fem::element::{NODE_RS, bilinear_shape};
 use lamdyn_fem::mesh::{Locator, Mesh, SurfacePoint};
 use lamdyn_fem::vec3::{cross, dot, unit};
 use lamdyn_frf::Channel;
@@ -83,7 +83,6 @@ impl Probe {
 
     /// A probe along `direction` at a point of the mid-surface (module docs).
     pub fn on_surface(mesh: &Mesh, q: &SurfacePoint, direction: [f64; 3]) -> Self {
-        const NODE_RS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
         let conn = mesh.elements()[q.element];
         let x = conn.map(|n| mesh.nodes()[n]);
         let tangents = |r: f64, s: f64| {

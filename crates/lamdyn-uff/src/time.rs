@@ -142,7 +142,11 @@ fn same_axis(force: &Function58, f: &Function58, dt: f64) -> Result<(), UffError
             force.data.len()
         )));
     }
-    let (t0, t1) = (force.x()[0], f.x()[0]);
+    let start = |f: &Function58| match &f.abscissa {
+        Abscissa::Even { start, .. } => *start,
+        Abscissa::Uneven(t) => t[0],
+    };
+    let (t0, t1) = (start(force), start(f));
     if (t1 - t0).abs() > 0.5 * dt {
         return Err(convert(format!(
             "time response {b} starts at {t1} s, the force {a} at {t0} s: they were not sampled together"

@@ -3,7 +3,7 @@
 
 mod quad4_mitc;
 
-pub use quad4_mitc::{DRILLING_FACTOR, Quad4Mitc, SHEAR_CORRECTION, bilinear_shape};
+pub use quad4_mitc::{DRILLING_FACTOR, NODE_RS, Quad4Mitc, SHEAR_CORRECTION, bilinear_shape};
 
 use serde::{Deserialize, Serialize};
 

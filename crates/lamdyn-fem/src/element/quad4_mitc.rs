@@ -37,7 +37,8 @@ pub const SHEAR_CORRECTION: f64 = 5.0 / 6.0;
 pub const DRILLING_FACTOR: f64 = 1e-3;
 
 const GAUSS: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
-const NODE_RS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+/// Natural coordinates (r_k, s_k) of the 4-node quadrilateral's nodes, in element order.
+pub const NODE_RS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
 
 /// Bilinear shape functions h_k = ¼(1 + r r_k)(1 + s s_k) of the 4-node quadrilateral (nodes
 /// at (r_k, s_k) = (−1, −1), (1, −1), (1, 1), (−1, 1)) and their r and s derivatives.

@@ -2,7 +2,7 @@
 //! mid-surface with the element's shape functions there ([`Locator::on_surface`]).
 
 use super::Mesh;
-use crate::element::bilinear_shape;
+use crate::element::{NODE_RS, bilinear_shape};
 use crate::error::FemError;
 use crate::vec3::{V3, add, dot, norm, scale, sub};
 
@@ -158,7 +158,7 @@ impl<'m> Locator<'m> {
         let element = self.node_elements[n0].first().copied().unwrap_or(0);
         let conn = self.mesh.elements()[element];
         let corner = conn.iter().position(|&n| n == n0).unwrap_or(0);
-        let rs = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]][corner];
+        let rs = NODE_RS[corner];
         let at_node = SurfacePoint {
             element,
             rs,
