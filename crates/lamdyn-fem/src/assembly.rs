@@ -26,8 +26,11 @@ pub struct SystemPattern {
     node_adj: Vec<usize>,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
-    /// For element e and local nodes (l, k): 6 × (position of node k among node l's neighbours).
-    offsets: Vec<[usize; 16]>,
+    /// Nodes per element.
+    per_element: usize,
+    /// For element e and local nodes (l, k): 6 × (position of node k among node l's neighbours),
+    /// at `offsets[e·p² + p·l + k]` with p nodes per element.
+    offsets: Vec<usize>,
 }
 
 impl SystemPattern {
@@ -61,18 +64,15 @@ impl SystemPattern {
                 col_ptr.push(row_idx.len());
             }
         }
+        let per_element = mesh.order().nodes();
         let offsets = mesh
             .elements()
-            .iter()
-            .map(|el| {
-                let mut o = [0; 16];
-                for l in 0..4 {
-                    let nbrs = &node_adj[node_ptr[el[l]]..node_ptr[el[l] + 1]];
-                    for k in 0..4 {
-                        o[4 * l + k] = 6 * nbrs.binary_search(&el[k]).unwrap_or(0);
-                    }
-                }
-                o
+            .flat_map(|el| {
+                el.iter().flat_map(|&l| {
+                    let nbrs = &node_adj[node_ptr[l]..node_ptr[l + 1]];
+                    el.iter()
+                        .map(move |k| 6 * nbrs.binary_search(k).unwrap_or(0))
+                })
             })
             .collect();
         Self {
@@ -81,6 +81,7 @@ impl SystemPattern {
             node_adj,
             col_ptr,
             row_idx,
+            per_element,
             offsets,
         }
     }
@@ -112,14 +113,15 @@ impl SystemPattern {
         rows.binary_search(&row).ok().map(|p| self.col_ptr[col] + p)
     }
 
-    fn scatter(&self, values: &mut [f64], element: usize, nodes: &[usize; 4], m: &ElementMatrix) {
-        let off = &self.offsets[element];
-        for l in 0..4 {
+    fn scatter(&self, values: &mut [f64], element: usize, nodes: &[usize], m: &ElementMatrix) {
+        let p = self.per_element;
+        let off = &self.offsets[p * p * element..p * p * (element + 1)];
+        for l in 0..p {
             for cb in 0..6 {
                 let col = 6 * nodes[l] + cb;
                 let base = self.col_ptr[col];
-                for k in 0..4 {
-                    let start = base + off[4 * l + k];
+                for k in 0..p {
+                    let start = base + off[p * l + k];
                     for ca in 0..6 {
                         values[start + ca] += m[6 * k + ca][6 * l + cb];
                     }
@@ -162,7 +164,7 @@ pub struct Assembly {
 }
 
 impl Assembly {
-    /// Assembles the MITC4 stiffness and mass of `mesh` with `material`, in parallel.
+    /// Assembles the MITC4 or MITC9 stiffness and mass of `mesh` with `material`, in parallel.
     ///
     /// # Errors
     /// [`FemError::InvalidParameter`] for a non-physical material or a mesh whose modal solve
@@ -179,7 +181,7 @@ impl Assembly {
         let nnz = pattern.nnz();
         let mut k = vec![0.0; nnz];
         let mut m = vec![0.0; nnz];
-        let n_el = mesh.elements().len();
+        let n_el = mesh.n_elements();
         const BATCH: usize = 1024;
         for start in (0..n_el).step_by(BATCH) {
             let end = (start + BATCH).min(n_el);
@@ -196,12 +198,12 @@ impl Assembly {
                 let (ke, me) = r.map_err(|(e, _)| {
                     FemError::InvalidMesh(format!(
                         "element {e} (nodes {:?}): the Jacobian turns negative through the thickness ({} m): the shell is too thick for its curvature or the element is folded",
-                        mesh.elements()[e], material.thickness_m
+                        mesh.element_nodes(e), material.thickness_m
                     ))
                 })?;
                 let e = start + i;
-                pattern.scatter(&mut k, e, &mesh.elements()[e], &ke);
-                pattern.scatter(&mut m, e, &mesh.elements()[e], &me);
+                pattern.scatter(&mut k, e, mesh.element_nodes(e), &ke);
+                pattern.scatter(&mut m, e, mesh.element_nodes(e), &me);
             }
         }
         let springs = spring_diagonal(springs, mesh.nodes().len())?;

@@ -10,6 +10,9 @@
 //! elements_y = 40
 //! radius_x_m = 4.0            # optional: a shallow dome; inf or absent is flat
 //! radius_y_m = 6.0
+//! element = "mitc9"           # optional: 9-node MITC9 elements (default "mitc4")
+//! edge_layers = 3             # optional: geometric layers at the free edges, the outermost
+//! edge_layer_m = 0.002        #   this wide (default: half the shell's thickness)
 //!
 //! [material]
 //! young_pa = 67.45e9
@@ -26,7 +29,7 @@
 //! ```
 
 use crate::assembly::NodeSpring;
-use crate::element::ShellMaterial;
+use crate::element::{ElementOrder, ShellMaterial};
 use crate::error::FemError;
 use crate::mesh::structured::RectangleSpec;
 use crate::mesh::{Locator, Mesh, gmsh};
@@ -54,26 +57,9 @@ pub struct ModelSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum MeshSpec {
-    /// A structured rectangle, flat or a shallow dome.
-    Rectangle {
-        /// Length along x, m.
-        length_x_m: f64,
-        /// Length along y, m.
-        length_y_m: f64,
-        /// Elements along x.
-        elements_x: usize,
-        /// Elements along y.
-        elements_y: usize,
-        /// Radius in the x-z plane, m (absent: flat).
-        #[serde(default = "infinite")]
-        radius_x_m: f64,
-        /// Radius in the y-z plane, m (absent: flat).
-        #[serde(default = "infinite")]
-        radius_y_m: f64,
-        /// Edge grading in [0, 1).
-        #[serde(default)]
-        grading: f64,
-    },
+    /// A structured rectangle, flat or a shallow dome ([`RectangleSpec`]; `edge_layer_m`
+    /// absent or 0 with `edge_layers` > 0: half the shell's thickness).
+    Rectangle(RectangleSpec),
     /// A Gmsh MSH file (2.2 or 4.1 ASCII), relative to the model file.
     Gmsh {
         /// Path of the file.
@@ -81,12 +67,13 @@ pub enum MeshSpec {
         /// Unit of the file's coordinates: "m" (default) or "mm".
         #[serde(default = "metres")]
         unit: String,
+        /// The element the file must hold, `"mitc4"` (4-node quadrilaterals) or `"mitc9"`
+        /// (9-node); absent: whichever it holds.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        element: Option<ElementOrder>,
     },
 }
 
-fn infinite() -> f64 {
-    f64::INFINITY
-}
 fn metres() -> String {
     "m".into()
 }
@@ -144,29 +131,26 @@ impl ModelSpec {
     pub fn build(&self, base_dir: &Path) -> Result<(Mesh, Vec<NodeSpring>), FemError> {
         self.check_units()?;
         let mesh = match &self.mesh {
-            MeshSpec::Rectangle {
-                length_x_m,
-                length_y_m,
-                elements_x,
-                elements_y,
-                radius_x_m,
-                radius_y_m,
-                grading,
-            } => {
+            MeshSpec::Rectangle(rect) => {
                 // Refused before the mesh is built: a 2000 x 2000 mesh takes seconds to make.
-                crate::memory::check_modal_memory(6 * (elements_x + 1) * (elements_y + 1))?;
-                RectangleSpec {
-                    length_x_m: *length_x_m,
-                    length_y_m: *length_y_m,
-                    elements_x: *elements_x,
-                    elements_y: *elements_y,
-                    radius_x_m: *radius_x_m,
-                    radius_y_m: *radius_y_m,
-                    grading: *grading,
+                let per_side = match rect.order {
+                    ElementOrder::Linear => 1,
+                    ElementOrder::Quadratic => 2,
+                };
+                crate::memory::check_modal_memory(
+                    6 * (per_side * rect.elements_x + 1) * (per_side * rect.elements_y + 1),
+                )?;
+                let mut rect = *rect;
+                if rect.edge_layers > 0 && rect.edge_layer_m == 0.0 {
+                    rect.edge_layer_m = 0.5 * self.material.thickness_m;
                 }
-                .build()?
+                rect.build()?
             }
-            MeshSpec::Gmsh { file, unit } => {
+            MeshSpec::Gmsh {
+                file,
+                unit,
+                element,
+            } => {
                 let scale = match unit.as_str() {
                     "m" => 1.0,
                     "mm" => 1e-3,
@@ -179,7 +163,25 @@ impl ModelSpec {
                         });
                     }
                 };
-                gmsh::read_msh(&base_dir.join(file), scale)?
+                let mesh = gmsh::read_msh(&base_dir.join(file), scale)?;
+                if let Some(want) = element
+                    && *want != mesh.order()
+                {
+                    return Err(FemError::InvalidParameter {
+                        context: "mesh".into(),
+                        field: "element".into(),
+                        value: format!("{want:?}").to_lowercase(),
+                        requirement: format!(
+                            "'{file}' holds {}-node quadrilaterals ({}); {} needs {}-node ones (Gmsh: Mesh.ElementOrder = {}, Mesh.SecondOrderIncomplete = 0)",
+                            mesh.order().nodes(),
+                            mesh.order().name(),
+                            want.name(),
+                            want.nodes(),
+                            if want.nodes() == 9 { 2 } else { 1 }
+                        ),
+                    });
+                }
+                mesh
             }
         };
         check_span(&mesh, self.material.thickness_m)?;
@@ -234,14 +236,9 @@ impl ModelSpec {
                 Quantity::Thickness,
             ),
         ];
-        if let MeshSpec::Rectangle {
-            length_x_m,
-            length_y_m,
-            ..
-        } = &self.mesh
-        {
-            fields.push(("mesh", "length_x_m", *length_x_m, Quantity::Length));
-            fields.push(("mesh", "length_y_m", *length_y_m, Quantity::Length));
+        if let MeshSpec::Rectangle(rect) = &self.mesh {
+            fields.push(("mesh", "length_x_m", rect.length_x_m, Quantity::Length));
+            fields.push(("mesh", "length_y_m", rect.length_y_m, Quantity::Length));
         }
         for (context, field, value, quantity) in fields {
             units::check(quantity, value).map_err(|requirement| FemError::InvalidParameter {

@@ -89,7 +89,7 @@ impl<'a> DirectSolver<'a> {
         let n = self.asm.n_dofs();
         let mut rhs = Mat::<Complex64>::zeros(n, references.len());
         for (j, q) in references.iter().enumerate() {
-            for (d, w) in q.entries() {
+            for &(d, w) in q.entries() {
                 rhs[(d, j)] += Complex64::new(w, 0.0);
             }
         }

@@ -13,9 +13,12 @@
 //!
 //! N_k = ⅛(1 + r₀)(1 + s₀)(2 + r₀ + s₀ − r² − s²), N_rk = ⅛ r_k (1 + r₀)²(r₀ − 1)(1 + s₀),
 //! N_sk = ⅛ s_k (1 + r₀)(1 + s₀)²(s₀ − 1), with r₀ = r r_k, s₀ = s s_k.
+//!
+//! On a 9-node (MITC9) mesh every component is the element's biquadratic interpolation
+//! Σ h_k(r, s) u_k, which already bends between nodes.
 
 use crate::error::{FitError, inconsistent};
-use lamdyn_fem::element::{NODE_RS, bilinear_shape};
+use lamdyn_fem::element::{ElementOrder, NODE_RS, bilinear_shape};
 use lamdyn_fem::mesh::{Locator, Mesh, SurfacePoint};
 use lamdyn_fem::vec3::{cross, dot, unit};
 use lamdyn_frf::Channel;
@@ -44,11 +47,10 @@ pub struct SensorPlacement {
 
 /// A channel on the mesh: response pᵀu, or a unit force along its direction distributed as p
 /// (work-equivalent).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Probe {
-    /// The nonzero entries (dof, weight) of p over the 6-dof-per-node system (unused entries
-    /// have weight 0).
-    pub weights: [(usize, f64); 24],
+    /// The entries (dof, weight) of p over the 6-dof-per-node system (some weights may be 0).
+    pub weights: Vec<(usize, f64)>,
     /// Distance from the channel's point to where it was placed, m.
     pub distance_m: f64,
 }
@@ -56,20 +58,16 @@ pub struct Probe {
 impl Probe {
     /// A probe on one node's translations along `direction`.
     pub fn at_node(node: usize, direction: [f64; 3]) -> Self {
-        let mut weights = [(6 * node, 0.0); 24];
-        for c in 0..3 {
-            weights[c] = (6 * node + c, direction[c]);
-        }
         Self {
-            weights,
+            weights: (0..3).map(|c| (6 * node + c, direction[c])).collect(),
             distance_m: 0.0,
         }
     }
 
     /// The entries (dof, weight) of the probe's vector (a dof may appear more than once; the
     /// weights add).
-    pub fn entries(&self) -> [(usize, f64); 24] {
-        self.weights
+    pub fn entries(&self) -> &[(usize, f64)] {
+        &self.weights
     }
 
     /// pᵀ x for a vector over the dofs.
@@ -83,7 +81,17 @@ impl Probe {
 
     /// A probe along `direction` at a point of the mid-surface (module docs).
     pub fn on_surface(mesh: &Mesh, q: &SurfacePoint, direction: [f64; 3]) -> Self {
-        let conn = mesh.elements()[q.element];
+        if mesh.order() == ElementOrder::Quadratic {
+            return Self {
+                weights: q
+                    .weights
+                    .iter()
+                    .flat_map(|&(n, h)| (0..3).map(move |c| (6 * n + c, h * direction[c])))
+                    .collect(),
+                distance_m: q.distance_m,
+            };
+        }
+        let conn = mesh.corners(q.element);
         let x = conn.map(|n| mesh.nodes()[n]);
         let tangents = |r: f64, s: f64| {
             let (_, hr, hs) = bilinear_shape(r, s);
@@ -101,7 +109,7 @@ impl Probe {
         let [xr, xs] = tangents(r, s);
         let normal = unit(cross(xr, xs));
         let dn = dot(direction, normal);
-        let mut weights = [(6 * conn[0], 0.0); 24];
+        let mut weights = vec![(6 * conn[0], 0.0); 24];
         for k in 0..4 {
             let [rk, sk] = NODE_RS[k];
             let (r0, s0) = (r * rk, s * sk);

@@ -24,6 +24,7 @@ use crate::job::Job;
 use crate::output::OutputDir;
 use crate::{ChainResult, RunOptions, run_job};
 use lamdyn_fem::element::ShellMaterial;
+use lamdyn_fem::mesh::structured::RectangleSpec;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_frf::FrfSet;
 use lamdyn_testbench::description::{Bench, Description};
@@ -79,15 +80,15 @@ pub fn shell_model(d: &Description) -> ModelSpec {
         .filter_map(|l| l.young_pa)
         .fold(0.0, f64::max);
     ModelSpec {
-        mesh: MeshSpec::Rectangle {
-            length_x_m: d.plate.length_m,
-            length_y_m: d.plate.width_m,
-            elements_x: 2 * d.mesh.elements[0],
-            elements_y: 2 * d.mesh.elements[1],
-            radius_x_m: d.plate.radius_x_m,
-            radius_y_m: d.plate.radius_y_m,
-            grading: 0.0,
-        },
+        mesh: MeshSpec::Rectangle(
+            RectangleSpec::flat(
+                d.plate.length_m,
+                d.plate.width_m,
+                2 * d.mesh.elements[0],
+                2 * d.mesh.elements[1],
+            )
+            .curved(d.plate.radius_x_m, d.plate.radius_y_m),
+        ),
         material: ShellMaterial {
             young_pa: e_ref,
             poisson: d.layers[0].poisson,

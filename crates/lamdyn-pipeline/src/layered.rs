@@ -33,13 +33,7 @@ fn plate(job: &Job, base: &Path) -> Result<([f64; 2], [f64; 2])> {
         (None, None) => bail!("model: give file or spec"),
     };
     match spec.mesh {
-        MeshSpec::Rectangle {
-            length_x_m,
-            length_y_m,
-            radius_x_m,
-            radius_y_m,
-            ..
-        } => Ok(([length_x_m, length_y_m], [radius_x_m, radius_y_m])),
+        MeshSpec::Rectangle(r) => Ok(([r.length_x_m, r.length_y_m], [r.radius_x_m, r.radius_y_m])),
         _ => bail!(
             "the layered inverse needs a rectangle model (plan and dome radii); set inverse.layered = false for a Gmsh mesh"
         ),

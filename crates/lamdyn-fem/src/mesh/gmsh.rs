@@ -1,17 +1,20 @@
-//! Reader for Gmsh MSH files, ASCII versions 2.2 and 4.1, with 4-node quadrilaterals.
+//! Reader for Gmsh MSH files, ASCII versions 2.2 and 4.1, with 4-node or 9-node quadrilaterals.
 //!
-//! - 4-node quadrilaterals (type 3) become the shell elements; 2D physical groups become
-//!   element groups.
+//! - 4-node quadrilaterals (type 3) become MITC4 elements, 9-node quadrilaterals (type 10,
+//!   `Mesh.ElementOrder = 2`) MITC9 elements; one file holds one kind. 2D physical groups
+//!   become element groups.
 //! - Points and lines (types 15, 1, 8) are boundary entities: their physical groups become node
 //!   groups, the elements themselves are dropped.
-//! - Triangles and higher-order faces are refused with the conversion that fixes them
-//!   (`Mesh.RecombineAll = 1`, `Mesh.ElementOrder = 1`); volume elements are refused.
+//! - Triangles and 8-node (serendipity) quadrilaterals are refused with the setting that fixes
+//!   them (`Mesh.RecombineAll = 1`, `Mesh.SecondOrderIncomplete = 0`); volume elements are
+//!   refused.
 //! - Binary files are refused (`Mesh.Binary = 0` saves ASCII).
 //!
 //! Gmsh files carry no unit: coordinates are multiplied by `scale_to_m` (1 for metres,
 //! 1e-3 for millimetres).
 
 use super::Mesh;
+use crate::element::ElementOrder;
 use crate::error::FemError;
 use crate::vec3::V3;
 use std::collections::{BTreeMap, HashMap};
@@ -87,8 +90,8 @@ enum Version {
 struct RawMesh {
     node_tags: HashMap<i64, usize>,
     nodes: Vec<V3>,
-    /// (tag, node tags, physical tags, line)
-    quads: Vec<([i64; 4], Vec<i64>, usize)>,
+    /// (node tags, physical tags, line) of the 4-node or 9-node quadrilaterals.
+    quads: Vec<(Vec<i64>, Vec<i64>, usize)>,
     /// (dimension, node tags, physical tags)
     boundary: Vec<(usize, Vec<i64>, Vec<i64>)>,
 }
@@ -110,14 +113,22 @@ impl RawMesh {
         line: usize,
     ) -> Result<(), String> {
         match etype {
-            3 => {
-                let q = [nodes[0], nodes[1], nodes[2], nodes[3]];
-                self.quads.push((q, physicals, line));
+            3 | 10 => {
+                if let Some((first, _, first_line)) = self.quads.first()
+                    && first.len() != nodes.len()
+                {
+                    return Err(format!(
+                        "a {}-node quadrilateral after {}-node ones (line {first_line}): one file must hold one element order",
+                        nodes.len(),
+                        first.len()
+                    ));
+                }
+                self.quads.push((nodes, physicals, line));
             }
             15 => self.boundary.push((0, nodes, physicals)),
             1 | 8 => self.boundary.push((1, nodes, physicals)),
             2 | 9 => return Err("triangles are not supported: recombine the mesh into quadrilaterals (Mesh.RecombineAll = 1)".into()),
-            10 | 16 => return Err("second-order quadrilaterals are not supported: mesh with Mesh.ElementOrder = 1".into()),
+            16 => return Err("8-node (serendipity) quadrilaterals are not supported: mesh with Mesh.SecondOrderIncomplete = 0 for 9-node ones".into()),
             4..=7 | 11..=14 | 17..=19 => return Err(format!("volume element type {etype}: lamdyn meshes shells (2D quadrilaterals) only")),
             t => return Err(format!("unsupported element type {t}")),
         }
@@ -139,14 +150,12 @@ impl RawMesh {
                     reason: format!("element refers to node tag {tag}, which is not in $Nodes"),
                 })
         };
-        let mut elements = Vec::with_capacity(self.quads.len());
+        let mut connectivity = Vec::with_capacity(9 * self.quads.len());
         let mut element_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
         for (e, (q, phys, line)) in self.quads.iter().enumerate() {
-            let mut el = [0; 4];
-            for k in 0..4 {
-                el[k] = index(q[k], *line)?;
+            for tag in q {
+                connectivity.push(index(*tag, *line)?);
             }
-            elements.push(el);
             for p in phys {
                 element_groups
                     .entry(group_name(physical_names, 2, *p))
@@ -154,13 +163,18 @@ impl RawMesh {
                     .push(e);
             }
         }
-        if elements.is_empty() {
-            return Err(FemError::MeshFile {
-                path: name.into(),
-                line: 0,
-                reason: "no 4-node quadrilaterals (element type 3) in the file".into(),
-            });
-        }
+        let order = match self.quads.first() {
+            Some((q, _, _)) if q.len() == 9 => ElementOrder::Quadratic,
+            Some(_) => ElementOrder::Linear,
+            None => {
+                return Err(FemError::MeshFile {
+                    path: name.into(),
+                    line: 0,
+                    reason: "no 4-node or 9-node quadrilaterals (element types 3, 10) in the file"
+                        .into(),
+                });
+            }
+        };
         let mut node_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
         for (dim, nodes, phys) in &self.boundary {
             for p in phys {
@@ -172,12 +186,13 @@ impl RawMesh {
                 }
             }
         }
-        let mut mesh = Mesh::new(self.nodes, elements).map_err(|e| match e {
-            FemError::InvalidMesh(m) => FemError::InvalidMesh(format!(
-                "'{name}': {m} (indices count from 0 in file order)"
-            )),
-            other => other,
-        })?;
+        let mut mesh =
+            Mesh::of_order(order, self.nodes, None, connectivity).map_err(|e| match e {
+                FemError::InvalidMesh(m) => FemError::InvalidMesh(format!(
+                    "'{name}': {m} (indices count from 0 in file order)"
+                )),
+                other => other,
+            })?;
         for (g, mut nodes) in node_groups {
             nodes.sort_unstable();
             nodes.dedup();
@@ -502,6 +517,7 @@ fn check_node_count(etype: i64, n: usize) -> Result<(), String> {
         8 => 3,
         2 => 3,
         3 => 4,
+        10 => 9,
         _ => return Ok(()),
     };
     if n != want {

@@ -2,12 +2,11 @@
 //! mid-surface with the element's shape functions there ([`Locator::on_surface`]).
 
 use super::Mesh;
-use crate::element::{NODE_RS, bilinear_shape};
 use crate::error::FemError;
 use crate::vec3::{V3, add, dot, norm, scale, sub};
 
 /// The point of the mesh's mid-surface nearest a given point.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SurfacePoint {
     /// Element index.
     pub element: usize,
@@ -15,7 +14,7 @@ pub struct SurfacePoint {
     pub rs: [f64; 2],
     /// The element's nodes and their shape-function values h_k(r, s) (summing to 1): a field
     /// given at the nodes is Σ h_k u_k there.
-    pub weights: [(usize, f64); 4],
+    pub weights: Vec<(usize, f64)>,
     /// Distance from the given point to the surface point, m.
     pub distance_m: f64,
 }
@@ -56,7 +55,7 @@ impl<'m> Locator<'m> {
         let mut buckets = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
         let mut node_elements = vec![Vec::new(); nodes.len()];
         let mut largest_element_m: f64 = 0.0;
-        for (e, conn) in mesh.elements().iter().enumerate() {
+        for (e, conn) in mesh.elements().enumerate() {
             for &n in conn {
                 node_elements[n].push(e);
             }
@@ -154,15 +153,18 @@ impl<'m> Locator<'m> {
             .collect();
         candidates.sort_unstable();
         candidates.dedup();
-        // The nearest node, as the corner of one of its elements: (r, s) = ±1 there.
+        // The nearest node, as a node of one of its elements.
         let element = self.node_elements[n0].first().copied().unwrap_or(0);
-        let conn = self.mesh.elements()[element];
-        let corner = conn.iter().position(|&n| n == n0).unwrap_or(0);
-        let rs = NODE_RS[corner];
+        let conn = self.mesh.element_nodes(element);
+        let local = conn.iter().position(|&n| n == n0).unwrap_or(0);
         let at_node = SurfacePoint {
             element,
-            rs,
-            weights: [0, 1, 2, 3].map(|k| (conn[k], f64::from(u8::from(k == corner)))),
+            rs: self.mesh.order().node_rs()[local],
+            weights: conn
+                .iter()
+                .enumerate()
+                .map(|(k, &n)| (n, f64::from(u8::from(k == local))))
+                .collect(),
             distance_m: d0,
         };
         candidates
@@ -179,12 +181,13 @@ impl<'m> Locator<'m> {
 
     /// The point of element `e` nearest `p` (see [`Self::on_surface`]).
     fn nearest_in_element(&self, e: usize, p: V3) -> SurfacePoint {
-        let conn = self.mesh.elements()[e];
-        let x = conn.map(|n| self.mesh.nodes()[n]);
+        let conn = self.mesh.element_nodes(e);
+        let order = self.mesh.order();
+        let x: Vec<V3> = conn.iter().map(|&n| self.mesh.nodes()[n]).collect();
         let point = |rs: [f64; 2]| {
-            let (h, hr, hs) = bilinear_shape(rs[0], rs[1]);
+            let (h, hr, hs) = order.shape(rs[0], rs[1]);
             let mut out = [[0.0; 3]; 3];
-            for k in 0..4 {
+            for k in 0..x.len() {
                 out[0] = add(out[0], scale(h[k], x[k]));
                 out[1] = add(out[1], scale(hr[k], x[k]));
                 out[2] = add(out[2], scale(hs[k], x[k]));
@@ -212,11 +215,11 @@ impl<'m> Locator<'m> {
                 break;
             }
         }
-        let (h, _, _) = bilinear_shape(rs[0], rs[1]);
+        let (h, _, _) = order.shape(rs[0], rs[1]);
         SurfacePoint {
             element: e,
             rs,
-            weights: [0, 1, 2, 3].map(|k| (conn[k], h[k])),
+            weights: conn.iter().copied().zip(h).collect(),
             distance_m: norm(sub(p, point(rs)[0])),
         }
     }
@@ -257,6 +260,7 @@ impl<'m> Locator<'m> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::bilinear_shape;
     use crate::mesh::structured::RectangleSpec;
     use crate::vec3::cross;
 
@@ -269,6 +273,7 @@ mod tests {
             radius_x_m: 3.0,
             radius_y_m: 5.0,
             grading: 0.4,
+            ..RectangleSpec::flat(1.0, 1.0, 1, 1)
         }
         .build()
         .unwrap()
@@ -288,8 +293,7 @@ mod tests {
             (40, [0.5, 0.5], -2e-3),
             (62, [1.0, 1.0], 0.0),
         ] {
-            let conn = mesh.elements()[e];
-            let x = conn.map(|n| mesh.nodes()[n]);
+            let x = mesh.corners(e).map(|n| mesh.nodes()[n]);
             let (h, hr, hs) = bilinear_shape(rs[0], rs[1]);
             let mut at = [0.0; 3];
             let (mut xr, mut xs) = ([0.0; 3], [0.0; 3]);
@@ -326,6 +330,7 @@ mod tests {
             radius_x_m: f64::INFINITY,
             radius_y_m: f64::INFINITY,
             grading: 0.0,
+            ..RectangleSpec::flat(1.0, 1.0, 1, 1)
         }
         .build()
         .unwrap();

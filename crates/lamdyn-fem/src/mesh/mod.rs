@@ -1,7 +1,8 @@
-//! Meshes of 4-node quadrilaterals on a (possibly curved) mid-surface.
+//! Meshes of 4-node or 9-node quadrilaterals on a (possibly curved) mid-surface.
 //!
 //! A [`Mesh`] holds node positions (m), a unit director per node (the shell normal), the
-//! elements (4 node indices, counter-clockwise seen from the directors' side), and named node
+//! elements (4 or 9 node indices, corners counter-clockwise seen from the directors' side), the
+//! element order (MITC4 or MITC9), and named node
 //! and element groups. [`Mesh::new`] validates everything an element needs: finite
 //! coordinates, node indices in range, no unused node, consistent orientation, no degenerate or
 //! inverted element.
@@ -17,37 +18,37 @@ pub mod structured;
 
 pub use locate::{Locator, SurfacePoint};
 
-use crate::element::{ElementDefect, Quad4Mitc};
+use crate::element::{ElementDefect, ElementOrder, Quad4Mitc, Quad9Mitc, ShellElement};
 use crate::error::FemError;
 use crate::vec3::{V3, add, cross, norm, scale, sub, unit};
 use std::collections::{BTreeMap, HashMap};
 
-/// A quadrilateral shell mesh.
+/// A quadrilateral shell mesh of 4-node or 9-node elements.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mesh {
     nodes: Vec<V3>,
     directors: Vec<V3>,
-    elements: Vec<[usize; 4]>,
+    order: ElementOrder,
+    /// Node indices, [`ElementOrder::nodes`] per element.
+    connectivity: Vec<usize>,
     node_groups: BTreeMap<String, Vec<usize>>,
     element_groups: BTreeMap<String, Vec<usize>>,
 }
 
 impl Mesh {
-    /// A mesh from node positions (m) and elements. Directors are the normalised average of the
-    /// adjacent elements' normals at each node.
+    /// A mesh of 4-node elements from node positions (m). Directors are the normalised average
+    /// of the adjacent elements' normals at each node.
     ///
     /// # Errors
     /// [`FemError::InvalidMesh`] naming the node or element: NaN coordinates, an index out of
     /// range, a node no element uses, a repeated node in an element, elements whose orientation
     /// disagrees with a neighbour's, a degenerate or inverted element.
     pub fn new(nodes: Vec<V3>, elements: Vec<[usize; 4]>) -> Result<Self, FemError> {
-        check_nodes_and_connectivity(&nodes, &elements)?;
-        check_orientation(&elements)?;
-        let directors = averaged_normals(&nodes, &elements)?;
-        Self::with_directors(nodes, directors, elements)
+        Self::of_order(ElementOrder::Linear, nodes, None, elements.concat())
     }
 
-    /// A mesh with given unit directors (e.g. the exact normals of an analytic surface).
+    /// A mesh of 4-node elements with given unit directors (e.g. the exact normals of an
+    /// analytic surface).
     ///
     /// # Errors
     /// As [`Mesh::new`], and for directors that are not unit vectors.
@@ -56,8 +57,58 @@ impl Mesh {
         directors: Vec<V3>,
         elements: Vec<[usize; 4]>,
     ) -> Result<Self, FemError> {
-        check_nodes_and_connectivity(&nodes, &elements)?;
-        check_orientation(&elements)?;
+        Self::of_order(
+            ElementOrder::Linear,
+            nodes,
+            Some(directors),
+            elements.concat(),
+        )
+    }
+
+    /// A mesh of 9-node elements (corners counter-clockwise, then the mid-side nodes of edges
+    /// 0-1, 1-2, 2-3, 3-0, then the centre: Gmsh's and VTK's order), with given directors or
+    /// (None) directors averaged from the elements' normals at each node.
+    ///
+    /// # Errors
+    /// As [`Mesh::with_directors`], and for neighbours that share an edge but not its mid-side
+    /// node, or a mid-side or centre node far from where the corners put it (more than a quarter
+    /// of the edge from the edge's midpoint).
+    pub fn quadratic(
+        nodes: Vec<V3>,
+        directors: Option<Vec<V3>>,
+        elements: Vec<[usize; 9]>,
+    ) -> Result<Self, FemError> {
+        Self::of_order(ElementOrder::Quadratic, nodes, directors, elements.concat())
+    }
+
+    /// A mesh of either order from a flat connectivity list ([`ElementOrder::nodes`] indices
+    /// per element).
+    ///
+    /// # Errors
+    /// As [`Mesh::with_directors`] and [`Mesh::quadratic`]; a connectivity whose length is not a
+    /// multiple of the element's node count.
+    pub fn of_order(
+        order: ElementOrder,
+        nodes: Vec<V3>,
+        directors: Option<Vec<V3>>,
+        connectivity: Vec<usize>,
+    ) -> Result<Self, FemError> {
+        let per = order.nodes();
+        if connectivity.len() % per != 0 {
+            return Err(FemError::InvalidMesh(format!(
+                "{} node indices do not make whole {per}-node elements",
+                connectivity.len()
+            )));
+        }
+        check_nodes_and_connectivity(&nodes, &connectivity, per)?;
+        check_orientation(&connectivity, per)?;
+        if order == ElementOrder::Quadratic {
+            check_quadratic_nodes(&nodes, &connectivity)?;
+        }
+        let directors = match directors {
+            Some(d) => d,
+            None => averaged_normals(&nodes, &connectivity, order)?,
+        };
         if directors.len() != nodes.len() {
             return Err(FemError::InvalidMesh(format!(
                 "{} directors for {} nodes",
@@ -75,15 +126,16 @@ impl Mesh {
         let mesh = Self {
             nodes,
             directors,
-            elements,
+            order,
+            connectivity,
             node_groups: BTreeMap::new(),
             element_groups: BTreeMap::new(),
         };
-        for e in 0..mesh.elements.len() {
-            // Geometry only: a unit thickness is enough to check the Jacobian's sign.
+        for e in 0..mesh.n_elements() {
+            // Geometry only: a small thickness is enough to check the Jacobian's sign.
             let scale_len = mesh.element_size(e);
             mesh.element(e, 1e-3 * scale_len).check_geometry().map_err(|d| {
-                let nodes = mesh.elements[e];
+                let nodes = mesh.element_nodes(e);
                 FemError::InvalidMesh(match d {
                     ElementDefect::Degenerate { at } => format!(
                         "element {e} (nodes {nodes:?}) is degenerate (zero area near r = {}, s = {})",
@@ -118,7 +170,7 @@ impl Mesh {
     /// # Errors
     /// [`FemError::InvalidMesh`] for an index out of range.
     pub fn add_element_group(&mut self, name: &str, elements: Vec<usize>) -> Result<(), FemError> {
-        if let Some(bad) = elements.iter().find(|&&e| e >= self.elements.len()) {
+        if let Some(bad) = elements.iter().find(|&&e| e >= self.n_elements()) {
             return Err(FemError::InvalidMesh(format!(
                 "element group '{name}': element {bad} does not exist"
             )));
@@ -135,9 +187,27 @@ impl Mesh {
     pub fn directors(&self) -> &[V3] {
         &self.directors
     }
-    /// Elements as node indices.
-    pub fn elements(&self) -> &[[usize; 4]] {
-        &self.elements
+    /// The elements' node indices, one slice of [`ElementOrder::nodes`] per element.
+    pub fn elements(&self) -> std::slice::ChunksExact<'_, usize> {
+        self.connectivity.chunks_exact(self.order.nodes())
+    }
+    /// Number of elements.
+    pub fn n_elements(&self) -> usize {
+        self.connectivity.len() / self.order.nodes()
+    }
+    /// The node indices of element `e`.
+    pub fn element_nodes(&self, e: usize) -> &[usize] {
+        let per = self.order.nodes();
+        &self.connectivity[per * e..per * (e + 1)]
+    }
+    /// The four corner nodes of element `e`, counter-clockwise.
+    pub fn corners(&self, e: usize) -> [usize; 4] {
+        let n = self.element_nodes(e);
+        [n[0], n[1], n[2], n[3]]
+    }
+    /// The element family: 4-node MITC4 or 9-node MITC9.
+    pub fn order(&self) -> ElementOrder {
+        self.order
     }
     /// Named node groups.
     pub fn node_groups(&self) -> &BTreeMap<String, Vec<usize>> {
@@ -152,62 +222,68 @@ impl Mesh {
         6 * self.nodes.len()
     }
 
-    /// The element `e` as a MITC4 element of thickness `thickness_m`.
-    pub fn element(&self, e: usize, thickness_m: f64) -> Quad4Mitc {
-        let n = self.elements[e];
-        Quad4Mitc::new(
-            n.map(|i| self.nodes[i]),
-            n.map(|i| self.directors[i]),
-            thickness_m,
-        )
+    /// The element `e` with thickness `thickness_m`: MITC4 or MITC9 by the mesh's order.
+    pub fn element(&self, e: usize, thickness_m: f64) -> ShellElement {
+        let n = self.element_nodes(e);
+        let x = |k: usize| self.nodes[n[k]];
+        let d = |k: usize| self.directors[n[k]];
+        match self.order {
+            ElementOrder::Linear => ShellElement::Quad4(Quad4Mitc::new(
+                std::array::from_fn(x),
+                std::array::from_fn(d),
+                thickness_m,
+            )),
+            ElementOrder::Quadratic => ShellElement::Quad9(Quad9Mitc::new(
+                std::array::from_fn(x),
+                std::array::from_fn(d),
+                thickness_m,
+            )),
+        }
     }
 
-    /// Longest edge of element `e`, m.
+    /// Longest corner-to-corner edge of element `e`, m.
     fn element_size(&self, e: usize) -> f64 {
-        let n = self.elements[e];
+        let n = self.corners(e);
         (0..4)
             .map(|k| norm(sub(self.nodes[n[(k + 1) % 4]], self.nodes[n[k]])))
             .fold(0.0, f64::max)
     }
 
-    /// Total area of the mid-surface (2×2 Gauss), m².
+    /// Total area of the mid-surface (the element's Gauss rule), m².
     pub fn area(&self) -> f64 {
-        (0..self.elements.len()).map(|e| self.element_area(e)).sum()
+        (0..self.n_elements()).map(|e| self.element_area(e)).sum()
     }
 
     fn element_area(&self, e: usize) -> f64 {
-        let x = self.elements[e].map(|i| self.nodes[i]);
-        let g = 0.577_350_269_189_625_8;
+        let n = self.element_nodes(e);
+        let rule = self.order.gauss();
         let mut a = 0.0;
-        for r in [-g, g] {
-            for s in [-g, g] {
-                let dr = scale(
-                    0.25,
-                    add(
-                        add(scale(-(1.0 - s), x[0]), scale(1.0 - s, x[1])),
-                        add(scale(1.0 + s, x[2]), scale(-(1.0 + s), x[3])),
-                    ),
-                );
-                let ds = scale(
-                    0.25,
-                    add(
-                        add(scale(-(1.0 - r), x[0]), scale(-(1.0 + r), x[1])),
-                        add(scale(1.0 + r, x[2]), scale(1.0 - r, x[3])),
-                    ),
-                );
-                a += norm(cross(dr, ds));
+        for &(r, wr) in rule {
+            for &(s, ws) in rule {
+                let (_, hr, hs) = self.order.shape(r, s);
+                let mut dr = [0.0; 3];
+                let mut ds = [0.0; 3];
+                for (k, &node) in n.iter().enumerate() {
+                    dr = add(dr, scale(hr[k], self.nodes[node]));
+                    ds = add(ds, scale(hs[k], self.nodes[node]));
+                }
+                a += norm(cross(dr, ds)) * wr * ws;
             }
         }
         a
     }
 }
 
-fn check_nodes_and_connectivity(nodes: &[V3], elements: &[[usize; 4]]) -> Result<(), FemError> {
-    if nodes.is_empty() || elements.is_empty() {
+fn check_nodes_and_connectivity(
+    nodes: &[V3],
+    connectivity: &[usize],
+    per: usize,
+) -> Result<(), FemError> {
+    if nodes.is_empty() || connectivity.is_empty() {
         return Err(FemError::InvalidMesh(format!(
             "{} nodes and {} elements: nothing to mesh",
             nodes.len(),
-            elements.len()
+            connectivity.len() / per
         )));
     }
     for (i, p) in nodes.iter().enumerate() {
@@ -218,7 +294,7 @@ fn check_nodes_and_connectivity(nodes: &[V3], elements: &[[usize; 4]]) -> Result
         }
     }
     let mut used = vec![false; nodes.len()];
-    for (e, el) in elements.iter().enumerate() {
+    for (e, el) in connectivity.chunks_exact(per).enumerate() {
         for &n in el {
             if n >= nodes.len() {
                 return Err(FemError::InvalidMesh(format!(
@@ -228,8 +304,8 @@ fn check_nodes_and_connectivity(nodes: &[V3], elements: &[[usize; 4]]) -> Result
             }
             used[n] = true;
         }
-        for a in 0..4 {
-            for b in a + 1..4 {
+        for a in 0..per {
+            for b in a + 1..per {
                 if el[a] == el[b] {
                     return Err(FemError::InvalidMesh(format!(
                         "element {e} (nodes {el:?}) repeats node {}: degenerate",
@@ -247,32 +323,87 @@ fn check_nodes_and_connectivity(nodes: &[V3], elements: &[[usize; 4]]) -> Result
     Ok(())
 }
 
-/// Neighbouring elements must run along their shared edge in opposite directions.
-fn check_orientation(elements: &[[usize; 4]]) -> Result<(), FemError> {
-    let mut edges: HashMap<(usize, usize), usize> = HashMap::new();
-    for (e, el) in elements.iter().enumerate() {
+/// Neighbouring elements must run along their shared edge in opposite directions, and 9-node
+/// neighbours must share the edge's mid-side node.
+fn check_orientation(connectivity: &[usize], per: usize) -> Result<(), FemError> {
+    let mut edges: HashMap<(usize, usize), (usize, Option<usize>)> = HashMap::new();
+    for (e, el) in connectivity.chunks_exact(per).enumerate() {
         for k in 0..4 {
             let (a, b) = (el[k], el[(k + 1) % 4]);
-            if let Some(&other) = edges.get(&(a, b)) {
+            let mid = (per == 9).then(|| el[4 + k]);
+            if let Some(&(other, _)) = edges.get(&(a, b)) {
                 return Err(FemError::InvalidMesh(format!(
                     "elements {other} and {e} run along edge {a}-{b} in the same direction: their orientations (normals) disagree"
                 )));
             }
-            edges.insert((a, b), e);
+            if let Some(&(other, other_mid)) = edges.get(&(b, a))
+                && other_mid != mid
+            {
+                return Err(FemError::InvalidMesh(format!(
+                    "elements {other} and {e} share edge {a}-{b} but not its mid-side node ({:?} and {:?})",
+                    other_mid.unwrap_or(usize::MAX),
+                    mid.unwrap_or(usize::MAX)
+                )));
+            }
+            edges.insert((a, b), (e, mid));
         }
     }
     Ok(())
 }
 
-/// Unit average of the adjacent elements' corner normals at each node.
-fn averaged_normals(nodes: &[V3], elements: &[[usize; 4]]) -> Result<Vec<V3>, FemError> {
-    let mut sum = vec![[0.0; 3]; nodes.len()];
-    for el in elements {
+/// A 9-node element's mid-side nodes lie within a quarter of their edge's length of the
+/// edge's midpoint, and its centre node within a quarter of the shorter diagonal of the point
+/// the other eight nodes put it at (½ Σ mid-sides − ¼ Σ corners, exact for any biquadratic
+/// map that is serendipity-consistent).
+fn check_quadratic_nodes(nodes: &[V3], connectivity: &[usize]) -> Result<(), FemError> {
+    for (e, el) in connectivity.chunks_exact(9).enumerate() {
+        let x = |k: usize| nodes[el[k]];
         for k in 0..4 {
-            let p = nodes[el[k]];
-            let next = sub(nodes[el[(k + 1) % 4]], p);
-            let prev = sub(nodes[el[(k + 3) % 4]], p);
-            let n = cross(next, prev);
+            let (a, b) = (x(k), x((k + 1) % 4));
+            let chord = norm(sub(b, a));
+            let off = norm(sub(x(4 + k), scale(0.5, add(a, b))));
+            if off > 0.25 * chord {
+                return Err(FemError::InvalidMesh(format!(
+                    "element {e}: mid-side node {} is {off:.4e} m from the middle of edge {}-{} ({chord:.4e} m long): more than a quarter of the edge, the element would fold (check the node order)",
+                    el[4 + k],
+                    el[k],
+                    el[(k + 1) % 4]
+                )));
+            }
+        }
+        let mut centre = [0.0; 3];
+        for k in 0..4 {
+            centre = add(centre, add(scale(0.5, x(4 + k)), scale(-0.25, x(k))));
+        }
+        let diagonal = norm(sub(x(2), x(0))).min(norm(sub(x(3), x(1))));
+        let off = norm(sub(x(8), centre));
+        if off > 0.25 * diagonal {
+            return Err(FemError::InvalidMesh(format!(
+                "element {e}: centre node {} is {off:.4e} m from where its edges put it, more than a quarter of the diagonal ({diagonal:.4e} m)",
+                el[8]
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Unit average of the adjacent elements' normals g_r × g_s at each node.
+fn averaged_normals(
+    nodes: &[V3],
+    connectivity: &[usize],
+    order: ElementOrder,
+) -> Result<Vec<V3>, FemError> {
+    let mut sum = vec![[0.0; 3]; nodes.len()];
+    for el in connectivity.chunks_exact(order.nodes()) {
+        for (k, rs) in order.node_rs().iter().enumerate() {
+            let (_, hr, hs) = order.shape(rs[0], rs[1]);
+            let mut gr = [0.0; 3];
+            let mut gs = [0.0; 3];
+            for (m, &node) in el.iter().enumerate() {
+                gr = add(gr, scale(hr[m], nodes[node]));
+                gs = add(gs, scale(hs[m], nodes[node]));
+            }
+            let n = cross(gr, gs);
             if norm(n) > 0.0 {
                 sum[el[k]] = add(sum[el[k]], unit(n));
             }

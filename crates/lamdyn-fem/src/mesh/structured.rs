@@ -8,9 +8,16 @@
 //! with exact unit normals n ∝ (x/R_x, y/R_y, 1) as directors; an infinite radius is flat in that
 //! direction. Nodes are numbered row by row (x fastest), elements likewise, counter-clockwise
 //! seen from +z. Optional grading clusters nodes towards the free edges, where a Mindlin plate
-//! has a boundary layer of width about t/√(12k) (method-notes §5).
+//! has a boundary layer of width about t/√(12k) (method-notes §5); edge layers resolve it
+//! better: `edge_layers` elements at each edge whose widths grow geometrically from
+//! `edge_layer_m` to the interior's uniform size ([`axis_coordinates`]).
+//!
+//! With `element = "mitc9"` each element gets mid-side nodes at the midpoints of its edges in
+//! plan and a centre node (lifted onto the dome with their exact normals): the elements stay
+//! rectangles in plan, so the MITC9 tying is exact there.
 
 use super::Mesh;
+use crate::element::ElementOrder;
 use crate::error::{FemError, check_positive};
 use crate::vec3::unit;
 use serde::{Deserialize, Serialize};
@@ -37,6 +44,15 @@ pub struct RectangleSpec {
     /// (see [`graded`]).
     #[serde(default)]
     pub grading: f64,
+    /// Element family: `"mitc4"` (default) or `"mitc9"`.
+    #[serde(default, rename = "element")]
+    pub order: ElementOrder,
+    /// Elements in the geometric layer at each edge (0: none).
+    #[serde(default)]
+    pub edge_layers: usize,
+    /// Width of the outermost layer element, m (used when `edge_layers` > 0).
+    #[serde(default)]
+    pub edge_layer_m: f64,
 }
 
 fn infinite() -> f64 {
@@ -60,7 +76,24 @@ impl RectangleSpec {
             radius_x_m: f64::INFINITY,
             radius_y_m: f64::INFINITY,
             grading: 0.0,
+            order: ElementOrder::Linear,
+            edge_layers: 0,
+            edge_layer_m: 0.0,
         }
+    }
+
+    /// The same rectangle with elements of `order`.
+    pub fn with_order(mut self, order: ElementOrder) -> Self {
+        self.order = order;
+        self
+    }
+
+    /// The same rectangle with `layers` elements at each edge growing geometrically from
+    /// `first_m` (see [`axis_coordinates`]).
+    pub fn with_edge_layers(mut self, layers: usize, first_m: f64) -> Self {
+        self.edge_layers = layers;
+        self.edge_layer_m = first_m;
+        self
     }
 
     /// The same rectangle lifted onto a shallow dome of radii (R_x, R_y).
@@ -108,6 +141,18 @@ impl RectangleSpec {
                 });
             }
         }
+        if self.edge_layers > 0 {
+            check_positive(ctx, "edge_layer_m", self.edge_layer_m)?;
+            if self.grading != 0.0 {
+                return Err(FemError::InvalidParameter {
+                    context: ctx.into(),
+                    field: "grading".into(),
+                    value: format!("{}", self.grading),
+                    requirement: "must be 0 with edge_layers (choose one way to refine the edges)"
+                        .into(),
+                });
+            }
+        }
         if !(0.0..1.0).contains(&self.grading) {
             return Err(FemError::InvalidParameter {
                 context: ctx.into(),
@@ -123,37 +168,141 @@ impl RectangleSpec {
     ///
     /// # Errors
     /// [`FemError::InvalidParameter`] for non-positive lengths, counts outside 1..=2000, radii
-    /// shorter than the span, or grading outside [0, 1).
+    /// shorter than the span, grading outside [0, 1), or edge layers that do not fit.
     pub fn build(&self) -> Result<Mesh, FemError> {
         self.validate()?;
         let (nx, ny) = (self.elements_x, self.elements_y);
-        let coord = |i: usize, n: usize, l: f64| {
-            0.5 * l * graded(2.0 * i as f64 / n as f64 - 1.0, self.grading)
+        let xs = self.axis("x", nx, self.length_x_m)?;
+        let ys = self.axis("y", ny, self.length_y_m)?;
+        // Node lines: every element edge, and for MITC9 the midpoints between them.
+        // Node-line steps per element.
+        let p = match self.order {
+            ElementOrder::Linear => 1,
+            ElementOrder::Quadratic => 2,
         };
-        let mut nodes = Vec::with_capacity((nx + 1) * (ny + 1));
+        let lines = |c: &[f64]| -> Vec<f64> {
+            if p == 1 {
+                c.to_vec()
+            } else {
+                let mut out: Vec<f64> = c
+                    .windows(2)
+                    .flat_map(|w| [w[0], 0.5 * (w[0] + w[1])])
+                    .collect();
+                out.extend(c.last());
+                out
+            }
+        };
+        let (lx, ly) = (lines(&xs), lines(&ys));
+        let (kx, ky) = (1.0 / self.radius_x_m, 1.0 / self.radius_y_m);
+        let mut nodes = Vec::with_capacity(lx.len() * ly.len());
         let mut directors = Vec::with_capacity(nodes.capacity());
-        for j in 0..=ny {
-            for i in 0..=nx {
-                let x = coord(i, nx, self.length_x_m);
-                let y = coord(j, ny, self.length_y_m);
-                let (kx, ky) = (1.0 / self.radius_x_m, 1.0 / self.radius_y_m);
+        for &y in &ly {
+            for &x in &lx {
                 nodes.push([x, y, -0.5 * (kx * x * x + ky * y * y)]);
                 directors.push(unit([kx * x, ky * y, 1.0]));
             }
         }
-        let id = |i: usize, j: usize| j * (nx + 1) + i;
-        let mut elements = Vec::with_capacity(nx * ny);
+        let row = lx.len();
+        let id = |i: usize, j: usize| j * row + i;
+        let mut connectivity = Vec::with_capacity(self.order.nodes() * nx * ny);
         for j in 0..ny {
             for i in 0..nx {
-                elements.push([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                let (a, b) = (p * i, p * j);
+                connectivity.extend([id(a, b), id(a + p, b), id(a + p, b + p), id(a, b + p)]);
+                if p == 2 {
+                    connectivity.extend([
+                        id(a + 1, b),
+                        id(a + 2, b + 1),
+                        id(a + 1, b + 2),
+                        id(a, b + 1),
+                        id(a + 1, b + 1),
+                    ]);
+                }
             }
         }
-        let mut mesh = Mesh::with_directors(nodes, directors, elements)?;
-        mesh.add_node_group("corners", vec![id(0, 0), id(nx, 0), id(nx, ny), id(0, ny)])?;
-        let mut boundary: Vec<usize> = (0..=nx).flat_map(|i| [id(i, 0), id(i, ny)]).collect();
-        boundary.extend((1..ny).flat_map(|j| [id(0, j), id(nx, j)]));
+        let mut mesh = Mesh::of_order(self.order, nodes, Some(directors), connectivity)?;
+        let (ex, ey) = (lx.len() - 1, ly.len() - 1);
+        mesh.add_node_group("corners", vec![id(0, 0), id(ex, 0), id(ex, ey), id(0, ey)])?;
+        let mut boundary: Vec<usize> = (0..=ex).flat_map(|i| [id(i, 0), id(i, ey)]).collect();
+        boundary.extend((1..ey).flat_map(|j| [id(0, j), id(ex, j)]));
         boundary.sort_unstable();
         mesh.add_node_group("boundary", boundary)?;
         Ok(mesh)
     }
+
+    /// The n + 1 element-edge coordinates along one side of length l, centred on 0.
+    fn axis(&self, name: &str, n: usize, l: f64) -> Result<Vec<f64>, FemError> {
+        if self.edge_layers == 0 {
+            return Ok((0..=n)
+                .map(|i| 0.5 * l * graded(2.0 * i as f64 / n as f64 - 1.0, self.grading))
+                .collect());
+        }
+        axis_coordinates(n, l, self.edge_layers, self.edge_layer_m).map_err(|requirement| {
+            FemError::InvalidParameter {
+                context: "rectangle".into(),
+                field: "edge_layers".into(),
+                value: format!(
+                    "{} layers from {} m along {name} ({n} elements over {l} m)",
+                    self.edge_layers, self.edge_layer_m
+                ),
+                requirement,
+            }
+        })
+    }
+}
+
+/// Element-edge coordinates over [−l/2, l/2] with `layers` elements at each end whose widths
+/// grow geometrically, w_k = w_0 qᵏ (k = 0 at the edge), and n − 2·layers uniform interior
+/// elements of width h. The ratio q ≥ 1 is the one that makes the layers meet the interior
+/// smoothly, w_0 q^layers = h, with 2 Σ w_k + (n − 2 layers) h = l (found by bisection).
+///
+/// # Errors
+/// A sentence when the layers do not fit: fewer than one interior element, or a first layer
+/// already as wide as a uniform element (no refinement to make).
+pub fn axis_coordinates(n: usize, l: f64, layers: usize, first_m: f64) -> Result<Vec<f64>, String> {
+    if 2 * layers >= n {
+        return Err(format!(
+            "needs more than {} elements along the side for {layers} layers at each edge and an interior",
+            2 * layers
+        ));
+    }
+    let interior = (n - 2 * layers) as f64;
+    let layer_sum = |q: f64| (0..layers).map(|k| first_m * q.powi(k as i32)).sum::<f64>();
+    // Mismatch between the next layer's width and the interior width.
+    let mismatch = |q: f64| first_m * q.powi(layers as i32) - (l - 2.0 * layer_sum(q)) / interior;
+    if mismatch(1.0) >= 0.0 {
+        return Err(format!(
+            "the first layer ({first_m} m) must be thinner than a uniform element ({} m)",
+            l / n as f64
+        ));
+    }
+    let (mut lo, mut hi) = (1.0, 2.0);
+    while mismatch(hi) < 0.0 {
+        hi *= 2.0;
+        if hi > 1e6 {
+            return Err("no geometric growth fits the side".into());
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mismatch(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let q = 0.5 * (lo + hi);
+    let h = (l - 2.0 * layer_sum(q)) / interior;
+    let mut widths: Vec<f64> = (0..layers).map(|k| first_m * q.powi(k as i32)).collect();
+    widths.extend(std::iter::repeat_n(h, n - 2 * layers));
+    widths.extend((0..layers).rev().map(|k| first_m * q.powi(k as i32)));
+    let mut x = Vec::with_capacity(n + 1);
+    let mut at = -0.5 * l;
+    x.push(at);
+    for w in &widths[..n - 1] {
+        at += w;
+        x.push(at);
+    }
+    x.push(0.5 * l);
+    Ok(x)
 }

@@ -4,6 +4,7 @@
 //! mass-normalised) and a `rotation_NN` field (rad); frequencies are in the field names' order
 //! in a `frequencies_hz` field data array.
 
+use crate::element::ElementOrder;
 use crate::error::FemError;
 use crate::mesh::Mesh;
 use std::fmt::Write as _;
@@ -26,7 +27,12 @@ pub fn write_vtu(
 /// The `.vtu` text of `mesh` with the mode shapes (columns of `shapes`, 6 dofs per node).
 pub fn vtu_text(mesh: &Mesh, freqs_hz: &[f64], shapes: &[Vec<f64>]) -> String {
     let mut s = String::new();
-    let (nn, ne) = (mesh.nodes().len(), mesh.elements().len());
+    let (nn, ne) = (mesh.nodes().len(), mesh.n_elements());
+    // VTK_QUAD (9) or VTK_BIQUADRATIC_QUAD (28); both share Gmsh's node order.
+    let (per, vtk_type) = match mesh.order() {
+        ElementOrder::Linear => (4, 9),
+        ElementOrder::Quadratic => (9, 28),
+    };
     let _ = writeln!(
         s,
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>"
@@ -52,21 +58,22 @@ pub fn vtu_text(mesh: &Mesh, freqs_hz: &[f64], shapes: &[Vec<f64>]) -> String {
         "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
     );
     for e in mesh.elements() {
-        let _ = writeln!(s, "{} {} {} {}", e[0], e[1], e[2], e[3]);
+        let line: Vec<String> = e.iter().map(|n| n.to_string()).collect();
+        let _ = writeln!(s, "{}", line.join(" "));
     }
     let _ = writeln!(
         s,
         "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">"
     );
     for i in 1..=ne {
-        let _ = write!(s, "{} ", 4 * i);
+        let _ = write!(s, "{} ", per * i);
     }
     let _ = writeln!(
         s,
         "\n</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">"
     );
     for _ in 0..ne {
-        let _ = write!(s, "9 ");
+        let _ = write!(s, "{vtk_type} ");
     }
     let _ = writeln!(s, "\n</DataArray>\n</Cells>\n<PointData>");
     for (m, shape) in shapes.iter().enumerate() {

@@ -13,6 +13,7 @@ use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report, Section, write_csv_table};
 use anyhow::{Context, Result, bail};
 use lamdyn_fem::eigen::Progress;
+use lamdyn_fem::mesh::structured::RectangleSpec;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_fit::fit::{Covariance, FitResult, FitSettings, LawKind, fit};
 use lamdyn_fit::misfit::{MisfitKind, MisfitSpec, Objective};
@@ -194,15 +195,10 @@ fn from_example(e: FitExample, seed: u64, noise: f64) -> Result<Problem> {
 fn write_example(dir: &OutputDir, e: FitExample, problem: &Problem) -> Result<()> {
     let case = PaperPlateCase::default();
     let spec = ModelSpec {
-        mesh: MeshSpec::Rectangle {
-            length_x_m: 0.923,
-            length_y_m: 0.8632,
-            elements_x: case.elements,
-            elements_y: case.elements,
-            radius_x_m: f64::INFINITY,
-            radius_y_m: f64::INFINITY,
-            grading: 0.0,
-        },
+        mesh: MeshSpec::Rectangle(
+            RectangleSpec::flat(0.923, 0.8632, case.elements, case.elements)
+                .curved(f64::INFINITY, f64::INFINITY),
+        ),
         material: PaperPlateCase::GLASS,
         supports: vec![],
         solver: SolverSpec {

@@ -11,6 +11,7 @@ use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::{ModalParams, ModalSolution, Shift, solve_modes};
 use lamdyn_fem::element::ShellMaterial;
 use lamdyn_fem::mesh::Mesh;
+use lamdyn_fem::mesh::structured::RectangleSpec;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_fem::output::{mac, vtu_text};
 use lamdyn_pipeline::io::read_toml;
@@ -38,14 +39,8 @@ struct ShapeEntry {
 }
 
 fn example(e: ModelExample) -> ModelSpec {
-    let rect = |lx: f64, ly: f64, rx: f64, ry: f64| MeshSpec::Rectangle {
-        length_x_m: lx,
-        length_y_m: ly,
-        elements_x: 40,
-        elements_y: 40,
-        radius_x_m: rx,
-        radius_y_m: ry,
-        grading: 0.0,
+    let rect = |lx: f64, ly: f64, rx: f64, ry: f64| {
+        MeshSpec::Rectangle(RectangleSpec::flat(lx, ly, 40, 40).curved(rx, ry))
     };
     let glass = ShellMaterial {
         young_pa: 67.45e9,
@@ -98,16 +93,24 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
     if let Some(n) = args.modes {
         spec.solver.modes = n as usize;
     }
-    if let Some((nx, ny)) = args.elements {
+    if args.elements.is_some() || args.element.is_some() || args.edge_layers.is_some() {
         match &mut spec.mesh {
-            MeshSpec::Rectangle {
-                elements_x,
-                elements_y,
-                ..
-            } => (*elements_x, *elements_y) = (nx, ny),
-            MeshSpec::Gmsh { .. } => {
-                bail!("--elements applies to rectangle models; this model reads a mesh file")
+            MeshSpec::Rectangle(r) => {
+                if let Some((nx, ny)) = args.elements {
+                    (r.elements_x, r.elements_y) = (nx, ny);
+                }
+                if let Some(e) = args.element {
+                    r.order = e.into();
+                }
+                if let Some(n) = args.edge_layers {
+                    r.edge_layers = n;
+                    r.edge_layer_m = 0.0;
+                    r.grading = 0.0;
+                }
             }
+            MeshSpec::Gmsh { .. } => bail!(
+                "--elements, --element and --edge-layers apply to rectangle models; this model reads a mesh file (its element order is the file's)"
+            ),
         }
     }
     let compare = match &args.compare {
@@ -214,9 +217,10 @@ fn build_report(
     report.input(
         "mesh",
         format!(
-            "{} nodes, {} MITC4 elements, {} dofs, area {:.6} m^2",
+            "{} nodes, {} {} elements, {} dofs, area {:.6} m^2",
             mesh.nodes().len(),
-            mesh.elements().len(),
+            mesh.n_elements(),
+            mesh.order().name(),
             mesh.n_dofs(),
             mesh.area()
         ),
