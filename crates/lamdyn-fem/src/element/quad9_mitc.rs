@@ -107,6 +107,8 @@ pub struct Mitc9Tied {
     s_family: [[[Row<9>; 2]; 3]; 2],
     /// ε̃_rs at (∓a, ∓a).
     rs: [[Row<9>; 2]; 2],
+    /// Contravariant base vectors of the element's centre at this thickness coordinate.
+    central_contravariant: [V3; 3],
 }
 
 impl Scheme<9> for Mitc9 {
@@ -120,6 +122,7 @@ impl Scheme<9> for Mitc9 {
 
     fn tie(el: &Quad9Mitc, t: f64) -> Self::Tied {
         let central = el.base(0.0, 0.0, t);
+        let (central_contravariant, _) = inverse_columns(central[0], central[1], central[2]);
         let direct = |r, s| {
             let g = el.base(r, s, t);
             let (gcon, _) = inverse_columns(g[0], g[1], g[2]);
@@ -130,6 +133,7 @@ impl Scheme<9> for Mitc9 {
             r_family: [[[zero; 3]; 2]; 2],
             s_family: [[[zero; 2]; 3]; 2],
             rs: [[zero; 2]; 2],
+            central_contravariant,
         });
         let lin = [-A, A];
         let quad = [-B, 0.0, B];
@@ -152,31 +156,31 @@ impl Scheme<9> for Mitc9 {
     fn assumed(el: &Quad9Mitc, tied: &Self::Tied, r: f64, s: f64, t: f64) -> CovariantRows<9> {
         let (lr, ls) = (linear_through(r), linear_through(s));
         let (qr, qs) = (quadratic_through(r), quadratic_through(s));
-        let r_family = |c: usize| {
-            let terms: Vec<(f64, &Row<9>)> = (0..2)
-                .flat_map(|i| (0..3).map(move |j| (i, j)))
-                .map(|(i, j)| (lr[i] * qs[j], &tied.r_family[c][i][j]))
-                .collect();
-            combine(&terms)
-        };
-        let s_family = |c: usize| {
-            let terms: Vec<(f64, &Row<9>)> = (0..3)
-                .flat_map(|i| (0..2).map(move |j| (i, j)))
-                .map(|(i, j)| (qr[i] * ls[j], &tied.s_family[c][i][j]))
-                .collect();
-            combine(&terms)
-        };
-        let rs = combine(&[
-            (lr[0] * ls[0], &tied.rs[0][0]),
-            (lr[0] * ls[1], &tied.rs[0][1]),
-            (lr[1] * ls[0], &tied.rs[1][0]),
-            (lr[1] * ls[1], &tied.rs[1][1]),
-        ]);
-        let central = [r_family(0), s_family(0), rs, r_family(1), s_family(1)];
-        let c = el.base(0.0, 0.0, t);
-        let (ccon, _) = inverse_columns(c[0], c[1], c[2]);
-        change_basis(&central, &projections(&el.base(r, s, t), &ccon))
+        let central = [
+            tensor(lr, qs, &tied.r_family[0]),
+            tensor(qr, ls, &tied.s_family[0]),
+            tensor(lr, ls, &tied.rs),
+            tensor(lr, qs, &tied.r_family[1]),
+            tensor(qr, ls, &tied.s_family[1]),
+        ];
+        let basis = projections(&el.base(r, s, t), &tied.central_contravariant);
+        change_basis(&central, &basis)
     }
+}
+
+/// The tensor-product interpolation `Σ_ij w_r[i] w_s[j] samples[i][j]`.
+fn tensor<const I: usize, const J: usize>(
+    w_r: [f64; I],
+    w_s: [f64; J],
+    samples: &[[Row<9>; J]; I],
+) -> Row<9> {
+    let mut terms = Vec::with_capacity(I * J);
+    for (wi, row) in w_r.iter().zip(samples) {
+        for (wj, sample) in w_s.iter().zip(row) {
+            terms.push((wi * wj, sample));
+        }
+    }
+    combine(&terms)
 }
 
 /// `m[k][i]` = b_k · d^i.
