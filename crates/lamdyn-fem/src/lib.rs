@@ -9,6 +9,7 @@
 //! | [`element`] | the MITC4 shell element (stiffness, consistent mass) and its material |
 //! | [`assembly`] | planned sparse pattern, parallel assembly of K0 and M, elastic supports |
 //! | [`eigen`] | LLᵀ/LDLᵀ on faer, thick-restart Lanczos, [`eigen::solve_modes`] |
+//! | [`convergence`] | per-mode discretization error by Richardson extrapolation over nested meshes |
 //! | [`memory`] | the memory a modal solve needs, checked before allocating |
 //! | [`model`] | the TOML model description (mesh, material, supports, solver) |
 //! | [`output`] | MAC, VTK `.vtu` and JSON mode shapes |
@@ -39,6 +40,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod assembly;
+pub mod convergence;
 pub mod eigen;
 pub mod element;
 mod error;

@@ -31,6 +31,7 @@
 use crate::assembly::NodeSpring;
 use crate::element::{ElementOrder, ShellMaterial};
 use crate::error::FemError;
+use crate::mesh::refine::SurfaceFn;
 use crate::mesh::structured::RectangleSpec;
 use crate::mesh::{Locator, Mesh, gmsh};
 use lamdyn_material::units::{self, Quantity};
@@ -212,6 +213,16 @@ impl ModelSpec {
             });
         }
         Ok((mesh, springs))
+    }
+
+    /// The exact mid-surface of a rectangle model (its dome or plane), for refining it
+    /// ([`crate::mesh::Mesh::subdivided`]); `None` for a mesh file, whose elements are the
+    /// geometry.
+    pub fn surface(&self) -> Option<Box<SurfaceFn>> {
+        match &self.mesh {
+            MeshSpec::Rectangle(rect) => Some(Box::new(rect.surface())),
+            MeshSpec::Gmsh { .. } => None,
+        }
     }
 
     /// The material and the rectangle's lengths in plausible SI ranges

@@ -5,6 +5,7 @@
 
 mod it {
     mod common;
+    mod convergence;
     mod element;
     mod mesh;
     mod modes;

@@ -514,6 +514,15 @@ pub struct ModesArgs {
     /// shell's thickness wide: they resolve the free edges' boundary layer (0: none).
     #[arg(long, value_name = "N")]
     pub edge_layers: Option<usize>,
+    /// Refine until every elastic mode among the --modes lowest has an estimated
+    /// discretization error below TOL (relative, e.g. 1e-4): each element split 2x2, 3x3, ...,
+    /// each mode's error by Richardson extrapolation over the last three meshes (docs/fem.md);
+    /// exit 1 with how far it got when the tolerance is not met.
+    #[arg(long, value_name = "TOL", conflicts_with_all = ["vtu", "shapes_json", "compare"])]
+    pub converge: Option<f64>,
+    /// With --converge: the largest mesh to solve, in dofs [default: 600000].
+    #[arg(long, value_name = "N", requires = "converge")]
+    pub max_dofs: Option<usize>,
     /// Write the mode shapes with the mesh as a VTK unstructured grid for ParaView.
     #[arg(long, value_name = "FILE.vtu")]
     pub vtu: Option<PathBuf>,

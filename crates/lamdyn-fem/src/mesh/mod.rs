@@ -9,11 +9,13 @@
 //!
 //! - [`structured`]: rectangular plates and doubly curved shallow shells over a rectangle.
 //! - [`gmsh`]: Gmsh MSH 2.2 and 4.1 ASCII files.
+//! - [`refine`]: every element split into m × m ([`Mesh::subdivided`]).
 //! - [`Locator`]: measurement points → nearest nodes, or points of the mid-surface with their
 //!   shape-function weights ([`SurfacePoint`]).
 
 pub mod gmsh;
 mod locate;
+pub mod refine;
 pub mod structured;
 
 pub use locate::{Locator, SurfacePoint};
@@ -22,6 +24,27 @@ use crate::element::{ElementDefect, ElementOrder, Quad4Mitc, Quad9Mitc, ShellEle
 use crate::error::FemError;
 use crate::vec3::{V3, add, cross, norm, scale, sub, unit};
 use std::collections::{BTreeMap, HashMap};
+
+/// Appends the element whose lower-left node is grid point (a, b) of a structured grid of
+/// nodes `at(i, j)`, spanning q grid steps per side (q = 1: 4-node, q = 2: 9-node), in the
+/// node order of [`Mesh::quadratic`].
+pub(crate) fn push_grid_element(
+    connectivity: &mut Vec<usize>,
+    at: impl Fn(usize, usize) -> usize,
+    (a, b): (usize, usize),
+    q: usize,
+) {
+    connectivity.extend([at(a, b), at(a + q, b), at(a + q, b + q), at(a, b + q)]);
+    if q == 2 {
+        connectivity.extend([
+            at(a + 1, b),
+            at(a + 2, b + 1),
+            at(a + 1, b + 2),
+            at(a, b + 1),
+            at(a + 1, b + 1),
+        ]);
+    }
+}
 
 /// A quadrilateral shell mesh of 4-node or 9-node elements.
 #[derive(Debug, Clone, PartialEq)]

@@ -19,7 +19,7 @@
 use super::Mesh;
 use crate::element::ElementOrder;
 use crate::error::{FemError, check_positive};
-use crate::vec3::unit;
+use crate::vec3::{V3, unit};
 use serde::{Deserialize, Serialize};
 
 /// A rectangle and its subdivision.
@@ -101,6 +101,19 @@ impl RectangleSpec {
         self.radius_x_m = radius_x_m;
         self.radius_y_m = radius_y_m;
         self
+    }
+
+    /// The exact mid-surface z = −x²/(2R_x) − y²/(2R_y) as a [`super::refine::Surface`]: a
+    /// point's (x, y) → the dome's point above it and its unit normal ∝ (x/R_x, y/R_y, 1).
+    pub fn surface(&self) -> impl Fn(V3) -> (V3, V3) + Sync + use<> {
+        let (kx, ky) = (1.0 / self.radius_x_m, 1.0 / self.radius_y_m);
+        move |p: V3| {
+            let [x, y, _] = p;
+            (
+                [x, y, -0.5 * (kx * x * x + ky * y * y)],
+                unit([kx * x, ky * y, 1.0]),
+            )
+        }
     }
 
     /// The same rectangle with edge grading `g` (see [`graded`]).
@@ -193,13 +206,14 @@ impl RectangleSpec {
             }
         };
         let (lx, ly) = (lines(&xs), lines(&ys));
-        let (kx, ky) = (1.0 / self.radius_x_m, 1.0 / self.radius_y_m);
+        let lift = self.surface();
         let mut nodes = Vec::with_capacity(lx.len() * ly.len());
         let mut directors = Vec::with_capacity(nodes.capacity());
         for &y in &ly {
             for &x in &lx {
-                nodes.push([x, y, -0.5 * (kx * x * x + ky * y * y)]);
-                directors.push(unit([kx * x, ky * y, 1.0]));
+                let (point, normal) = lift([x, y, 0.0]);
+                nodes.push(point);
+                directors.push(normal);
             }
         }
         let row = lx.len();
@@ -207,17 +221,7 @@ impl RectangleSpec {
         let mut connectivity = Vec::with_capacity(self.order.nodes() * nx * ny);
         for j in 0..ny {
             for i in 0..nx {
-                let (a, b) = (p * i, p * j);
-                connectivity.extend([id(a, b), id(a + p, b), id(a + p, b + p), id(a, b + p)]);
-                if p == 2 {
-                    connectivity.extend([
-                        id(a + 1, b),
-                        id(a + 2, b + 1),
-                        id(a + 1, b + 2),
-                        id(a, b + 1),
-                        id(a + 1, b + 1),
-                    ]);
-                }
+                super::push_grid_element(&mut connectivity, id, (p * i, p * j), p);
             }
         }
         let mut mesh = Mesh::of_order(self.order, nodes, Some(directors), connectivity)?;

@@ -267,3 +267,62 @@ fn a_mesh_too_large_for_memory_is_refused_with_the_figure() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("GB for a modal solve, more than the"), "{err}");
 }
+
+/// The flat paper plate on 6 × 6 MITC9 elements with 2 edge layers.
+const FLAT_MITC9_6X6: [&str; 9] = [
+    "modes",
+    "--example",
+    "paper-plate",
+    "--element",
+    "mitc9",
+    "--elements",
+    "6x6",
+    "--edge-layers",
+    "2",
+];
+
+/// `--converge`: the flat paper plate on 6 × 6 MITC9 with 2 edge layers refines until its first
+/// elastic modes meet 1e-4; their extrapolated frequencies are within 1e-5 of the
+/// Reissner-Mindlin reference (method-notes §5) and each estimate covers its true error.
+#[test]
+fn converge_refines_until_the_tolerance_holds() {
+    let (code, out, err) = lamdyn(
+        &[
+            &FLAT_MITC9_6X6[..],
+            &["--modes", "10", "--converge", "1e-4", "--csv"],
+        ]
+        .concat(),
+    );
+    assert_eq!(code, 0, "{err}");
+    let rows = csv_rows(&out);
+    let elastic: Vec<_> = rows.iter().filter(|r| r["rigid"] != "yes").collect();
+    assert_eq!(elastic.len(), 4);
+    for (r, want) in elastic.iter().zip([16.06997, 22.65761, 27.80974, 39.98957]) {
+        let (f, estimate) = (num(r, "freq_hz"), num(r, "error_estimate"));
+        assert!(estimate <= 1e-4, "{r:?}");
+        assert!((f / want - 1.0).abs() <= estimate + 1e-6, "{r:?} vs {want}");
+        assert!(
+            (num(r, "extrapolated_hz") / want - 1.0).abs() < 1e-5,
+            "{r:?}"
+        );
+    }
+}
+
+/// A cap below what the tolerance needs: exit 1, how far it got; a tolerance below double
+/// precision: exit 2, said so; --max-dofs alone is refused by the parser.
+#[test]
+fn converge_says_how_far_it_got_and_refuses_impossible_tolerances() {
+    let base = [&FLAT_MITC9_6X6[..], &["--modes", "8"]].concat();
+    let (code, out, err) =
+        lamdyn(&[&base[..], &["--converge", "1e-7", "--max-dofs", "10000"]].concat());
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("not converged to 1e-7"), "{err}");
+    assert!(err.contains("dof cap"), "{err}");
+    assert!(out.contains("est. error"), "{out}");
+    let (code, _, err) = lamdyn(&[&base[..], &["--converge", "1e-17"]].concat());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("below what double precision allows"), "{err}");
+    let (code, _, err) = lamdyn(&[&base[..], &["--max-dofs", "1000"]].concat());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--converge"), "{err}");
+}
