@@ -132,6 +132,8 @@ pub struct Level {
     pub freqs_hz: Vec<f64>,
     /// MAC of each match (translations at the user's mesh's nodes).
     pub mac: Vec<f64>,
+    /// Index of each match among this level's modes (`usize::MAX`: none).
+    pub matched: Vec<usize>,
 }
 
 /// One mode's estimate.
@@ -169,6 +171,40 @@ pub struct Convergence {
 }
 
 impl Convergence {
+    /// Signed relative discretization error of each of the first `n_modes` modes of level
+    /// `level` (0: the user's mesh), in that level's own mode order:
+    /// δ = (f_level − f∞)/f∞ from the extrapolated f∞, its magnitude increased by the finest
+    /// mesh's estimate (the uncertainty of f∞ itself). Rigid modes get 0. A mode the estimate
+    /// does not cover (beyond the wanted ones) gets the largest magnitude of the modes below it,
+    /// positive (meshes are too stiff).
+    pub fn errors_of_level(&self, level: usize, n_modes: usize) -> Vec<f64> {
+        let mut out = vec![f64::NAN; n_modes];
+        let Some(l) = self.levels.get(level) else {
+            return out;
+        };
+        for (j, m) in self.modes.iter().enumerate() {
+            let k = l.matched[j];
+            if k >= n_modes {
+                continue;
+            }
+            out[k] = if m.rigid {
+                0.0
+            } else {
+                let d = l.freqs_hz[j] / m.extrapolated_hz - 1.0;
+                d.signum() * (d.abs() + m.error)
+            };
+        }
+        let mut largest: f64 = 0.0;
+        for d in &mut out {
+            if d.is_nan() {
+                *d = largest;
+            } else {
+                largest = largest.max(d.abs());
+            }
+        }
+        out
+    }
+
     /// The largest estimated error over the elastic modes, and which mode (0-based).
     pub fn worst(&self) -> Option<(usize, f64)> {
         self.modes
@@ -317,6 +353,31 @@ pub fn outermost_width(mesh: &Mesh) -> f64 {
     widest
 }
 
+/// The signed discretization error of the lowest `n_modes` modes of `mesh` itself
+/// ([`Convergence::errors_of_level`] of level 0), from the mesh and its 2 × 2 and 3 × 3
+/// subdivisions: what a model built on `mesh` carries into a fit. Returns the errors and the
+/// study (its warnings say when the free edges are unresolved, which the errors cannot show).
+///
+/// # Errors
+/// As [`converge_modes`].
+pub fn mesh_errors(
+    mesh: &Mesh,
+    surface: Option<Surface<'_>>,
+    material: &ShellMaterial,
+    springs: &[NodeSpring],
+    n_modes: usize,
+    progress: &dyn Progress,
+) -> Result<(Vec<f64>, Convergence), FemError> {
+    let params = ConvergeParams {
+        modes: n_modes,
+        tolerance: MIN_TOLERANCE,
+        max_dofs: usize::MAX,
+        max_levels: 3,
+    };
+    let study = converge_modes(mesh, surface, material, springs, &params, progress)?;
+    Ok((study.errors_of_level(0, n_modes), study))
+}
+
 /// A solved level: frequencies, rigid flags and translations at the coarse nodes.
 struct Solved {
     subdivisions: usize,
@@ -383,13 +444,17 @@ fn estimate(solved: &[Solved], wanted: usize, nominal: f64) -> Estimate {
     let levels: Vec<Level> = solved
         .iter()
         .map(|level| {
-            let (freqs_hz, mac) = match_modes(finest, level, wanted);
+            let (matched, mac) = match_modes(finest, level, wanted);
             Level {
                 subdivisions: level.subdivisions,
                 n_dofs: level.n_dofs,
                 seconds: level.seconds,
-                freqs_hz,
+                freqs_hz: matched
+                    .iter()
+                    .map(|&k| level.freqs.get(k).copied().unwrap_or(f64::NAN))
+                    .collect(),
                 mac,
+                matched,
             }
         })
         .collect();
@@ -412,38 +477,38 @@ fn estimate(solved: &[Solved], wanted: usize, nominal: f64) -> Estimate {
     Estimate { levels, modes }
 }
 
-/// For each of the finest level's first `wanted` modes, the frequency and MAC of its best
-/// match on `level` (greedy, each mode of `level` used once; rigid modes match by order).
-fn match_modes(finest: &Solved, level: &Solved, wanted: usize) -> (Vec<f64>, Vec<f64>) {
+/// For each of the finest level's first `wanted` modes, the index and MAC of its best match
+/// on `level` (greedy, each mode of `level` used once; rigid modes match by order;
+/// `usize::MAX` where none is left).
+fn match_modes(finest: &Solved, level: &Solved, wanted: usize) -> (Vec<usize>, Vec<f64>) {
     let mut taken = vec![false; level.freqs.len()];
-    let mut freqs = Vec::with_capacity(wanted);
+    let mut matched = Vec::with_capacity(wanted);
     let mut macs = Vec::with_capacity(wanted);
     for j in 0..wanted {
-        if finest.rigid[j] {
-            freqs.push(0.0);
-            macs.push(1.0);
-            continue;
-        }
-        let best = (0..level.freqs.len())
-            .filter(|&k| !taken[k] && !level.rigid[k])
-            .map(|k| (k, mac(&finest.samples[j], &level.samples[k])))
-            .fold(None, |a: Option<(usize, f64)>, b| match a {
-                Some(a) if a.1 >= b.1 => Some(a),
-                _ => Some(b),
-            });
+        let best = if finest.rigid[j] {
+            (j < level.freqs.len() && level.rigid[j]).then_some((j, 1.0))
+        } else {
+            (0..level.freqs.len())
+                .filter(|&k| !taken[k] && !level.rigid[k])
+                .map(|k| (k, mac(&finest.samples[j], &level.samples[k])))
+                .fold(None, |a: Option<(usize, f64)>, b| match a {
+                    Some(a) if a.1 >= b.1 => Some(a),
+                    _ => Some(b),
+                })
+        };
         match best {
             Some((k, value)) => {
                 taken[k] = true;
-                freqs.push(level.freqs[k]);
+                matched.push(k);
                 macs.push(value);
             }
             None => {
-                freqs.push(f64::NAN);
+                matched.push(usize::MAX);
                 macs.push(0.0);
             }
         }
     }
-    (freqs, macs)
+    (matched, macs)
 }
 
 /// Generalised Richardson extrapolation of one mode over element sizes `h` (decreasing) and

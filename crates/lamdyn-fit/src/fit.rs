@@ -18,6 +18,11 @@
 //! [MacKinnon & White 1985], which stays valid when the noise differs from line to line. It is
 //! mapped to the natural parameters by the delta method; 95 % intervals are ±1.96 standard
 //! deviations (normal approximation).
+//!
+//! **Model error.** When the modal model carries its modes' estimated discretization errors
+//! ([`ModalModel::with_frequency_errors`]), the parameter change they cause (a linearised refit
+//! against the corrected eigenvalues) is added to the covariance as one systematic term, so
+//! the intervals cover the answer of a converged mesh (`discretization_shift`).
 
 use crate::error::{FitError, inconsistent};
 use crate::law::LawChoice;
@@ -146,6 +151,10 @@ pub struct FitResult {
     pub seconds: f64,
     /// What the plausibility check noticed but did not refuse ([`fit`]).
     pub warnings: Vec<String>,
+    /// Change of the natural parameters from the model's estimated discretization error
+    /// (linearised refit against the corrected model; included in the intervals), if the
+    /// model carries an estimate.
+    pub discretization_shift: Option<Vec<f64>>,
     #[serde(skip)]
     cov_u: Option<Mat<f64>>,
     #[serde(skip)]
@@ -530,10 +539,25 @@ fn run_starts(
     let best =
         best.ok_or_else(|| inconsistent("fit", "no starting point gives a finite misfit".into()))?;
     let nat = law.natural(&best.x);
-    let cov_u = match settings.covariance {
+    let cov_noise = match settings.covariance {
         Covariance::Classical => covariance(&best.jacobian, best.cost, m, p),
         Covariance::RobustHc3 => sandwich_covariance(&best.jacobian, &best.residuals, p),
     };
+    let shift_u = discretization_shift(objective, law, &best, settings);
+    let cov_u = match (cov_noise, &shift_u) {
+        (Some(c), Some(du)) => Some(Mat::from_fn(p, p, |a, b| {
+            c[(a, b)] + du[a] * du[b] / (1.96 * 1.96)
+        })),
+        (c, _) => c,
+    };
+    let discretization_shift = shift_u.as_ref().map(|du| {
+        let moved: Vec<f64> = best.x.iter().zip(du).map(|(u, d)| u + d).collect();
+        law.natural(&moved)
+            .iter()
+            .zip(&nat)
+            .map(|(a, b)| a - b)
+            .collect()
+    });
     let stds = cov_u.as_ref().map(|c| natural_std(law, &best.x, c));
     let parameters = law
         .names()
@@ -563,9 +587,39 @@ fn run_starts(
         peaks: vec![],
         warnings: Vec::new(),
         seconds: 0.0,
+        discretization_shift,
         cov_u,
         u: best.x,
     })
+}
+
+/// What the model's discretization error does to the parameters: Δu = u_c − u, where u_c is
+/// the optimum against the corrected model ([`ModalModel::corrected`]), found by LM from u. A
+/// refit, not a linearised step: a frequency error of a few per cent moves a peak by several
+/// half-power bandwidths, far outside the range where the misfit is linear in it. The errors of
+/// one mesh share their sign (a mesh too stiff is too stiff in every mode), so they are one
+/// systematic effect, not independent scatter: Δu enters the covariance as the rank-one term
+/// Δu Δuᵀ / 1.96², so that the 95 % interval reaches the corrected optimum. `None` when the
+/// model carries no estimate or the refit fails.
+fn discretization_shift(
+    objective: &Objective<'_>,
+    law: &LawChoice,
+    best: &crate::lm::LmOutcome,
+    settings: &FitSettings,
+) -> Option<Vec<f64>> {
+    let corrected = objective.model().corrected()?;
+    let moved = objective.with_model(&corrected);
+    let residuals = |u: &[f64]| -> Option<Vec<f64>> {
+        let n = law.natural(u);
+        if !n.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let prepared = law.prepare(&n);
+        Some(moved.residuals(&|w: f64| prepared.modulus(w)))
+    };
+    let refit = levenberg_marquardt(&residuals, &best.x, settings.lm)?;
+    let out: Vec<f64> = refit.x.iter().zip(&best.x).map(|(c, u)| c - u).collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
 }
 
 /// The HC3 sandwich (JᵀJ)⁻¹ Jᵀ diag(r_i²/(1 − h_i)²) J (JᵀJ)⁻¹ with leverages

@@ -238,6 +238,30 @@ impl<'a> Objective<'a> {
         })
     }
 
+    /// The same misfit against another model of the same channels (e.g.
+    /// [`ModalModel::corrected`]).
+    pub fn with_model<'b>(&self, model: &'b ModalModel) -> Objective<'b>
+    where
+        'a: 'b,
+    {
+        Objective {
+            spec: self.spec.clone(),
+            model,
+            measured: self.measured,
+            lines: self.lines.clone(),
+            evaluator: model.rms_evaluator(self.spec.reference),
+            rms_exp: self.rms_exp.clone(),
+            scale: self.scale,
+            channel_norm: self.channel_norm.clone(),
+            sqrt_w: self.sqrt_w.clone(),
+        }
+    }
+
+    /// The model.
+    pub fn model(&self) -> &ModalModel {
+        self.model
+    }
+
     /// The lines used.
     pub fn lines(&self) -> &[usize] {
         &self.lines

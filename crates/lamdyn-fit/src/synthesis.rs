@@ -52,6 +52,9 @@ pub struct ModalModel {
     f: Mat<f64>,
     residual: Option<Residual>,
     e_ref_pa: f64,
+    /// Estimated signed relative error of each mode's frequency from the discretization
+    /// (f_model = f_converged (1 + δ)); empty when not estimated. Not cached.
+    freq_error: Vec<f64>,
 }
 
 /// Whether to add the residual flexibility of the omitted modes.
@@ -125,6 +128,7 @@ impl ModalModel {
             f,
             residual,
             e_ref_pa,
+            freq_error: Vec::new(),
         })
     }
 
@@ -204,7 +208,56 @@ impl ModalModel {
             f,
             residual,
             e_ref_pa,
+            freq_error: Vec::new(),
         })
+    }
+
+    /// The same model carrying each mode's estimated discretization error δ_r, a signed
+    /// relative frequency error (f_model = f_converged (1 + δ_r);
+    /// [`lamdyn_fem::convergence`]): the fit adds what it does to the parameters to their
+    /// covariance ([`crate::fit`]).
+    ///
+    /// # Errors
+    /// [`FitError::Inconsistent`] for a count other than the model's modes, or values that are
+    /// not finite or not above −1.
+    pub fn with_frequency_errors(mut self, errors: Vec<f64>) -> Result<Self, FitError> {
+        if errors.len() != self.lambda.len() {
+            return Err(inconsistent(
+                "modal model",
+                format!(
+                    "{} frequency errors for {} modes",
+                    errors.len(),
+                    self.lambda.len()
+                ),
+            ));
+        }
+        if let Some(bad) = errors.iter().find(|d| !(d.is_finite() && **d > -1.0)) {
+            return Err(inconsistent(
+                "modal model",
+                format!("frequency error {bad} is not a relative error above -1"),
+            ));
+        }
+        self.freq_error = errors;
+        Ok(self)
+    }
+
+    /// Each mode's estimated discretization error (empty when not estimated).
+    pub fn frequency_errors(&self) -> &[f64] {
+        &self.freq_error
+    }
+
+    /// The model with the eigenvalues the estimate says a converged mesh would give,
+    /// λ_r / (1 + δ_r)² (shapes and residual terms kept); `None` without an estimate.
+    pub fn corrected(&self) -> Option<Self> {
+        if self.freq_error.is_empty() {
+            return None;
+        }
+        let mut out = self.clone();
+        for (l, d) in out.lambda.iter_mut().zip(&self.freq_error) {
+            *l /= (1.0 + d) * (1.0 + d);
+        }
+        out.freq_error.clear();
+        Some(out)
     }
 
     /// The modulus E_ref (Pa) at which K0 was assembled.

@@ -2,6 +2,7 @@
 
 mod it {
     mod common;
+    mod discretization;
     mod errors;
     mod misfit;
     mod recovery;

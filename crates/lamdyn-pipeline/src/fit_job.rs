@@ -73,6 +73,14 @@ struct FitOptions {
     prominence: f64,
     #[serde(default)]
     misfit: Option<MisfitSpec>,
+    /// Estimate the model's discretization error and add it to the intervals
+    /// ([`with_discretization_error`]).
+    #[serde(default = "yes")]
+    discretization_error: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Default for FitOptions {
@@ -82,6 +90,7 @@ impl Default for FitOptions {
             covariance: Covariance::default(),
             prominence: default_prominence(),
             misfit: None,
+            discretization_error: true,
         }
     }
 }
@@ -220,14 +229,63 @@ pub fn modal_model(
     };
     let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, term)?;
     let line = format!(
-        "{name}: {} nodes, {} MITC4, {modes} modes{}, E_ref = {:.4e} Pa; {}",
+        "{name}: {} nodes, {} {}, {modes} modes{}, E_ref = {:.4e} Pa; {}",
         mesh.nodes().len(),
-        mesh.elements().len(),
+        mesh.n_elements(),
+        mesh.order().name(),
         if residual { " + residual term" } else { "" },
         spec.material.young_pa,
         placement_line(mapping, &[resp.as_slice(), refs.as_slice()].concat())
     );
     Ok((model, line))
+}
+
+/// The model with its modes' estimated discretization errors attached
+/// ([`lamdyn_fem::convergence::mesh_errors`]: the model's mesh and its 2 × 2 and 3 × 3
+/// subdivisions, Richardson per mode), so that the fit's intervals include them
+/// ([`lamdyn_fit::fit`]). Modes up to 1.25 `top_hz` are estimated; those above get the largest
+/// error found below them. Returns the model and a line saying what was found.
+///
+/// # Errors
+/// The model's and the solver's errors.
+pub fn with_discretization_error(
+    model: ModalModel,
+    spec: &ModelSpec,
+    base: &Path,
+    top_hz: f64,
+    progress: &dyn Reporter,
+) -> Result<(ModalModel, String)> {
+    let (mesh, springs) = spec.build(base)?;
+    let n_all = model.eigenvalues().len();
+    let within = model
+        .eigenvalues()
+        .iter()
+        .filter(|&&l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI) <= 1.25 * top_hz)
+        .count();
+    let n_est = (within + 2).clamp(7, n_all);
+    progress.stage("estimating the model's discretization error (2x2 and 3x3 refined meshes)");
+    let surface = spec.surface();
+    let (mut errors, study) = lamdyn_fem::convergence::mesh_errors(
+        &mesh,
+        surface.as_deref(),
+        &spec.material,
+        &springs,
+        n_est,
+        progress,
+    )?;
+    let largest = errors.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+    errors.resize(n_all, largest);
+    let finest = study.levels.last().map_or(0, |l| l.n_dofs);
+    let mut line = format!(
+        "discretization error estimated on 3 meshes (up to {finest} dofs): largest {largest:.2e} in frequency over {} modes up to {:.0} Hz",
+        n_est,
+        1.25 * top_hz
+    );
+    for w in &study.warnings {
+        line.push_str("; warning: ");
+        line.push_str(w);
+    }
+    Ok((model.with_frequency_errors(errors)?, line))
 }
 
 /// Reads and validates a fit job, builds its modal model (module docs).
@@ -292,6 +350,15 @@ pub fn load_fit_job(path: &Path, progress: &dyn Reporter) -> Result<FitProblem> 
         crate::PipelineError::Invalid(m) => in_job(m),
         e => e,
     })?;
+    let (model, model_line) = if job.fit.discretization_error {
+        let top_hz = misfit
+            .band_hz
+            .map_or_else(|| set.freqs_hz().last().copied().unwrap_or(0.0), |b| b[1]);
+        let (model, line) = with_discretization_error(model, &spec, &model_base, top_hz, progress)?;
+        (model, format!("{model_line}; {line}"))
+    } else {
+        (model, model_line)
+    };
     let mut settings = FitSettings::new(job.fit.law, misfit);
     settings.covariance = job.fit.covariance;
     settings.prominence = prominence;

@@ -418,7 +418,7 @@ fn build_model(
     key = channels_key(key, set.references());
     let line = |n_nodes: String, n_el: String| {
         format!(
-            "{label}: {n_nodes} nodes, {n_el} MITC4, {modes} modes{}, E_ref = {:.4e} Pa, h = {:.4} mm, rho = {:.1} kg/m^3",
+            "{label}: {n_nodes} nodes, {n_el} elements, {modes} modes{}, E_ref = {:.4e} Pa, h = {:.4} mm, rho = {:.1} kg/m^3",
             if job.model.residual {
                 " + residual term"
             } else {
@@ -457,7 +457,7 @@ fn build_model(
         "{}; {}",
         line(
             mesh.nodes().len().to_string(),
-            mesh.elements().len().to_string(),
+            format!("{} {}", mesh.n_elements(), mesh.order().name()),
         ),
         placement_line(mapping, &[resp.as_slice(), refs.as_slice()].concat())
     );
