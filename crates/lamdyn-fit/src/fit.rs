@@ -65,6 +65,19 @@ pub struct FitSettings {
     pub prominence: f64,
     /// How the parameter covariance is estimated.
     pub covariance: Covariance,
+    /// Identified poles (`lamdyn ema`) to use instead of the RMS FRF's peaks for the starts, the
+    /// peak matching and the mode-wise estimate (`None`: peaks of the measured RMS FRF).
+    pub poles: Option<Vec<Pole>>,
+}
+
+/// An identified pole: natural frequency and damping ratio (e.g. one row of `lamdyn ema`'s
+/// modes.csv).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pole {
+    /// Damped natural frequency, Hz.
+    pub freq_hz: f64,
+    /// Damping ratio ζ (η = 2ζ).
+    pub damping_ratio: f64,
 }
 
 /// Estimator of the parameter covariance at the optimum.
@@ -91,6 +104,7 @@ impl FitSettings {
             lm: LmSettings::default(),
             prominence: 1.5,
             covariance: Covariance::default(),
+            poles: None,
         }
     }
 }
@@ -360,6 +374,79 @@ pub fn check_plausible(result: &mut FitResult, e_ref_pa: f64) -> Result<(), FitE
     Ok(())
 }
 
+/// The poles inside the misfit's band as peaks (the measured RMS FRF at the nearest line as
+/// the amplitude, the pole's damping ratio), lowest first.
+///
+/// # Errors
+/// [`FitError::Inconsistent`] for a pole with a frequency that is not positive and finite or a
+/// damping ratio outside [0, 1), and when no pole lies in the band.
+fn poles_as_peaks(
+    poles: &[Pole],
+    freqs_hz: &[f64],
+    objective: &Objective<'_>,
+) -> Result<Vec<Peak>, FitError> {
+    for (k, p) in poles.iter().enumerate() {
+        if !(p.freq_hz.is_finite() && p.freq_hz > 0.0) {
+            return Err(inconsistent(
+                "poles",
+                format!(
+                    "pole {}: frequency {} Hz must be positive",
+                    k + 1,
+                    p.freq_hz
+                ),
+            ));
+        }
+        if !(p.damping_ratio.is_finite() && (0.0..1.0).contains(&p.damping_ratio)) {
+            return Err(inconsistent(
+                "poles",
+                format!(
+                    "pole {} at {} Hz: damping ratio {} must lie in [0, 1)",
+                    k + 1,
+                    p.freq_hz,
+                    p.damping_ratio
+                ),
+            ));
+        }
+    }
+    let lines = objective.lines();
+    let (lo, hi) = match (lines.first(), lines.last()) {
+        (Some(&a), Some(&b)) => (freqs_hz[a], freqs_hz[b]),
+        _ => return Ok(vec![]),
+    };
+    let rms = objective.measured_rms();
+    let mut peaks: Vec<Peak> = poles
+        .iter()
+        .filter(|p| (lo..=hi).contains(&p.freq_hz))
+        .map(|p| {
+            let nearest = lines
+                .iter()
+                .copied()
+                .min_by(|&a, &b| {
+                    (freqs_hz[a] - p.freq_hz)
+                        .abs()
+                        .total_cmp(&(freqs_hz[b] - p.freq_hz).abs())
+                })
+                .unwrap_or(0);
+            Peak {
+                freq_hz: p.freq_hz,
+                amplitude: rms[nearest],
+                damping_ratio: Some(p.damping_ratio),
+            }
+        })
+        .collect();
+    if peaks.is_empty() {
+        return Err(inconsistent(
+            "poles",
+            format!(
+                "none of the {} poles lies in the fit band {lo}-{hi} Hz",
+                poles.len()
+            ),
+        ));
+    }
+    peaks.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
+    Ok(peaks)
+}
+
 /// [`fit`] without the plausibility check.
 fn fit_unchecked(
     model: &ModalModel,
@@ -381,12 +468,15 @@ fn fit_unchecked(
     }
     let objective = Objective::new(model, measured, settings.misfit.clone())?;
     enough_residuals(&objective, settings.law)?;
-    let peaks = find_peaks(
-        measured.freqs_hz(),
-        objective.measured_rms(),
-        objective.lines(),
-        settings.prominence,
-    );
+    let peaks = match &settings.poles {
+        Some(poles) => poles_as_peaks(poles, measured.freqs_hz(), &objective)?,
+        None => find_peaks(
+            measured.freqs_hz(),
+            objective.measured_rms(),
+            objective.lines(),
+            settings.prominence,
+        ),
+    };
     if peaks.is_empty() {
         return Err(inconsistent(
             "fit",

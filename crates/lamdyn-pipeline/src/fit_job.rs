@@ -8,14 +8,14 @@
 //! top-level `modes`, `residual` and `[misfit]`) is still read, with a deprecation note.
 
 use crate::error::{Context, Result};
-use crate::io::read_toml;
+use crate::io::{CsvTable, read_toml};
 use crate::job::{Measurement, ModelSource, base_of, default_misfit, default_prominence, relative};
 use crate::measurement::read_measurement_section;
 use crate::{Reporter, err};
 use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::{ModalParams, solve_modes};
 use lamdyn_fem::model::ModelSpec;
-use lamdyn_fit::fit::{Covariance, FitSettings, LawKind};
+use lamdyn_fit::fit::{Covariance, FitSettings, LawKind, Pole};
 use lamdyn_fit::misfit::MisfitSpec;
 use lamdyn_fit::probe::{SensorPlacement, placement_line, probes_with};
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
@@ -77,6 +77,10 @@ struct FitOptions {
     /// ([`with_discretization_error`]).
     #[serde(default = "yes")]
     discretization_error: bool,
+    /// Identified poles (`lamdyn ema`'s modes.csv) for the starts, peak matching and mode-wise
+    /// estimate, relative to the job ([`read_poles`]).
+    #[serde(default)]
+    poles: Option<PathBuf>,
 }
 
 fn yes() -> bool {
@@ -91,6 +95,7 @@ impl Default for FitOptions {
             prominence: default_prominence(),
             misfit: None,
             discretization_error: true,
+            poles: None,
         }
     }
 }
@@ -240,6 +245,44 @@ pub fn modal_model(
     Ok((model, line))
 }
 
+/// Poles from a CSV table with columns `freq_hz` (Hz) and `damping_ratio` (others ignored):
+/// `lamdyn ema --out DIR` writes one as DIR/modes.csv.
+///
+/// # Errors
+/// The file's, naming it and the line: missing columns, a frequency that is not positive, a
+/// damping ratio outside [0, 1), no rows.
+pub fn read_poles(path: &Path) -> Result<Vec<Pole>> {
+    let table = CsvTable::read(path)?;
+    let (f, z) = (
+        table.require_any(&["freq_hz"])?,
+        table.require_any(&["damping_ratio"])?,
+    );
+    let mut poles = Vec::with_capacity(table.rows().len());
+    for (line, row) in table.rows() {
+        let (freq_hz, damping_ratio) = (row[f], row[z]);
+        if !(freq_hz.is_finite() && freq_hz > 0.0) {
+            crate::bail!(
+                "'{}' line {line}: freq_hz = {freq_hz} must be a positive frequency in Hz",
+                path.display()
+            );
+        }
+        if !(damping_ratio.is_finite() && (0.0..1.0).contains(&damping_ratio)) {
+            crate::bail!(
+                "'{}' line {line}: damping_ratio = {damping_ratio} must lie in [0, 1) (a ratio, not %)",
+                path.display()
+            );
+        }
+        poles.push(Pole {
+            freq_hz,
+            damping_ratio,
+        });
+    }
+    if poles.is_empty() {
+        crate::bail!("'{}' holds no pole", path.display());
+    }
+    Ok(poles)
+}
+
 /// The model with its modes' estimated discretization errors attached
 /// ([`lamdyn_fem::convergence::mesh_errors`]: the model's mesh and its 2 × 2 and 3 × 3
 /// subdivisions, Richardson per mode), so that the fit's intervals include them
@@ -360,6 +403,9 @@ pub fn load_fit_job(path: &Path, progress: &dyn Reporter) -> Result<FitProblem> 
         (model, model_line)
     };
     let mut settings = FitSettings::new(job.fit.law, misfit);
+    if let Some(p) = &job.fit.poles {
+        settings.poles = Some(read_poles(&relative(&base, p))?);
+    }
     settings.covariance = job.fit.covariance;
     settings.prominence = prominence;
     let mut notes = notes;

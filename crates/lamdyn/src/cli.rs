@@ -383,6 +383,11 @@ pub struct FitArgs {
     /// Covariance estimator (overrides the job's fit.covariance).
     #[arg(long, value_enum)]
     pub covariance: Option<CovarianceArg>,
+    /// Identified poles for the starts, peak matching and mode-wise estimate instead of the
+    /// RMS FRF's peaks: a CSV with freq_hz and damping_ratio columns, as `lamdyn ema --out DIR`
+    /// writes in DIR/modes.csv (overrides the job's fit.poles).
+    #[arg(long, value_name = "modes.csv")]
+    pub poles: Option<PathBuf>,
     /// Write report.json, one CSV per table and the RMS curves into this folder once everything
     /// is computed (never over files lamdyn did not write; see --force).
     #[arg(long, value_name = "DIR")]

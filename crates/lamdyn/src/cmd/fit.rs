@@ -55,6 +55,15 @@ pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     }
     let flag_notes = apply_flags(args, &mut problem.settings);
     problem.notes.extend(flag_notes);
+    if let Some(path) = &args.poles {
+        problem.settings.poles = Some(lamdyn_pipeline::fit_job::read_poles(path)?);
+    }
+    if let Some(poles) = &problem.settings.poles {
+        problem.notes.push(format!(
+            "peaks: {} identified poles (freq_hz, damping_ratio) instead of the RMS FRF's peaks; the mode-wise eta from each pole's zeta",
+            poles.len()
+        ));
+    }
     spinner.stage("fitting the modulus law");
     let result =
         fit(&problem.model, &problem.measured, &problem.settings).context("the fit failed")?;
@@ -342,7 +351,7 @@ fn build_report(
     report.notes.push("Main table: the fitted law at the measured resonances (sd by the delta method through the parameter covariance); its CSV (--csv) is a `lamdyn core --table` input.".into());
     report.notes.push("Table 3: peaks of the measured and fitted RMS FRFs, parabolic refinement in log magnitude; damping ratio by the half-power bandwidth on the RMS curve, linearly interpolated between lines ('-' when the bandwidth spans less than two lines).".into());
     report.notes.push(
-        "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak; eta = 2 zeta (half-power)."
+        "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak (or identified pole); eta = 2 zeta (1 - beta/2), zeta the resonance's damping (half-power or the pole's), beta = d ln E'/d ln f between neighbouring resonances (docs/fit.md)."
             .into(),
     );
     report.warnings.extend(problem.notes.iter().cloned());
@@ -498,7 +507,7 @@ fn table3_section(problem: &Problem, objective: &Objective<'_>, fitted_rms: &[f6
 fn modewise_section(problem: &Problem, r: &FitResult) -> Section {
     let mut sec = Section::new(
         "modewise",
-        "Mode-wise estimate: E' = E_ref (f_exp/f_num)^2, eta = 2 zeta",
+        "Mode-wise estimate: E' = E_ref (f_exp/f_num)^2, eta = 2 zeta (1 - beta/2)",
         vec![
             Column::new("f_measured_hz", "f meas", "Hz", Fmt::Fixed(3)),
             Column::new("f_fe_hz", "f FE at E_ref", "Hz", Fmt::Fixed(3)),
