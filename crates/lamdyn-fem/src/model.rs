@@ -13,6 +13,8 @@
 //! element = "mitc9"           # optional: 9-node MITC9 elements (default "mitc4")
 //! edge_layers = 3             # optional: geometric layers at the free edges, the outermost
 //! edge_layer_m = 0.002        #   this wide (default: half the shell's thickness)
+//! lines_x_m = [-0.4115, 0.0, 0.4115]  # optional: node lines through these x (and y) coordinates,
+//! lines_y_m = [-0.3816, 0.0, 0.3816]  #   e.g. the measurement grid's (nearest edges moved)
 //!
 //! [material]
 //! young_pa = 67.45e9
@@ -141,7 +143,7 @@ impl ModelSpec {
                 crate::memory::check_modal_memory(
                     6 * (per_side * rect.elements_x + 1) * (per_side * rect.elements_y + 1),
                 )?;
-                let mut rect = *rect;
+                let mut rect = rect.clone();
                 if rect.edge_layers > 0 && rect.edge_layer_m == 0.0 {
                     rect.edge_layer_m = 0.5 * self.material.thickness_m;
                 }

@@ -23,7 +23,7 @@ use crate::vec3::{V3, unit};
 use serde::{Deserialize, Serialize};
 
 /// A rectangle and its subdivision.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RectangleSpec {
     /// Length along x, m.
@@ -53,6 +53,14 @@ pub struct RectangleSpec {
     /// Width of the outermost layer element, m (used when `edge_layers` > 0).
     #[serde(default)]
     pub edge_layer_m: f64,
+    /// x coordinates (m, centred on the rectangle) that node lines must pass through, e.g. the
+    /// measurement grid's: each moves the nearest interior element edge onto it (see
+    /// [`snap_lines`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lines_x_m: Vec<f64>,
+    /// y coordinates that node lines must pass through.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lines_y_m: Vec<f64>,
 }
 
 fn infinite() -> f64 {
@@ -79,7 +87,17 @@ impl RectangleSpec {
             order: ElementOrder::Linear,
             edge_layers: 0,
             edge_layer_m: 0.0,
+            lines_x_m: Vec::new(),
+            lines_y_m: Vec::new(),
         }
+    }
+
+    /// The same rectangle with node lines through the given x and y coordinates (m, centred on
+    /// the rectangle), e.g. a measurement grid's ([`snap_lines`]).
+    pub fn with_node_lines(mut self, xs_m: Vec<f64>, ys_m: Vec<f64>) -> Self {
+        self.lines_x_m = xs_m;
+        self.lines_y_m = ys_m;
+        self
     }
 
     /// The same rectangle with elements of `order`.
@@ -185,8 +203,8 @@ impl RectangleSpec {
     pub fn build(&self) -> Result<Mesh, FemError> {
         self.validate()?;
         let (nx, ny) = (self.elements_x, self.elements_y);
-        let xs = self.axis("x", nx, self.length_x_m)?;
-        let ys = self.axis("y", ny, self.length_y_m)?;
+        let xs = self.axis("x", nx, self.length_x_m, &self.lines_x_m)?;
+        let ys = self.axis("y", ny, self.length_y_m, &self.lines_y_m)?;
         // Node lines: every element edge, and for MITC9 the midpoints between them.
         // Node-line steps per element.
         let p = match self.order {
@@ -234,25 +252,87 @@ impl RectangleSpec {
         Ok(mesh)
     }
 
-    /// The n + 1 element-edge coordinates along one side of length l, centred on 0.
-    fn axis(&self, name: &str, n: usize, l: f64) -> Result<Vec<f64>, FemError> {
-        if self.edge_layers == 0 {
-            return Ok((0..=n)
+    /// The n + 1 element-edge coordinates along one side of length l, centred on 0, with node
+    /// lines moved onto `through` ([`snap_lines`]).
+    fn axis(&self, name: &str, n: usize, l: f64, through: &[f64]) -> Result<Vec<f64>, FemError> {
+        let coords = if self.edge_layers == 0 {
+            (0..=n)
                 .map(|i| 0.5 * l * graded(2.0 * i as f64 / n as f64 - 1.0, self.grading))
-                .collect());
-        }
-        axis_coordinates(n, l, self.edge_layers, self.edge_layer_m).map_err(|requirement| {
-            FemError::InvalidParameter {
-                context: "rectangle".into(),
-                field: "edge_layers".into(),
-                value: format!(
-                    "{} layers from {} m along {name} ({n} elements over {l} m)",
-                    self.edge_layers, self.edge_layer_m
-                ),
-                requirement,
-            }
+                .collect()
+        } else {
+            axis_coordinates(n, l, self.edge_layers, self.edge_layer_m).map_err(|requirement| {
+                FemError::InvalidParameter {
+                    context: "rectangle".into(),
+                    field: "edge_layers".into(),
+                    value: format!(
+                        "{} layers from {} m along {name} ({n} elements over {l} m)",
+                        self.edge_layers, self.edge_layer_m
+                    ),
+                    requirement,
+                }
+            })?
+        };
+        let protected = self.edge_layers;
+        snap_lines(coords, through, protected).map_err(|requirement| FemError::InvalidParameter {
+            context: "rectangle".into(),
+            field: format!("lines_{name}_m"),
+            value: format!("{through:?}"),
+            requirement,
         })
     }
+}
+
+/// Moves element edges onto the coordinates `through`: each goes to the nearest edge that is
+/// not a boundary, not among the `protected` edge layers at either end, and not taken by
+/// another coordinate; an edge may move by at most half the width of the element on the side it
+/// moves into, so that no element shrinks below half its width and the order is kept.
+///
+/// # Errors
+/// A sentence for a coordinate outside the side, two coordinates that need the same edge (the
+/// mesh is too coarse for the grid), or a move that would squeeze an element to under half.
+pub fn snap_lines(mut x: Vec<f64>, through: &[f64], protected: usize) -> Result<Vec<f64>, String> {
+    let n = x.len() - 1;
+    let (lo, hi) = (x[0], x[n]);
+    let first = 1 + protected;
+    let last = n.saturating_sub(1 + protected);
+    let mut taken = vec![false; n + 1];
+    let original = x.clone();
+    for &c in through {
+        if !(c.is_finite() && c > lo && c < hi) {
+            return Err(format!(
+                "{c} m lies outside the side ({lo} m to {hi} m) or on its edge"
+            ));
+        }
+        if first > last {
+            return Err("no interior element edge is left to move".into());
+        }
+        let k = (first..=last)
+            .min_by(|&a, &b| (original[a] - c).abs().total_cmp(&(original[b] - c).abs()))
+            .unwrap_or(first);
+        if taken[k] {
+            return Err(format!(
+                "{c} m needs the same element edge ({} m) as another coordinate: use more elements",
+                original[k]
+            ));
+        }
+        let room = if c >= original[k] {
+            0.5 * (original[k + 1] - original[k])
+        } else {
+            0.5 * (original[k] - original[k - 1])
+        };
+        if (c - original[k]).abs() > room + 1e-12 * (hi - lo) {
+            return Err(format!(
+                "{c} m is more than half an element from the nearest movable edge ({} m): use more elements",
+                original[k]
+            ));
+        }
+        taken[k] = true;
+        x[k] = c;
+    }
+    if x.windows(2).any(|w| w[1] <= w[0]) {
+        return Err("moved edges would cross: use more elements".into());
+    }
+    Ok(x)
 }
 
 /// Element-edge coordinates over [−l/2, l/2] with `layers` elements at each end whose widths

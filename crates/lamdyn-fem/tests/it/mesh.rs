@@ -440,3 +440,43 @@ fn an_element_order_the_file_cannot_give_is_refused() {
     assert!(spec(Some(ElementOrder::Linear)).build(&dir).is_ok());
     assert!(spec(None).build(&dir).is_ok());
 }
+
+/// Node lines through a measurement grid (issue 16.5): the paper's 9 × 9 grid with 5 cm
+/// margins lies on nodes of a 40 × 40 MITC4 mesh and of a 24 × 24 MITC9 mesh with edge layers
+/// (without the option the nearest nodes are up to 9 mm away); a grid too fine for the mesh and
+/// a line outside the plate are refused with the field.
+#[test]
+fn node_lines_pass_through_a_measurement_grid() {
+    let (lx, ly) = (0.923, 0.8632);
+    let grid = |l: f64| -> Vec<f64> {
+        (0..9)
+            .map(|i| -0.5 * l + 0.05 + (l - 0.1) * i as f64 / 8.0)
+            .collect()
+    };
+    let points: Vec<[f64; 3]> = grid(ly)
+        .iter()
+        .flat_map(|&y| grid(lx).into_iter().map(move |x| [x, y, 0.0]))
+        .collect();
+    let worst = |mesh: &lamdyn_fem::mesh::Mesh| {
+        let loc = Locator::new(mesh, f64::INFINITY);
+        points.iter().map(|&p| loc.nearest(p).1).fold(0.0, f64::max)
+    };
+    let plain = RectangleSpec::flat(lx, ly, 40, 40);
+    assert!(worst(&plain.build().unwrap()) > 5e-3);
+    let through = plain.with_node_lines(grid(lx), grid(ly));
+    assert!(worst(&through.build().unwrap()) < 1e-12);
+    let nine = RectangleSpec::flat(lx, ly, 24, 24)
+        .with_order(ElementOrder::Quadratic)
+        .with_edge_layers(3, 0.002)
+        .with_node_lines(grid(lx), grid(ly));
+    assert!(worst(&nine.build().unwrap()) < 1e-12);
+    let coarse = RectangleSpec::flat(lx, ly, 6, 6).with_node_lines(grid(lx), grid(ly));
+    let e = coarse.build().unwrap_err().to_string();
+    assert!(
+        e.contains("lines_x_m") && e.contains("use more elements"),
+        "{e}"
+    );
+    let outside = RectangleSpec::flat(lx, ly, 40, 40).with_node_lines(vec![0.5], vec![]);
+    let e = outside.build().unwrap_err().to_string();
+    assert!(e.contains("lines_x_m") && e.contains("outside"), "{e}");
+}

@@ -207,8 +207,8 @@ fn curvature_limits() {
         let asm = Assembly::new(&spec.build().unwrap(), &ROOF, &[]).unwrap();
         elastic_hz(&modes(&asm, &ModalParams::lowest(12)))
     };
-    let f0 = solve(flat);
-    let f_big = solve(flat.curved(1e5, 1e5));
+    let f0 = solve(flat.clone());
+    let f_big = solve(flat.clone().curved(1e5, 1e5));
     for (a, b) in f0.iter().zip(&f_big) {
         assert!((a / b - 1.0).abs() < 1e-5, "{a} vs {b}");
     }
