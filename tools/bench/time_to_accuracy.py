@@ -113,15 +113,7 @@ def ccx(n, layers, etype):
         nodes, elems = dome_mesh(n, layers, etype == "S8R")
         write_deck(d, nodes, elems, etype, 6 + ELASTIC)
         dt, _ = wall(["ccx", "-i", "plate"], d, cm.ccx_env())
-        freqs = []
-        lines = open(os.path.join(d, "plate.dat")).read().splitlines()
-        start = next(i for i, l in enumerate(lines) if "E I G E N V A L U E   O U T P U T" in l)
-        for l in lines[start + 1:]:
-            w = l.split()
-            if len(w) >= 4 and w[0].isdigit():
-                freqs.append(float(w[3]))
-            elif freqs and not l.strip():
-                break
+        freqs = cm.read_dat_freqs(d)
         # ccx expands the shells into bricks: S4 -> C3D8I (two node layers), S8R -> C3D20R
         # (corners in three layers, mid-sides in two); 3 dofs per brick node.
         corners = len({k for e in elems for k in e[:4]})

@@ -101,7 +101,8 @@ def ccx_env():
     return env
 
 
-def read_ccx_results(workdir, n_nodes):
+def read_dat_freqs(workdir):
+    """Frequencies (cycles/time column) of the eigenvalue table of workdir/plate.dat."""
     freqs = []
     with open(os.path.join(workdir, "plate.dat")) as f:
         lines = f.read().splitlines()
@@ -112,7 +113,11 @@ def read_ccx_results(workdir, n_nodes):
             freqs.append(float(w[3]))
         elif freqs and not l.strip():
             break
-    return freqs, parse_frd(os.path.join(workdir, "plate.frd"), n_nodes)
+    return freqs
+
+
+def read_ccx_results(workdir, n_nodes):
+    return read_dat_freqs(workdir), parse_frd(os.path.join(workdir, "plate.frd"), n_nodes)
 
 
 def run_ccx(workdir, nodes, elems):
