@@ -592,15 +592,7 @@ fn run_starts(
             format!("{m} residuals for {p} parameters: widen the band or use more lines"),
         ));
     }
-    let residuals = |u: &[f64]| -> Option<Vec<f64>> {
-        let n = law.natural(u);
-        if !n.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        let prepared = law.prepare(&n);
-        let modulus = |w: f64| prepared.modulus(w);
-        Some(objective.residuals(&modulus))
-    };
+    let residuals = law_residuals(objective, law);
     // Starts run in parallel; the best final cost wins.
     let outcomes: Vec<(Vec<f64>, Option<crate::lm::LmOutcome>)> = starts
         .into_par_iter()
@@ -699,17 +691,26 @@ fn discretization_shift(
 ) -> Option<Vec<f64>> {
     let corrected = objective.model().corrected()?;
     let moved = objective.with_model(&corrected);
-    let residuals = |u: &[f64]| -> Option<Vec<f64>> {
+    let residuals = law_residuals(&moved, law);
+    let refit = levenberg_marquardt(&residuals, &best.x, settings.lm)?;
+    let out: Vec<f64> = refit.x.iter().zip(&best.x).map(|(c, u)| c - u).collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+/// The misfit's residuals as a function of the law's unconstrained parameters u (`None` where
+/// the natural parameters are not finite): what LM minimises.
+fn law_residuals<'o>(
+    objective: &'o Objective<'_>,
+    law: &'o LawChoice,
+) -> impl Fn(&[f64]) -> Option<Vec<f64>> + Sync + 'o {
+    move |u: &[f64]| {
         let n = law.natural(u);
         if !n.iter().all(|v| v.is_finite()) {
             return None;
         }
         let prepared = law.prepare(&n);
-        Some(moved.residuals(&|w: f64| prepared.modulus(w)))
-    };
-    let refit = levenberg_marquardt(&residuals, &best.x, settings.lm)?;
-    let out: Vec<f64> = refit.x.iter().zip(&best.x).map(|(c, u)| c - u).collect();
-    out.iter().all(|v| v.is_finite()).then_some(out)
+        Some(objective.residuals(&|w: f64| prepared.modulus(w)))
+    }
 }
 
 /// The HC3 sandwich (JᵀJ)⁻¹ Jᵀ diag(r_i²/(1 − h_i)²) J (JᵀJ)⁻¹ with leverages

@@ -126,8 +126,6 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
     let (mesh, springs) = spec
         .build(&base)
         .with_context(|| format!("invalid model {source}"))?;
-    let asm = Assembly::new(&mesh, &spec.material, &springs)
-        .with_context(|| format!("invalid model {source}"))?;
     let mut params = ModalParams::lowest(spec.solver.modes);
     if let Some(f) = spec.solver.shift_hz {
         if !(f.is_finite() && f > 0.0) {
@@ -135,9 +133,12 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
         }
         params = params.with_shift(Shift::BelowHz(f));
     }
+    // --converge assembles each of its meshes itself.
     if let Some(tolerance) = args.converge {
         return converge(args, &spec, &source, &mesh, &springs, tolerance, out, err);
     }
+    let asm = Assembly::new(&mesh, &spec.material, &springs)
+        .with_context(|| format!("invalid model {source}"))?;
     let progress = Spinner::new();
     let sol = solve_modes(&asm, &params, &progress)?;
     progress.finish();
