@@ -8,7 +8,7 @@ Stages, as in the command line:
 
 - :func:`read_uff`, :func:`read_uff_functions`, :func:`write_uff`: universal files.
 - :func:`ema`: modal identification (PolyMAX / LSCF, stabilization, LSFD).
-- :func:`modes`: the lowest modes of a shell model (MITC4).
+- :func:`modes`: the lowest modes of a shell model (MITC4 or MITC9, optional edge layers).
 - :func:`fit`, :func:`fit_job`: the laminate's effective modulus law E*(f) fitted to FRFs.
 - :func:`core_inverse`: the core's G*(f) from E*(f), by the paper's and the exact inverse.
 - :func:`run`: the whole chain on a job file (``lamdyn run``), report optional.
@@ -257,7 +257,7 @@ def _model_json(model: Union[dict, PathLike]) -> tuple:
 
 
 def modes(model: Union[dict, PathLike], n_modes: Optional[int] = None) -> dict:
-    """The lowest modes of a shell model (MITC4, Lanczos on the sparse Cholesky), as
+    """The lowest modes of a shell model (MITC4 or MITC9, Lanczos on the sparse Cholesky), as
     ``lamdyn modes``.
 
     ``model`` is a dict laid out as a model TOML (``mesh``, ``material``, ``solver``,

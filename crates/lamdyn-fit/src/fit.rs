@@ -204,6 +204,25 @@ impl FitResult {
         n.iter().all(|v| v.is_finite()).then_some(n)
     }
 
+    /// The squared Mahalanobis distance d² = (u − u*)ᵀ C⁻¹ (u − u*) of natural parameters
+    /// `natural` (e.g. a known truth, mapped to unconstrained u*) from the estimate u, with C the
+    /// covariance of u. A point lies inside the joint 95 % confidence region when
+    /// d² ≤ χ²_p(0.95) (9.488 for p = 4). `None` without a positive definite covariance, for a
+    /// wrong number of parameters, or for parameters outside the law's constraints.
+    pub fn mahalanobis_squared(&self, natural: &[f64]) -> Option<f64> {
+        let cov = self.cov_u.as_ref()?;
+        if natural.len() != self.u.len() {
+            return None;
+        }
+        let target = self.law.unconstrained(natural);
+        let d = Mat::from_fn(self.u.len(), 1, |i, _| self.u[i] - target[i]);
+        if !(0..d.nrows()).all(|i| d[(i, 0)].is_finite()) {
+            return None;
+        }
+        let x = cov.llt(Side::Lower).ok()?.solve(&d);
+        Some((0..d.nrows()).map(|i| d[(i, 0)] * x[(i, 0)]).sum())
+    }
+
     /// Whether the fit has a parameter covariance (for [`FitResult::draw_parameters`]).
     pub fn has_covariance(&self) -> bool {
         self.cov_u.is_some()

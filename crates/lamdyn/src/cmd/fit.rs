@@ -13,7 +13,6 @@ use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report, Section, write_csv_table};
 use anyhow::{Context, Result, bail};
 use lamdyn_fem::eigen::Progress;
-use lamdyn_fem::mesh::structured::RectangleSpec;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_fit::fit::{Covariance, FitResult, FitSettings, LawKind, fit};
 use lamdyn_fit::misfit::{MisfitKind, MisfitSpec, Objective};
@@ -186,8 +185,8 @@ fn from_example(e: FitExample, seed: u64, noise: f64) -> Result<Problem> {
             100.0 * noise
         ),
         model_line: format!(
-            "flat 0.923 x 0.8632 m plate, {0} x {0} MITC4, {1} modes + residual term, E_ref = {2:.4e} Pa",
-            case.elements,
+            "flat 0.923 x 0.8632 m plate, {0}, {1} modes + residual term, E_ref = {2:.4e} Pa",
+            case.mesh_line(),
             case.modes,
             PaperPlateCase::GLASS.young_pa
         ),
@@ -204,10 +203,7 @@ fn from_example(e: FitExample, seed: u64, noise: f64) -> Result<Problem> {
 fn write_example(dir: &OutputDir, e: FitExample, problem: &Problem) -> Result<()> {
     let case = PaperPlateCase::default();
     let spec = ModelSpec {
-        mesh: MeshSpec::Rectangle(
-            RectangleSpec::flat(0.923, 0.8632, case.elements, case.elements)
-                .curved(f64::INFINITY, f64::INFINITY),
-        ),
+        mesh: MeshSpec::Rectangle(case.mesh_spec()),
         material: PaperPlateCase::GLASS,
         supports: vec![],
         solver: SolverSpec {
