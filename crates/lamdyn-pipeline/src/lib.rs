@@ -59,7 +59,9 @@ pub use error::{PipelineError, Result};
 pub use job::Job;
 pub use lamdyn_fem::eigen::{Progress, Silent};
 pub use output::OutputDir;
-pub use stages::{ChainResult, CorePoint, RunOptions, StageTime, Truth, run_job};
+pub use stages::{
+    ChainResult, CorePoint, RunOptions, StageTime, Truth, run_job, same_bits_on_any_thread_count,
+};
 
 /// Progress that may be reported from worker threads (the Monte Carlo runs on rayon).
 pub trait Reporter: Progress + Sync {}

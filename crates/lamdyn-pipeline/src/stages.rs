@@ -196,9 +196,23 @@ fn stage<T>(
     Ok(value)
 }
 
+/// Sets faer's global parallelism (used by its operators and decompositions that take no
+/// explicit `Par`) to sequential. faer's parallel kernels split their sums by the thread
+/// count, so results changed with `RAYON_NUM_THREADS` (the layered inverse's G* at 3e-6,
+/// the EMA's damping at 1e-11); lamdyn's own parallelism (elements, right-hand-side blocks,
+/// Monte Carlo samples) is split independently of the thread count. Process-wide: the CLI and
+/// the Python module call it at start, and [`run_job`] does.
+pub fn same_bits_on_any_thread_count() {
+    faer::set_global_parallelism(faer::Par::Seq);
+}
+
 /// Runs the chain on `job`, read from the file at `path` (paths in it are relative to its
 /// folder) with [`Job::read`] and the options' overrides applied
 /// ([`Job::with_overrides`]).
+///
+/// The results are the same bits on any number of rayon threads: the chain parallelizes
+/// across independent solves only, and it sets faer's global parallelism to sequential
+/// ([`same_bits_on_any_thread_count`]).
 ///
 /// # Errors
 /// The first stage that fails (stage named).
@@ -208,6 +222,7 @@ pub fn run_job(
     options: &RunOptions,
     spinner: &dyn Reporter,
 ) -> Result<ChainResult> {
+    same_bits_on_any_thread_count();
     let base = job::base_of(path);
     let cache = Cache::new(options.cache_dir.clone());
     let mut timings = Vec::new();

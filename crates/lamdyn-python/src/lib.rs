@@ -47,6 +47,8 @@ fn version() -> &'static str {
 #[pymodule]
 #[pyo3(name = "_native")]
 fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Results independent of the thread count (lamdyn_pipeline::same_bits_on_any_thread_count).
+    lamdyn_pipeline::same_bits_on_any_thread_count();
     m.add("LamdynError", m.py().get_type::<LamdynError>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     frf::register(m)?;

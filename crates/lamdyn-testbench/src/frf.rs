@@ -20,11 +20,12 @@
 //! per line. The direct route factors the sparse complex Z(ω) (faer's sparse LU) per line.
 
 use crate::error::BenchError;
+use crate::seq;
 use crate::system::LayeredSystem;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
-use faer::{Mat, Side, c64};
+use faer::{Mat, c64};
 use num_complex::Complex64;
 
 /// The reduced model: basis and projected matrices.
@@ -96,15 +97,12 @@ impl ReducedModel {
         for &r in ratios {
             let scale = scales(n_layers, core_layer, r);
             let phi = sys.modes(&scale, modes, shift)?.1;
-            let shifted = &sys.stiffness(&scale) + &(&sys.m * (-shift));
-            let llt = shifted
-                .sp_cholesky(Side::Lower)
-                .map_err(|e| BenchError::Solver(format!("static residual: {e:?}")))?;
+            let llt = sys.shifted_cholesky(&scale, shift)?;
             let mut f = Mat::from_fn(n, loads.len(), |i, j| loads[j][i]);
             llt.solve_in_place(f.as_mut());
             cols.push(f);
             // How the modes change with the core modulus: (K_j − σM)⁻¹ K_c φ.
-            let mut sens = &sys.k_layers[core_layer] * &phi;
+            let mut sens = seq::sparse_mul(&sys.k_layers[core_layer], phi.as_ref());
             llt.solve_in_place(sens.as_mut());
             cols.push(phi);
             cols.push(sens);
@@ -118,8 +116,8 @@ impl ReducedModel {
         }
         let basis = m_orthonormal(&v, &sys.m);
         let project = |a: &SparseColMat<usize, f64>| {
-            let av = a * &basis;
-            basis.transpose() * &av
+            let av = seq::sparse_mul(a, basis.as_ref());
+            seq::mul(basis.transpose(), av.as_ref())
         };
         let mut k_elastic = Mat::<f64>::zeros(basis.ncols(), basis.ncols());
         for (l, k) in sys.k_layers.iter().enumerate() {
@@ -195,12 +193,7 @@ impl ReducedModel {
     pub fn complex_eigenvalues(&self, core_scale: Complex64) -> Vec<Complex64> {
         let m = self.size();
         let z = Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, 0.0, core_scale));
-        let mut out: Vec<Complex64> = z
-            .eigenvalues()
-            .map(|v| v.iter().map(|e| Complex64::new(e.re, e.im)).collect())
-            .unwrap_or_default();
-        out.sort_by(|a, b| a.re.total_cmp(&b.re));
-        out
+        seq::eigenvalues(z.as_ref())
     }
 
     /// The free model's reduced eigenproblem: Vᵀ K_e V, Vᵀ K_c V and η_e (supports and
@@ -220,7 +213,10 @@ impl ReducedModel {
 
     /// The load in the basis, Vᵀ f: computed once, used at every line by [`Self::response`].
     pub fn project_load(&self, load: &[f64]) -> Vec<f64> {
-        let f = self.basis.transpose() * Mat::from_fn(load.len(), 1, |i, _| load[i]);
+        let f = seq::mul(
+            self.basis.transpose(),
+            Mat::from_fn(load.len(), 1, |i, _| load[i]).as_ref(),
+        );
         (0..f.nrows()).map(|i| f[(i, 0)]).collect()
     }
 
@@ -273,12 +269,7 @@ impl ReducedEigen {
             let v = e * self.k_elastic[(i, j)] + core_scale * self.k_core[(i, j)];
             c64::new(v.re, v.im)
         });
-        let mut out: Vec<Complex64> = z
-            .eigenvalues()
-            .map(|v| v.iter().map(|e| Complex64::new(e.re, e.im)).collect())
-            .unwrap_or_default();
-        out.sort_by(|a, b| a.re.total_cmp(&b.re));
-        out
+        seq::eigenvalues(z.as_ref())
     }
 
     /// The matrices as bytes: a magic line, the size (u64) and η_e, K_e, K_c (f64,
@@ -330,8 +321,8 @@ fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
     let mut kept: Vec<Mat<f64>> = Vec::new();
     let mut m_kept: Vec<Mat<f64>> = Vec::new();
     let m_norm = |x: &Mat<f64>| -> f64 {
-        let mx = m * x;
-        (x.transpose() * &mx)[(0, 0)].max(0.0).sqrt()
+        let mx = seq::sparse_mul(m, x.as_ref());
+        seq::mul(x.transpose(), mx.as_ref())[(0, 0)].max(0.0).sqrt()
     };
     for j in 0..v.ncols() {
         let mut x = Mat::from_fn(n, 1, |i, _| v[(i, j)]);
@@ -342,7 +333,7 @@ fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
         x *= 1.0 / norm;
         for _ in 0..2 {
             for (q, mq) in kept.iter().zip(&m_kept) {
-                let c = (mq.transpose() * &x)[(0, 0)];
+                let c = seq::mul(mq.transpose(), x.as_ref())[(0, 0)];
                 x -= q * c;
             }
         }
@@ -351,7 +342,7 @@ fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
             continue;
         }
         x *= 1.0 / left;
-        m_kept.push(m * &x);
+        m_kept.push(seq::sparse_mul(m, x.as_ref()));
         kept.push(x);
     }
     Mat::from_fn(n, kept.len(), |i, j| kept[j][(i, 0)])

@@ -28,6 +28,7 @@ pub mod hex20;
 pub mod impact;
 pub mod inverse;
 pub mod mesh;
+pub mod seq;
 pub mod system;
 
 pub use error::BenchError;

@@ -8,9 +8,13 @@
 use crate::error::BenchError;
 use crate::hex20::{Elastic, matrices};
 use crate::mesh::HexMesh;
-use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
-use faer::{Mat, MatMut, MatRef, Par, Side};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
+};
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 use lamdyn_fem::eigen::lanczos::{LanczosParams, ShiftInvert, lanczos};
 use rayon::prelude::*;
 
@@ -132,11 +136,7 @@ impl LayeredSystem {
         count: usize,
         shift: f64,
     ) -> Result<(Vec<f64>, Mat<f64>), BenchError> {
-        let k = self.stiffness(scale);
-        let shifted = &k + &(&self.m * (-shift));
-        let llt = shifted.sp_cholesky(Side::Lower).map_err(|e| {
-            BenchError::Solver(format!("K - sigma M is not positive definite: {e:?}"))
-        })?;
+        let llt = self.shifted_cholesky(scale, shift)?;
         let op = Operator {
             llt,
             m: &self.m,
@@ -170,8 +170,76 @@ impl LayeredSystem {
     }
 }
 
+/// A sparse LLᵀ factor computed and applied sequentially (`Par::Seq`): faer's default
+/// parallel supernodal kernels split the work by the thread count, and with it the rounding,
+/// which the layered inverse amplifies about thirtyfold into G (issue 15.6).
+pub struct SeqCholesky {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+}
+
+impl SeqCholesky {
+    /// LLᵀ of the symmetric positive definite `a` (lower triangle used), AMD ordered.
+    ///
+    /// # Errors
+    /// [`BenchError::Solver`] when `a` is not numerically positive definite.
+    pub fn new(a: SparseColMatRef<'_, usize, f64>) -> Result<Self, BenchError> {
+        let fail = |what: &str, e: &dyn std::fmt::Debug| {
+            BenchError::Solver(format!("sparse Cholesky, {what}: {e:?}"))
+        };
+        let symbolic = factorize_symbolic_cholesky(
+            a.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| fail("symbolic", &e))?;
+        let mut values = vec![0.0; symbolic.len_val()];
+        let req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
+        let mut mem = MemBuffer::try_new(req).map_err(|e| fail("memory", &e))?;
+        symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                a,
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| fail("not positive definite", &e))?;
+        Ok(Self { symbolic, values })
+    }
+
+    /// Solves A X = B in place.
+    pub fn solve_in_place(&self, x: MatMut<'_, f64>) {
+        let req = self
+            .symbolic
+            .solve_in_place_scratch::<f64>(x.ncols(), Par::Seq);
+        let mut mem = MemBuffer::new(req);
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            x,
+            Par::Seq,
+            MemStack::new(&mut mem),
+        );
+    }
+}
+
+impl LayeredSystem {
+    /// The sequential LLᵀ of K − σM with layer stiffnesses scaled by `scale` (σ = `shift`,
+    /// rad²/s²).
+    ///
+    /// # Errors
+    /// [`BenchError::Solver`] if K − σM is not positive definite.
+    pub fn shifted_cholesky(&self, scale: &[f64], shift: f64) -> Result<SeqCholesky, BenchError> {
+        let shifted = &self.stiffness(scale) + &(&self.m * (-shift));
+        SeqCholesky::new(shifted.as_ref())
+    }
+}
+
 struct Operator<'a> {
-    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    llt: SeqCholesky,
     m: &'a SparseColMat<usize, f64>,
     n: usize,
 }

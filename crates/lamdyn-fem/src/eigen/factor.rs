@@ -194,9 +194,11 @@ pub struct LltFactor<'p> {
 impl LltFactor<'_> {
     /// Solves (K − σM) X = B in place; blocks of 8 or more columns are split in two halves
     /// solved concurrently (on this project's 2-core machines two sequential half-solves beat
-    /// faer's parallel solve, which is slower than its sequential one here).
+    /// faer's parallel solve, which is slower than its sequential one here). The split does not
+    /// depend on the thread count, so neither do the results, to the last bit: faer's kernels
+    /// may sum in another order for another number of columns.
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        if rhs.ncols() >= 8 && rayon::current_num_threads() > 1 {
+        if rhs.ncols() >= 8 {
             let half = rhs.ncols() / 2;
             let (a, b) = rhs.split_at_col_mut(half);
             let (symbolic, values) = (&self.plan.symbolic, &self.values[..]);
