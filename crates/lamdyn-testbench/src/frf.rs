@@ -96,8 +96,9 @@ impl ReducedModel {
         let mut cols: Vec<Mat<f64>> = Vec::new();
         for &r in ratios {
             let scale = scales(n_layers, core_layer, r);
-            let phi = sys.modes(&scale, modes, shift)?.1;
+            // One factor of K_j − σM for the modes and the static solves.
             let llt = sys.shifted_cholesky(&scale, shift)?;
+            let phi = sys.modes_with(&llt, modes, shift)?.1;
             let mut f = Mat::from_fn(n, loads.len(), |i, j| loads[j][i]);
             llt.solve_in_place(f.as_mut());
             cols.push(f);

@@ -136,7 +136,20 @@ impl LayeredSystem {
         count: usize,
         shift: f64,
     ) -> Result<(Vec<f64>, Mat<f64>), BenchError> {
-        let llt = self.shifted_cholesky(scale, shift)?;
+        self.modes_with(&self.shifted_cholesky(scale, shift)?, count, shift)
+    }
+
+    /// [`Self::modes`] with the factor of K − σM already made ([`Self::shifted_cholesky`]
+    /// with the same `shift`), for callers that solve with it again.
+    ///
+    /// # Errors
+    /// [`BenchError::Solver`] if Lanczos does not converge.
+    pub fn modes_with(
+        &self,
+        llt: &SeqCholesky,
+        count: usize,
+        shift: f64,
+    ) -> Result<(Vec<f64>, Mat<f64>), BenchError> {
         let op = Operator {
             llt,
             m: &self.m,
@@ -239,7 +252,7 @@ impl LayeredSystem {
 }
 
 struct Operator<'a> {
-    llt: SeqCholesky,
+    llt: &'a SeqCholesky,
     m: &'a SparseColMat<usize, f64>,
     n: usize,
 }
