@@ -150,9 +150,6 @@ fn one(law: &str, misfit: &str, seed: u64) {
     }
 }
 
-/// χ² quantile at 0.95 for 4 degrees of freedom: the joint 95 % region of 4 parameters.
-const CHI2_4_95: f64 = 9.487_729;
-
 fn study(seeds: u64) {
     println!(
         "| truth and law | misfit | covariance | inside 95 % CI | seeds inside the joint 95 % region | max abs z | max E' error at peaks | max eta error at peaks | fit time, median |"
@@ -175,7 +172,7 @@ fn study(seeds: u64) {
                 let r = fit(&c.model, &c.measured, &settings).unwrap();
                 joint += usize::from(
                     r.mahalanobis_squared(&truth_params)
-                        .is_some_and(|d2| d2 <= CHI2_4_95),
+                        .is_some_and(|d2| d2 <= FitResult::CHI2_95_4_PARAMETERS),
                 );
                 for (p, tv) in r.parameters.iter().zip(&truth_params) {
                     total += 1;

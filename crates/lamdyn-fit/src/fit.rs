@@ -204,6 +204,10 @@ impl FitResult {
         n.iter().all(|v| v.is_finite()).then_some(n)
     }
 
+    /// χ² quantile at 0.95 for 4 degrees of freedom (9.4877): the bound of the joint 95 %
+    /// region of a 4-parameter law for [`FitResult::mahalanobis_squared`].
+    pub const CHI2_95_4_PARAMETERS: f64 = 9.487_729;
+
     /// The squared Mahalanobis distance d² = (u − u*)ᵀ C⁻¹ (u − u*) of natural parameters
     /// `natural` (e.g. a known truth, mapped to unconstrained u*) from the estimate u, with C the
     /// covariance of u. A point lies inside the joint 95 % confidence region when

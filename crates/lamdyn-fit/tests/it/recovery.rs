@@ -52,9 +52,6 @@ fn check(r: &FitResult, truth_params: &[f64], truth: &dyn ViscoelasticLaw) -> f6
         .fold(0.0, f64::max)
 }
 
-/// χ² quantile at 0.95 for 4 degrees of freedom: the joint 95 % region of 4 parameters.
-const CHI2_4_95: f64 = 9.487_729;
-
 /// Five noise seeds. The four parameters of one fit are strongly correlated (t0 and c of eq. 7
 /// most), so they leave their marginal intervals together and a count of parameters
 /// inside is not binomial; the seeds are independent. So the test is per seed: the true
@@ -74,7 +71,7 @@ fn recovery(law: LawKind, truth: &dyn ViscoelasticLaw, truth_params: &[f64]) {
         .unwrap();
         let z = check(&r, truth_params, truth);
         let d2 = r.mahalanobis_squared(truth_params).expect("a covariance");
-        inside += usize::from(d2 <= CHI2_4_95);
+        inside += usize::from(d2 <= FitResult::CHI2_95_4_PARAMETERS);
         zmax = zmax.max(z);
         d2s.push(d2);
     }
