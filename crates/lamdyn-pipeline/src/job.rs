@@ -251,20 +251,37 @@ pub struct InverseOptions {
     /// rectangle model): on by default.
     #[serde(default = "yes")]
     pub layered: bool,
-    /// In-plane elements of the layered model (20-node hexahedra, one per layer through the
-    /// thickness).
+    /// In-plane elements of the layered model's coarsest mesh (20-node hexahedra, one per
+    /// layer through the thickness); the convergence ladder refines it by 4/3 per level.
     #[serde(default = "default_layered_elements")]
     pub layered_elements: [usize; 2],
     /// Modes per reference modulus in the layered model's reduced basis.
     #[serde(default = "default_layered_modes")]
     pub layered_modes: usize,
+    /// Largest estimated relative frequency error of the layered model after extrapolation
+    /// over the mesh ladder (lamdyn_layered::convergence); the ladder refines until it is met
+    /// or stops with an error saying how far it got.
+    #[serde(default = "default_ladder_tolerance")]
+    pub tolerance: f64,
+    /// Largest number of meshes in the ladder (3..=6).
+    #[serde(default = "default_layered_levels")]
+    pub layered_levels: usize,
+    /// Edge grading of the layered meshes in [0, 1) (lamdyn_layered::mesh; 0: uniform).
+    #[serde(default)]
+    pub layered_edge_grading: f64,
 }
 
 fn default_layered_elements() -> [usize; 2] {
-    [18, 18]
+    [12, 12]
 }
 fn default_layered_modes() -> usize {
     30
+}
+fn default_ladder_tolerance() -> f64 {
+    1e-4
+}
+fn default_layered_levels() -> usize {
+    4
 }
 
 fn default_kinematics() -> KinematicsChoice {
@@ -279,6 +296,9 @@ impl Default for InverseOptions {
             layered: true,
             layered_elements: default_layered_elements(),
             layered_modes: default_layered_modes(),
+            tolerance: default_ladder_tolerance(),
+            layered_levels: default_layered_levels(),
+            layered_edge_grading: 0.0,
         }
     }
 }
@@ -493,6 +513,24 @@ impl Job {
             return Err(err!(
                 "inverse.layered_modes: {} must lie in 6..=200",
                 inv.layered_modes
+            ));
+        }
+        if !(inv.tolerance.is_finite() && inv.tolerance > 0.0 && inv.tolerance < 0.1) {
+            return Err(err!(
+                "inverse.tolerance: {} must be a relative frequency error in (0, 0.1) (1e-4 is 0.01 %)",
+                inv.tolerance
+            ));
+        }
+        if !(3..=6).contains(&inv.layered_levels) {
+            return Err(err!(
+                "inverse.layered_levels: {} must lie in 3..=6 (three meshes give the order of convergence)",
+                inv.layered_levels
+            ));
+        }
+        if !(0.0..1.0).contains(&inv.layered_edge_grading) {
+            return Err(err!(
+                "inverse.layered_edge_grading: {} must lie in [0, 1)",
+                inv.layered_edge_grading
             ));
         }
         let u = &self.uncertainty;

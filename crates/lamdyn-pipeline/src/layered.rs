@@ -1,10 +1,13 @@
-//! The chain's layered inverse ([`lamdyn_testbench::inverse`]): for each modal frequency of the
-//! fit, the identified pole p of the EMA within 2 % of it gives the target eigenvalue
-//! λ = −p² = ω_n²(1 + iη), and the core's G* is solved through a layered solid model of the
-//! part built from the job's rectangle model (plan, dome radii) and its stack. The start is
-//! the exact inverse's G* at that frequency (else the paper's, else 10 MPa (1 + 0.5i)), which
-//! also picks the mode branch. The layered model's reduced eigenproblem is cached like the
-//! shell model (key: plan, radii, mesh, modes, layers and G_ref snapped to a power of two).
+//! The chain's layered inverse ([`lamdyn_layered::inverse`]), converged over a ladder of meshes
+//! ([`lamdyn_layered::convergence`]): for each modal frequency of the fit, the identified pole
+//! p of the EMA within 2 % of it gives the target eigenvalue λ = −p² = ω_n²(1 + iη), and the
+//! core's G* is solved through a layered solid model of the part built from the job's
+//! rectangle model (plan, dome radii) and its stack, corrected by the Richardson extrapolation
+//! of each mode's eigenvalue over meshes refined by 4/3 from `inverse.layered_elements` until
+//! the estimated frequency error is below `inverse.tolerance`. The start is the exact
+//! inverse's G* at that frequency (else the paper's, else 10 MPa (1 + 0.5i)), which also picks
+//! the mode branch. Every level's reduced eigenproblem is cached like the shell model (key:
+//! plan, radii, grading, mesh, modes, basis moduli, layers and G_ref snapped to a power of two).
 
 use super::CorePoint;
 use super::cache::{Cache, Key};
@@ -14,7 +17,9 @@ use crate::bail;
 use crate::error::{Context, Result};
 use lamdyn_ema::identify::EmaResult;
 use lamdyn_fem::model::{MeshSpec, ModelSpec};
-use lamdyn_testbench::inverse::{InverseLayer, LayeredInverse};
+use lamdyn_layered::LayeredError;
+use lamdyn_layered::convergence::{LadderSettings, build_level, converge};
+use lamdyn_layered::inverse::{InverseLayer, LayeredInverse, LayeredPlate};
 use num_complex::Complex64;
 use std::path::Path;
 
@@ -51,17 +56,10 @@ fn target(ema: &EmaResult, f: f64) -> Option<Complex64> {
     Some(if l.im < 0.0 { l.conj() } else { l })
 }
 
-/// Runs the layered inverse at every modal point; returns a line describing the model.
-pub fn run(
-    job: &Job,
-    base: &Path,
-    ema: &EmaResult,
-    modal: &mut [CorePoint],
-    cache: &Cache,
-    spinner: &dyn Reporter,
-) -> Result<(Option<String>, bool)> {
-    let (plan, radii) = plate(job, base)?;
-    let layers: Vec<InverseLayer> = job
+/// The job's plate for the layered model.
+fn layered_plate(job: &Job, base: &Path) -> Result<LayeredPlate> {
+    let (plan_m, radii_m) = plate(job, base)?;
+    let layers = job
         .stack
         .layers
         .iter()
@@ -78,6 +76,63 @@ pub fn run(
             },
         })
         .collect();
+    Ok(LayeredPlate {
+        plan_m,
+        radii_m,
+        edge_grading: job.inverse.layered_edge_grading,
+        layers,
+    })
+}
+
+/// One level's model from the cache, else built and cached; `ratios` empty: the coarsest
+/// (three-modulus basis), else a finer level's.
+fn cached_model(
+    cache: &Cache,
+    plate: &LayeredPlate,
+    elements: [usize; 2],
+    g_ref: f64,
+    modes: usize,
+    coarsest: bool,
+) -> std::result::Result<(LayeredInverse, bool), LayeredError> {
+    let mut key = Key::new(concat!("layered ", env!("CARGO_PKG_VERSION")))
+        .f64(g_ref)
+        .bytes(
+            format!(
+                "{:?} {:?} {} {elements:?} {modes} {coarsest}",
+                plate.plan_m, plate.radii_m, plate.edge_grading
+            )
+            .as_bytes(),
+        );
+    for l in &plate.layers {
+        key = key.bytes(format!("{l:?}").as_bytes());
+    }
+    if let Some(m) = cache
+        .get("layered", key)
+        .and_then(|b| LayeredInverse::from_bytes(&b))
+    {
+        return Ok((m, true));
+    }
+    let m = if coarsest {
+        LayeredInverse::build(plate, elements, g_ref, modes)?
+    } else {
+        build_level(plate, elements, g_ref, modes)?
+    };
+    cache
+        .put("layered", key, &m.to_bytes())
+        .map_err(|e| LayeredError::Invalid(format!("{e:#}")))?;
+    Ok((m, false))
+}
+
+/// Runs the layered inverse at every modal point; returns a line describing the model.
+pub fn run(
+    job: &Job,
+    base: &Path,
+    ema: &EmaResult,
+    modal: &mut [CorePoint],
+    cache: &Cache,
+    spinner: &dyn Reporter,
+) -> Result<(Option<String>, bool)> {
+    let plate = layered_plate(job, base)?;
     let starts: Vec<Complex64> = modal
         .iter()
         .map(|p| {
@@ -92,58 +147,79 @@ pub fn run(
     // G_ref snapped to a power of two (within √2 of the median start, well inside the basis's
     // G_ref/4 .. 4 G_ref): a re-run with another law finds the same model in the cache.
     let g_ref = 2f64.powf(g.get(g.len() / 2).copied().unwrap_or(10e6).log2().round());
-    spinner.stage("stage 'layered inverse': layered model and its reduced basis");
+    spinner.stage("stage 'layered inverse': coarsest layered model and its reduced basis");
     let t = std::time::Instant::now();
-    let mut key = Key::new(concat!("layered ", env!("CARGO_PKG_VERSION")))
-        .f64(g_ref)
-        .bytes(
-            format!(
-                "{plan:?} {radii:?} {:?} {}",
-                job.inverse.layered_elements, job.inverse.layered_modes
-            )
-            .as_bytes(),
-        );
-    for l in &layers {
-        key = key.bytes(format!("{l:?}").as_bytes());
+    let start = job.inverse.layered_elements;
+    let modes = job.inverse.layered_modes;
+    let (coarsest, cached) = cached_model(cache, &plate, start, g_ref, modes, true)
+        .context("cannot build the layered model")?;
+    // The modal points with a pole: the ladder's targets.
+    let with_pole: Vec<(usize, Complex64)> = modal
+        .iter()
+        .enumerate()
+        .filter_map(|(k, p)| target(ema, p.freq_hz).map(|t| (k, t)))
+        .collect();
+    for p in modal.iter_mut() {
+        p.layered = Some(Err(format!(
+            "no EMA pole within 2 % of {:.3} Hz for the target eigenvalue",
+            p.freq_hz
+        )));
     }
-    let (model, cached) = match cache
-        .get("layered", key)
-        .and_then(|b| LayeredInverse::from_bytes(&b))
-    {
-        Some(m) => (m, true),
-        None => {
-            let m = LayeredInverse::build(
-                plan,
-                radii,
-                job.inverse.layered_elements,
-                &layers,
-                g_ref,
-                job.inverse.layered_modes,
-            )
-            .context("cannot build the layered model")?;
-            cache.put("layered", key, &m.to_bytes())?;
-            (m, false)
+    let settings = LadderSettings {
+        max_levels: job.inverse.layered_levels,
+        tolerance: job.inverse.tolerance,
+        modes: (modes * 2 / 3).max(12),
+        ..LadderSettings::default()
+    };
+    let targets: Vec<Complex64> = with_pole.iter().map(|w| w.1).collect();
+    let first: Vec<Complex64> = with_pole.iter().map(|w| starts[w.0]).collect();
+    let all_cached = std::sync::atomic::AtomicBool::new(cached);
+    let level = |m: [usize; 2]| {
+        let (model, hit) = cached_model(cache, &plate, m, g_ref, settings.modes, false)?;
+        if !hit {
+            all_cached.store(false, std::sync::atomic::Ordering::Relaxed);
+        }
+        Ok(model)
+    };
+    let out = converge(
+        &coarsest,
+        start,
+        &level,
+        &targets,
+        &first,
+        &settings,
+        &|m| spinner.stage(&format!("stage 'layered inverse': {m}")),
+    );
+    let build_s = t.elapsed().as_secs_f64();
+    let out = match out {
+        Ok(o) => o,
+        Err(e) => {
+            for &(k, _) in &with_pole {
+                modal[k].layered = Some(Err(e.to_string()));
+            }
+            return Ok((Some(format!("not converged: {e}")), false));
         }
     };
-    let build_s = t.elapsed().as_secs_f64();
-    for (p, start) in modal.iter_mut().zip(starts) {
-        spinner.stage(&format!("stage 'layered inverse': {:.2} Hz", p.freq_hz));
-        p.layered = Some(match target(ema, p.freq_hz) {
-            Some(l) => model
-                .invert(l, start)
-                .map(|e| e.core_shear_pa)
+    for (&(k, _), m) in with_pole.iter().zip(&out.modes) {
+        modal[k].layered = Some(
+            m.as_ref()
+                .map(|m| m.core_shear_pa)
                 .map_err(|e| e.to_string()),
-            None => Err(format!(
-                "no EMA pole within 2 % of {:.3} Hz for the target eigenvalue",
-                p.freq_hz
-            )),
-        });
+        );
+        modal[k].layered_convergence = m.as_ref().ok().copied();
     }
-    let (dofs, basis) = model.size();
+    let meshes: Vec<String> = out
+        .meshes
+        .iter()
+        .zip(&out.dofs)
+        .map(|(m, d)| format!("{} x {} ({d} dofs)", m[0], m[1]))
+        .collect();
+    let cached = all_cached.load(std::sync::atomic::Ordering::Relaxed);
     let line = format!(
-        "{} x {} C3D20 in plane, one per layer, {dofs} dofs, reduced basis of {basis} vectors at G_ref {:.4e} Pa ({build_s:.1} s{}); targets: the EMA poles",
-        job.inverse.layered_elements[0],
-        job.inverse.layered_elements[1],
+        "C3D20, one per layer through the thickness, edge grading {}; meshes {} extrapolated to a frequency error below {:.1e}; coarsest basis at G_ref {:.4e} Pa ({build_s:.1} s{}); targets: the EMA poles",
+        plate.edge_grading,
+        meshes.join(", "),
+        settings.tolerance,
         g_ref,
         if cached { ", cached" } else { "" }
     );

@@ -394,7 +394,12 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         "eta_exact",
         "95% band",
         "G'_layered [MPa]",
+        "95% band",
         "eta_layered",
+        "95% band",
+        "layered f err, finest mesh",
+        "layered eta err, finest mesh",
+        "G' change by convergence [%]",
     ];
     if truth {
         header.extend([
@@ -409,7 +414,7 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         ]);
     }
     let mut csv = String::from(
-        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_loss_factor",
+        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_storage_lo_pa,g_layered_storage_hi_pa,g_layered_loss_factor,g_layered_loss_factor_lo,g_layered_loss_factor_hi,layered_freq_error_finest,layered_loss_error_finest,layered_residual_freq_error,g_layered_coarsest_storage_pa,g_layered_coarsest_loss_factor",
     );
     if truth {
         csv.push_str(",g_true_storage_pa,g_true_loss_factor,err_g_paper_storage,err_g_paper_loss_factor,err_g_exact_storage,err_g_exact_loss_factor,err_g_layered_storage,err_g_layered_loss_factor");
@@ -421,6 +426,7 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         let phi = p.phi();
         let valid = phi.map_or("-", |x| if x <= PHI_ACCURACY_LIMIT { "yes" } else { "NO" });
         let (gp, ge, gl) = (p.paper_g(), p.exact_g(), p.layered_g());
+        let lb = LayeredColumns::of(p);
         let mut row = vec![
             format!("{:.3}", p.freq_hz),
             format!("{:.4}", p.e_eff_pa.re / 1e9),
@@ -436,7 +442,12 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             fmt(loss(ge), 1.0, 3),
             band_text(b.exact_loss_factor, 1.0, 3),
             fmt(storage(gl), 1e6, 3),
+            band_text(lb.storage, 1e6, 3),
             fmt(loss(gl), 1.0, 3),
+            band_text(lb.loss, 1.0, 3),
+            lb.freq_error.map_or("-".into(), |e| format!("{e:+.1e}")),
+            lb.loss_error.map_or("-".into(), |e| format!("{e:+.1e}")),
+            pct(lb.coarsest.and_then(|c| rel_err(storage(gl), Some(c.re)))),
         ];
         let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
         let lo = |b: Option<Band>| opt(b.map(|b| b[0]));
@@ -460,7 +471,16 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             lo(b.exact_loss_factor),
             hi(b.exact_loss_factor),
             opt(storage(gl)),
+            lo(lb.storage),
+            hi(lb.storage),
             opt(loss(gl)),
+            lo(lb.loss),
+            hi(lb.loss),
+            opt(lb.freq_error),
+            opt(lb.loss_error),
+            opt(lb.residual),
+            opt(storage(lb.coarsest)),
+            opt(loss(lb.coarsest)),
         ];
         if let Some(t) = &r.truth {
             let g = t.at(p.freq_hz);
@@ -483,6 +503,37 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         csv.push_str(&csv_line(&c));
     }
     (header, rows, csv)
+}
+
+/// The layered inverse's convergence columns of one modal point: its 95 % band from the
+/// discretization residual alone, the finest mesh's errors, the residual, and the coarsest
+/// mesh's uncorrected G*.
+struct LayeredColumns {
+    storage: Option<Band>,
+    loss: Option<Band>,
+    freq_error: Option<f64>,
+    loss_error: Option<f64>,
+    residual: Option<f64>,
+    coarsest: Option<Complex64>,
+}
+
+impl LayeredColumns {
+    fn of(p: &CorePoint) -> Self {
+        let c = p.layered_convergence;
+        let g = p.layered_g();
+        let band = |v: Option<f64>, rel: Option<f64>| match (v, rel) {
+            (Some(v), Some(r)) => Some([v * (1.0 - r), v * (1.0 + r)]),
+            _ => None,
+        };
+        Self {
+            storage: band(storage(g), c.map(|c| c.storage_band)),
+            loss: band(loss(g), c.map(|c| c.loss_band)),
+            freq_error: c.map(|c| c.freq_error),
+            loss_error: c.map(|c| c.loss_error),
+            residual: c.map(|c| c.residual_freq_error),
+            coarsest: c.map(|c| c.coarsest_pa),
+        }
+    }
 }
 
 /// Columns of a table by header name: `(name, k)` is the column `k` places after `name`'s
@@ -518,7 +569,13 @@ fn lead_section(
     let layered = r.modal.iter().any(|p| p.layered_g().is_some());
     html.heading("The core: lamdyn's answer");
     let mut cols: Vec<(&'static str, usize)> = if layered {
-        vec![("f [Hz]", 0), ("G'_layered [MPa]", 0), ("eta_layered", 0)]
+        vec![
+            ("f [Hz]", 0),
+            ("G'_layered [MPa]", 0),
+            ("G'_layered [MPa]", 1),
+            ("eta_layered", 0),
+            ("eta_layered", 1),
+        ]
     } else {
         vec![
             ("f [Hz]", 0),
@@ -544,7 +601,7 @@ fn lead_section(
         row.push(pct(rel_err(loss(p.paper_g()), loss(best))));
     }
     let caption = if layered {
-        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole (frequency and damping) matched by a layered solid model of the part. Its 95 % band is not computed yet (the Monte Carlo covers the paper's and the exact routes, below); the last columns show how far the paper's route lies from this answer"
+        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below). Its band holds the discretization error left after extrapolation only: the EMA's scatter and the faces' uncertainty are not in it yet (the Monte Carlo covers the paper's and the exact routes, below); the last columns show how far the paper's route lies from this answer"
     } else {
         "G*(f) of the core at each identified mode by the exact Mead-Markus inverse of the fitted effective modulus, with 95 % Monte Carlo bands (the layered inverse did not run); the last columns show how far the paper's route lies from it"
     };

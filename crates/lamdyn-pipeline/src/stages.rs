@@ -22,6 +22,7 @@ use lamdyn_fit::modes::{PeakComparison, compare_peaks};
 use lamdyn_fit::probe::{placement_line, probes_with};
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_frf::{Channel, FrfSet};
+use lamdyn_layered::convergence::ConvergedMode;
 use lamdyn_material::causality::{CausalityParams, CausalityVerdict};
 use lamdyn_material::laminate::paper_inverse;
 use lamdyn_material::laminate::{
@@ -56,6 +57,8 @@ pub struct CorePoint {
     pub exact: Result<ExactCoreEstimate, String>,
     /// The layered inverse at a modal frequency (None: not run here).
     pub layered: Option<Result<Complex64, String>>,
+    /// The layered inverse's convergence over its mesh ladder (with a layered result).
+    pub layered_convergence: Option<ConvergedMode>,
 }
 
 impl CorePoint {
@@ -560,6 +563,7 @@ fn core_point(
         paper: paper_inverse(stack, w, e, options).map_err(|e| e.to_string()),
         exact: exact_inverse(stack, w, e, options.kinematics).map_err(|e| e.to_string()),
         layered: None,
+        layered_convergence: None,
     }
 }
 

@@ -12,8 +12,8 @@
 //! `cargo bench -p lamdyn-testbench --bench roof`
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use lamdyn_layered::reduced::DirectSolver;
 use lamdyn_testbench::description::Description;
-use lamdyn_testbench::frf::DirectSolver;
 use lamdyn_testbench::impact::hammer_load;
 use std::f64::consts::PI;
 use std::time::Duration;

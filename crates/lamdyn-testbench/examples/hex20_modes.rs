@@ -5,8 +5,8 @@
 //!
 //! The laminate is `lamdyn_testbench::cases::ccx_check_laminate`.
 
+use lamdyn_layered::system::LayeredSystem;
 use lamdyn_testbench::cases::ccx_check_laminate;
-use lamdyn_testbench::system::LayeredSystem;
 use std::f64::consts::PI;
 
 fn main() {

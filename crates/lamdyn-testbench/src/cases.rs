@@ -1,7 +1,7 @@
 //! Named bench cases shared by the examples, tests and cross-check scripts.
 
-use crate::hex20::Elastic;
-use crate::mesh::{LayerMesh, LayeredPlateSpec};
+use lamdyn_layered::hex20::Elastic;
+use lamdyn_layered::mesh::{LayerMesh, LayeredPlateSpec};
 
 /// Glass: E = 70 GPa, ν = 0.22, ρ = 2500 kg/m³.
 pub const GLASS: Elastic = Elastic {
@@ -39,6 +39,7 @@ pub fn ccx_check_laminate(
             ny,
             radius_x_m: rx,
             radius_y_m: ry,
+            edge_grading: 0.0,
             layers: vec![layer(0.0021), layer(0.00076), layer(0.0021)],
         },
         [GLASS, ELASTIC_CORE, GLASS],

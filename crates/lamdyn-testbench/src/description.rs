@@ -13,16 +13,16 @@
 //!
 //! **Core scale.** The core is assembled with the real shear modulus G_a = Re G*(2π f_a) at the
 //! basis's first reference frequency f_a (Young's modulus 2 G_a (1 + ν)); the FRFs use
-//! s(ω) = G*(ω)/G_a ([`crate::frf`]). A `young_law` core is scaled the same way by E*(ω)/E_a.
+//! s(ω) = G*(ω)/G_a ([`lamdyn_layered::reduced`]). A `young_law` core is scaled the same way by E*(ω)/E_a.
 
 use crate::error::BenchError;
-use crate::frf::ReducedModel;
-use crate::hex20::Elastic;
 use crate::impact::{HitSettings, Hits, ImpactTest, Support, simulate, simulate_hits};
 use crate::impact::{check_layout, hammer_load, support_springs};
-use crate::mesh::{HexMesh, LayerMesh, LayeredPlateSpec};
-use crate::system::LayeredSystem;
 use lamdyn_frf::FrfSet;
+use lamdyn_layered::hex20::Elastic;
+use lamdyn_layered::mesh::{HexMesh, LayerMesh, LayeredPlateSpec};
+use lamdyn_layered::reduced::ReducedModel;
+use lamdyn_layered::system::LayeredSystem;
 use lamdyn_material::laminate::LayerSpec;
 use lamdyn_material::law::ViscoelasticLaw;
 use num_complex::Complex64;
@@ -84,6 +84,14 @@ pub struct MeshSpec {
     /// Elements through each layer's thickness (default one per layer).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub through_thickness: Option<Vec<usize>>,
+    /// Edge grading of the in-plane element widths in [0, 1) (lamdyn_layered::mesh; default
+    /// 0: uniform).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub edge_grading: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// `[supports]`.
@@ -598,6 +606,7 @@ impl Description {
             ny: self.mesh.elements[1],
             radius_x_m: self.plate.radius_x_m,
             radius_y_m: self.plate.radius_y_m,
+            edge_grading: self.mesh.edge_grading,
             layers: self
                 .layers
                 .iter()

@@ -1,5 +1,6 @@
 //! Errors of the test bench.
 
+use lamdyn_layered::LayeredError;
 use thiserror::Error;
 
 /// What went wrong building or solving a bench model.
@@ -12,4 +13,7 @@ pub enum BenchError {
     /// The solver failed (singular shifted matrix, no convergence).
     #[error("solver: {0}")]
     Solver(String),
+    /// The layered model failed.
+    #[error(transparent)]
+    Model(#[from] LayeredError),
 }

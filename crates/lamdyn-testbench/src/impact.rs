@@ -22,10 +22,10 @@
 //! resonances of a few Hz, as in a real test on soft supports.
 
 use crate::error::BenchError;
-use crate::frf::ReducedModel;
-use crate::mesh::HexMesh;
 use lamdyn_frf::csv::TimeRecord;
 use lamdyn_frf::{Channel, FrfSet, Quantity};
+use lamdyn_layered::mesh::HexMesh;
+use lamdyn_layered::reduced::ReducedModel;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
@@ -607,8 +607,8 @@ pub struct Support {
 }
 
 /// The springs (dof, N/m) and dashpots (dof, N·s/m) of `supports` on the bottom surface of
-/// `mesh`, for [`crate::system::LayeredSystem::add_springs`] and
-/// [`crate::frf::ReducedModel::add_dampers`].
+/// `mesh`, for [`lamdyn_layered::system::LayeredSystem::add_springs`] and
+/// [`lamdyn_layered::reduced::ReducedModel::add_dampers`].
 ///
 /// # Errors
 /// [`BenchError::Invalid`] naming the support for a position outside the plan or a negative

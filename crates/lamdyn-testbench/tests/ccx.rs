@@ -2,8 +2,8 @@
 //! frequencies in tools/calculix/hex20_results.json were written by
 //! tools/calculix/compare_hex20.py (which runs `ccx` on the deck it writes from this model).
 
+use lamdyn_layered::system::LayeredSystem;
 use lamdyn_testbench::cases::ccx_check_laminate;
-use lamdyn_testbench::system::LayeredSystem;
 use std::f64::consts::PI;
 
 /// First ten elastic free-free frequencies within 1e-5 of CalculiX (ccx prints 7 significant

@@ -1,9 +1,9 @@
 //! Reduced-basis FRFs with a frequency-dependent core against direct sparse complex solves.
 
+use lamdyn_layered::reduced::{DirectSolver, ReducedModel};
+use lamdyn_layered::system::LayeredSystem;
 use lamdyn_material::law::{FractionalZener, ViscoelasticLaw};
 use lamdyn_testbench::cases::{ELASTIC_CORE, ccx_check_laminate};
-use lamdyn_testbench::frf::{DirectSolver, ReducedModel};
-use lamdyn_testbench::system::LayeredSystem;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 

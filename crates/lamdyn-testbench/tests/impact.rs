@@ -1,11 +1,11 @@
 //! The simulated impact test on the curved roof laminate with a viscoelastic core.
 
+use lamdyn_layered::mesh::HexMesh;
+use lamdyn_layered::reduced::ReducedModel;
+use lamdyn_layered::system::LayeredSystem;
 use lamdyn_material::law::{FractionalZener, ViscoelasticLaw};
 use lamdyn_testbench::cases::{ELASTIC_CORE, ccx_check_laminate};
-use lamdyn_testbench::frf::ReducedModel;
 use lamdyn_testbench::impact::{ImpactTest, hammer_load, simulate, surface_frame};
-use lamdyn_testbench::mesh::HexMesh;
-use lamdyn_testbench::system::LayeredSystem;
 use std::f64::consts::PI;
 
 struct Bench {

@@ -11,12 +11,12 @@
 //! mid-span node on the mid-plane; core G* = 2 MPa (1 + 0.8i). Its complex eigenvalues come from
 //! the reduced model (modes and core sensitivities at |G*| and G′).
 
+use lamdyn_layered::hex20::Elastic;
+use lamdyn_layered::mesh::{LayerMesh, LayeredPlateSpec};
+use lamdyn_layered::reduced::ReducedModel;
+use lamdyn_layered::system::LayeredSystem;
 use lamdyn_material::laminate::{CoreGeometry, Face, Kinematics, SandwichStack};
 use lamdyn_material::sandwich::MeadMarkus;
-use lamdyn_testbench::frf::ReducedModel;
-use lamdyn_testbench::hex20::Elastic;
-use lamdyn_testbench::mesh::{LayerMesh, LayeredPlateSpec};
-use lamdyn_testbench::system::LayeredSystem;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
@@ -36,6 +36,7 @@ fn simply_supported_sandwich_beam_matches_mead_markus() {
         ny: 1,
         radius_x_m: f64::INFINITY,
         radius_y_m: f64::INFINITY,
+        edge_grading: 0.0,
         layers: vec![layer(hf), layer(hc), layer(hf)],
     }
     .build()

@@ -5,7 +5,7 @@
 //! scaled by a frequency-dependent modulus (the core). Free-free models have six zero
 //! eigenvalues; a negative shift σ keeps K − σM positive definite.
 
-use crate::error::BenchError;
+use crate::error::LayeredError;
 use crate::hex20::{Elastic, matrices};
 use crate::mesh::HexMesh;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -34,12 +34,12 @@ impl LayeredSystem {
     /// Assembles `mesh` with one material per layer.
     ///
     /// # Errors
-    /// [`BenchError::Invalid`] for a material count that differs from the layers, or an element
+    /// [`LayeredError::Invalid`] for a material count that differs from the layers, or an element
     /// with a non-positive Jacobian.
-    pub fn assemble(mesh: &HexMesh, materials: &[Elastic]) -> Result<Self, BenchError> {
+    pub fn assemble(mesh: &HexMesh, materials: &[Elastic]) -> Result<Self, LayeredError> {
         let n_layers = mesh.layer.iter().max().map_or(0, |l| l + 1);
         if materials.len() != n_layers {
-            return Err(BenchError::Invalid(format!(
+            return Err(LayeredError::Invalid(format!(
                 "{} materials for {n_layers} layers",
                 materials.len()
             )));
@@ -55,7 +55,7 @@ impl LayeredSystem {
                 matrices(&x, &materials[l])
                     .map(|(k, m)| (l, k, m))
                     .ok_or_else(|| {
-                        BenchError::Invalid(format!("element {e}: non-positive Jacobian"))
+                        LayeredError::Invalid(format!("element {e}: non-positive Jacobian"))
                     })
             })
             .collect::<Result<_, _>>()?;
@@ -77,7 +77,7 @@ impl LayeredSystem {
         }
         let build = |t: &[Triplet<usize, usize, f64>]| {
             SparseColMat::try_new_from_triplets(n, n, t)
-                .map_err(|e| BenchError::Solver(format!("sparse assembly: {e:?}")))
+                .map_err(|e| LayeredError::Solver(format!("sparse assembly: {e:?}")))
         };
         Ok(Self {
             k_layers: k_trip.iter().map(|t| build(t)).collect::<Result<_, _>>()?,
@@ -91,12 +91,12 @@ impl LayeredSystem {
     /// above the structure's (a penalty) fixed dofs.
     ///
     /// # Errors
-    /// [`BenchError::Invalid`] for a dof out of range or a negative or non-finite stiffness.
-    pub fn add_springs(&mut self, springs: &[(usize, f64)]) -> Result<(), BenchError> {
+    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite stiffness.
+    pub fn add_springs(&mut self, springs: &[(usize, f64)]) -> Result<(), LayeredError> {
         let mut t: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(springs.len());
         for &(d, k) in springs {
             if d >= self.n_dofs || !(k.is_finite() && k >= 0.0) {
-                return Err(BenchError::Invalid(format!(
+                return Err(LayeredError::Invalid(format!(
                     "spring on dof {d} of {} with stiffness {k} N/m",
                     self.n_dofs
                 )));
@@ -104,7 +104,7 @@ impl LayeredSystem {
             t.push(Triplet::new(d, d, k));
         }
         let add = SparseColMat::try_new_from_triplets(self.n_dofs, self.n_dofs, &t)
-            .map_err(|e| BenchError::Solver(format!("springs: {e:?}")))?;
+            .map_err(|e| LayeredError::Solver(format!("springs: {e:?}")))?;
         self.springs = Some(match self.springs.take() {
             Some(s) => &s + &add,
             None => add,
@@ -129,13 +129,13 @@ impl LayeredSystem {
     /// negative for a free-free model).
     ///
     /// # Errors
-    /// [`BenchError::Solver`] if K − σM is not positive definite or Lanczos does not converge.
+    /// [`LayeredError::Solver`] if K − σM is not positive definite or Lanczos does not converge.
     pub fn modes(
         &self,
         scale: &[f64],
         count: usize,
         shift: f64,
-    ) -> Result<(Vec<f64>, Mat<f64>), BenchError> {
+    ) -> Result<(Vec<f64>, Mat<f64>), LayeredError> {
         self.modes_with(&self.shifted_cholesky(scale, shift)?, count, shift)
     }
 
@@ -143,13 +143,13 @@ impl LayeredSystem {
     /// with the same `shift`), for callers that solve with it again.
     ///
     /// # Errors
-    /// [`BenchError::Solver`] if Lanczos does not converge.
+    /// [`LayeredError::Solver`] if Lanczos does not converge.
     pub fn modes_with(
         &self,
         llt: &SeqCholesky,
         count: usize,
         shift: f64,
-    ) -> Result<(Vec<f64>, Mat<f64>), BenchError> {
+    ) -> Result<(Vec<f64>, Mat<f64>), LayeredError> {
         let op = Operator {
             llt,
             m: &self.m,
@@ -172,7 +172,7 @@ impl LayeredSystem {
             &mut |_| {},
         );
         if out.converged < count {
-            return Err(BenchError::Solver(format!(
+            return Err(LayeredError::Solver(format!(
                 "Lanczos converged {} of {count} modes",
                 out.converged
             )));
@@ -195,10 +195,10 @@ impl SeqCholesky {
     /// LLᵀ of the symmetric positive definite `a` (lower triangle used), AMD ordered.
     ///
     /// # Errors
-    /// [`BenchError::Solver`] when `a` is not numerically positive definite.
-    pub fn new(a: SparseColMatRef<'_, usize, f64>) -> Result<Self, BenchError> {
+    /// [`LayeredError::Solver`] when `a` is not numerically positive definite.
+    pub fn new(a: SparseColMatRef<'_, usize, f64>) -> Result<Self, LayeredError> {
         let fail = |what: &str, e: &dyn std::fmt::Debug| {
-            BenchError::Solver(format!("sparse Cholesky, {what}: {e:?}"))
+            LayeredError::Solver(format!("sparse Cholesky, {what}: {e:?}"))
         };
         let symbolic = factorize_symbolic_cholesky(
             a.symbolic(),
@@ -244,8 +244,8 @@ impl LayeredSystem {
     /// rad²/s²).
     ///
     /// # Errors
-    /// [`BenchError::Solver`] if K − σM is not positive definite.
-    pub fn shifted_cholesky(&self, scale: &[f64], shift: f64) -> Result<SeqCholesky, BenchError> {
+    /// [`LayeredError::Solver`] if K − σM is not positive definite.
+    pub fn shifted_cholesky(&self, scale: &[f64], shift: f64) -> Result<SeqCholesky, LayeredError> {
         let shifted = &self.stiffness(scale) + &(&self.m * (-shift));
         SeqCholesky::new(shifted.as_ref())
     }

@@ -11,8 +11,15 @@
 //!
 //! Nodes sit on a fine grid of (2n_x + 1) × (2n_y + 1) × (2n_z + 1) points; the serendipity
 //! element uses those with at most one odd index (corners and mid-edges).
+//!
+//! Edge grading: a free laminate's core shears in a boundary layer along the free edges, of
+//! width about the shear-lag length √(E_f h_f h_c / 2G) (5 cm for the paper's roof: one
+//! element of an 18 × 18 mesh). With grading g ∈ [0, 1) the element corners along x lie at
+//! x(u) = a (u − g sin(2πu)/(2π) − 1/2), u = i/n_x (the same along y): the element widths
+//! fall from (1 + g) times the mean at the centre to (1 − g) times it at the edges, smoothly,
+//! and mid-edge nodes stay at the middle of their corners.
 
-use crate::error::BenchError;
+use crate::error::LayeredError;
 use crate::hex20::NODES;
 
 /// One layer of the stack, bottom to top.
@@ -41,6 +48,23 @@ pub struct LayeredPlateSpec {
     pub radius_y_m: f64,
     /// The layers, bottom to top.
     pub layers: Vec<LayerMesh>,
+    /// Edge grading g ∈ [0, 1) of the in-plane element widths (module docs; 0: uniform).
+    pub edge_grading: f64,
+}
+
+/// Plan coordinate of fine-grid point `i` of `2n + 1` along a side of length `a`, centred,
+/// with edge grading `g` (module docs): corners (even i) on the graded map, mid-edge points
+/// (odd i) halfway between their corners.
+pub fn graded_coordinate(i: usize, n: usize, a: f64, g: f64) -> f64 {
+    let corner = |k: usize| {
+        let u = k as f64 / n as f64;
+        a * (u - g * (2.0 * std::f64::consts::PI * u).sin() / (2.0 * std::f64::consts::PI) - 0.5)
+    };
+    if i % 2 == 0 {
+        corner(i / 2)
+    } else {
+        0.5 * (corner(i / 2) + corner(i / 2 + 1))
+    }
 }
 
 /// A hexahedral mesh: nodes, 20-node elements (C3D20 order) and each element's layer.
@@ -60,8 +84,8 @@ pub struct HexMesh {
 
 impl LayeredPlateSpec {
     /// Checks the numbers (positive sizes and counts, radii positive or infinite).
-    fn validate(&self) -> Result<(), BenchError> {
-        let bad = |field: &str, why: String| Err(BenchError::Invalid(format!("{field}: {why}")));
+    fn validate(&self) -> Result<(), LayeredError> {
+        let bad = |field: &str, why: String| Err(LayeredError::Invalid(format!("{field}: {why}")));
         for (name, v) in [("length_m", self.length_m), ("width_m", self.width_m)] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(name, format!("{v} must be a positive length"));
@@ -74,6 +98,12 @@ impl LayeredPlateSpec {
             if v.is_nan() || v <= 0.0 {
                 return bad(name, format!("{v} must be positive (inf for straight)"));
             }
+        }
+        if !(0.0..1.0).contains(&self.edge_grading) {
+            return bad(
+                "edge_grading",
+                format!("{} must lie in [0, 1)", self.edge_grading),
+            );
         }
         if self.nx == 0 || self.ny == 0 {
             return bad("elements", format!("{} x {} in plane", self.nx, self.ny));
@@ -109,8 +139,8 @@ impl LayeredPlateSpec {
     /// Builds the mesh.
     ///
     /// # Errors
-    /// [`BenchError::Invalid`] naming the field for non-positive sizes, thicknesses or counts.
-    pub fn build(&self) -> Result<HexMesh, BenchError> {
+    /// [`LayeredError::Invalid`] naming the field for non-positive sizes, thicknesses or counts.
+    pub fn build(&self) -> Result<HexMesh, LayeredError> {
         self.validate()?;
         // Heights s of the fine grid through the thickness (2 n_z + 1), mid-thickness at 0.
         let total: f64 = self.layers.iter().map(|l| l.thickness_m).sum();
@@ -133,8 +163,8 @@ impl LayeredPlateSpec {
                     if (i % 2) + (j % 2) + (k % 2) > 1 {
                         continue;
                     }
-                    let x = self.length_m * (i as f64 / (fx - 1) as f64 - 0.5);
-                    let y = self.width_m * (j as f64 / (fy - 1) as f64 - 0.5);
+                    let x = graded_coordinate(i, self.nx, self.length_m, self.edge_grading);
+                    let y = graded_coordinate(j, self.ny, self.width_m, self.edge_grading);
                     let (z, n) = self.surface(x, y);
                     id[(k * fy + j) * fx + i] = nodes.len();
                     if k == fz - 1 {
@@ -186,6 +216,7 @@ mod tests {
             ny: 2,
             radius_x_m: rx,
             radius_y_m: f64::INFINITY,
+            edge_grading: 0.0,
             layers: vec![
                 LayerMesh {
                     thickness_m: 0.003,

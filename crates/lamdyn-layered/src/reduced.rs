@@ -19,7 +19,7 @@
 //! for the multi-model reduction]. Then u ≈ V (Vᵀ Z(ω) V)⁻¹ Vᵀ f: one small dense complex solve
 //! per line. The direct route factors the sparse complex Z(ω) (faer's sparse LU) per line.
 
-use crate::error::BenchError;
+use crate::error::LayeredError;
 use crate::seq;
 use crate::system::LayeredSystem;
 use faer::linalg::solvers::Solve;
@@ -70,7 +70,7 @@ impl ReducedModel {
     /// `ratios` (G_j/G_a), plus the residual vectors of `loads`, with shift `shift` (rad²/s²).
     ///
     /// # Errors
-    /// [`BenchError::Invalid`] for a core layer out of range or no load; [`BenchError::Solver`]
+    /// [`LayeredError::Invalid`] for a core layer out of range or no load; [`LayeredError::Solver`]
     /// from the eigen or static solves.
     pub fn new(
         sys: &LayeredSystem,
@@ -79,16 +79,16 @@ impl ReducedModel {
         modes: usize,
         loads: &[Vec<f64>],
         shift: f64,
-    ) -> Result<Self, BenchError> {
+    ) -> Result<Self, LayeredError> {
         let n_layers = sys.k_layers.len();
         if core_layer >= n_layers {
-            return Err(BenchError::Invalid(format!(
+            return Err(LayeredError::Invalid(format!(
                 "core layer {} of {n_layers} layers",
                 core_layer + 1
             )));
         }
         if loads.is_empty() || ratios.is_empty() {
-            return Err(BenchError::Invalid(
+            return Err(LayeredError::Invalid(
                 "the basis needs at least one load and one reference core modulus".into(),
             ));
         }
@@ -144,10 +144,10 @@ impl ReducedModel {
     /// Sets the constant loss factor η_e of the elastic layers.
     ///
     /// # Errors
-    /// [`BenchError::Invalid`] for a negative or non-finite loss factor.
-    pub fn set_elastic_loss(&mut self, eta: f64) -> Result<(), BenchError> {
+    /// [`LayeredError::Invalid`] for a negative or non-finite loss factor.
+    pub fn set_elastic_loss(&mut self, eta: f64) -> Result<(), LayeredError> {
         if !(eta.is_finite() && eta >= 0.0) {
-            return Err(BenchError::Invalid(format!(
+            return Err(LayeredError::Invalid(format!(
                 "loss factor of the elastic layers: {eta} must be finite and non-negative"
             )));
         }
@@ -158,12 +158,12 @@ impl ReducedModel {
     /// Adds grounded dashpots (dof, N·s/m): C_s += Σ c e_d e_dᵀ, projected on the basis.
     ///
     /// # Errors
-    /// [`BenchError::Invalid`] for a dof out of range or a negative or non-finite coefficient.
-    pub fn add_dampers(&mut self, dampers: &[(usize, f64)]) -> Result<(), BenchError> {
+    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite coefficient.
+    pub fn add_dampers(&mut self, dampers: &[(usize, f64)]) -> Result<(), LayeredError> {
         let n = self.basis.nrows();
         for &(d, c) in dampers {
             if d >= n || !(c.is_finite() && c >= 0.0) {
-                return Err(BenchError::Invalid(format!(
+                return Err(LayeredError::Invalid(format!(
                     "dashpot on dof {d} of {n} with {c} N s/m"
                 )));
             }
@@ -364,8 +364,8 @@ impl DirectSolver {
     /// The solver of `sys` with the core on layer `core_layer`.
     ///
     /// # Errors
-    /// [`BenchError::Solver`] if the pattern or its symbolic LU cannot be built.
-    pub fn new(sys: &LayeredSystem, core_layer: usize) -> Result<Self, BenchError> {
+    /// [`LayeredError::Solver`] if the pattern or its symbolic LU cannot be built.
+    pub fn new(sys: &LayeredSystem, core_layer: usize) -> Result<Self, LayeredError> {
         let (ke, kc) = split_stiffness(sys, core_layer);
         let parts = [&ke, &kc, &sys.m];
         let n = sys.n_dofs;
@@ -384,15 +384,15 @@ impl DirectSolver {
                 })
                 .collect();
             SparseColMat::try_new_from_triplets(n, n, &t)
-                .map_err(|e| BenchError::Solver(format!("sparse assembly: {e:?}")))
+                .map_err(|e| LayeredError::Solver(format!("sparse assembly: {e:?}")))
         };
         let mats = [on_pattern(0)?, on_pattern(1)?, on_pattern(2)?];
         let pattern = mats[0]
             .symbolic()
             .to_owned()
-            .map_err(|e| BenchError::Solver(format!("{e:?}")))?;
+            .map_err(|e| LayeredError::Solver(format!("{e:?}")))?;
         let symbolic = SymbolicLu::try_new(pattern.as_ref())
-            .map_err(|e| BenchError::Solver(format!("symbolic LU: {e:?}")))?;
+            .map_err(|e| LayeredError::Solver(format!("symbolic LU: {e:?}")))?;
         let values = mats.map(|m| m.val().to_vec());
         Ok(Self {
             pattern,
@@ -404,14 +404,14 @@ impl DirectSolver {
     /// u at `dofs` from Z(ω) u = `load` with core scale s(ω), m/N.
     ///
     /// # Errors
-    /// [`BenchError::Solver`] if the numeric LU fails (Z singular).
+    /// [`LayeredError::Solver`] if the numeric LU fails (Z singular).
     pub fn response(
         &self,
         load: &[f64],
         omega: f64,
         core_scale: Complex64,
         dofs: &[usize],
-    ) -> Result<Vec<Complex64>, BenchError> {
+    ) -> Result<Vec<Complex64>, LayeredError> {
         let [e, c, m] = &self.values;
         let vals: Vec<c64> = (0..e.len())
             .map(|k| {
@@ -421,7 +421,7 @@ impl DirectSolver {
             .collect();
         let z = SparseColMatRef::new(self.pattern.as_ref(), &vals);
         let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), z)
-            .map_err(|e| BenchError::Solver(format!("sparse LU of Z(omega): {e:?}")))?;
+            .map_err(|e| LayeredError::Solver(format!("sparse LU of Z(omega): {e:?}")))?;
         let mut rhs = Mat::from_fn(load.len(), 1, |i, _| c64::new(load[i], 0.0));
         lu.solve_in_place(rhs.as_mut());
         Ok(dofs

@@ -8,7 +8,7 @@
 //! modelled as it is — each layer meshed with 20-node hexahedra ([`crate::mesh`],
 //! [`crate::hex20`]) — and the core's modulus is found per mode: with the core stiffness
 //! assembled at G_a and scaled by s = G*/G_a (constant Poisson's ratio), the reduced model's
-//! complex eigenvalues λ(s) of Vᵀ((1 + iη_e)K_e + s K_c)V x = λ x (Vᵀ M V = I, [`crate::frf`])
+//! complex eigenvalues λ(s) of Vᵀ((1 + iη_e)K_e + s K_c)V x = λ x (Vᵀ M V = I, [`crate::reduced`])
 //! are matched to the measured pole, λ_meas = −p² = ω_n²(1 + iη) for a pole p of the
 //! identification, by a secant iteration on s:
 //!
@@ -19,10 +19,10 @@
 //! core moduli (G_a/4, G_a, 4 G_a) with their core sensitivities, so it spans the range the
 //! iteration moves in.
 
-use crate::error::BenchError;
-use crate::frf::{ReducedEigen, ReducedModel};
+use crate::error::LayeredError;
 use crate::hex20::Elastic;
 use crate::mesh::{LayerMesh, LayeredPlateSpec};
+use crate::reduced::{ReducedEigen, ReducedModel};
 use crate::system::LayeredSystem;
 use num_complex::Complex64;
 
@@ -41,6 +41,20 @@ pub struct InverseLayer {
     pub loss_factor: f64,
 }
 
+/// The part the layered inverse models: a rectangle in plan, flat or a shallow dome, meshed
+/// with [`crate::mesh::LayeredPlateSpec`] (one element per layer through the thickness).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayeredPlate {
+    /// Plan lengths along x and y, m.
+    pub plan_m: [f64; 2],
+    /// Radii of curvature along x and y, m (infinite: straight).
+    pub radii_m: [f64; 2],
+    /// Edge grading of the in-plane mesh ([`crate::mesh`]; 0: uniform).
+    pub edge_grading: f64,
+    /// The stack, bottom to top, with exactly one core layer.
+    pub layers: Vec<InverseLayer>,
+}
+
 /// The layered model of the inverse.
 pub struct LayeredInverse {
     model: ReducedEigen,
@@ -57,35 +71,59 @@ pub struct LayeredEstimate {
     pub eigenvalue: Complex64,
     /// Secant iterations.
     pub iterations: usize,
+    /// Rank of the matched mode among the elastic ones (0: the lowest).
+    pub rank: usize,
 }
 
+/// How far (relative, in frequency) the nearest mode of the model may lie from a target at the
+/// start modulus for the target to count as one of its modes: a pole further off than this
+/// from every mode is no mode of the part's layered model (a support's bounce, a spurious pole).
+pub const MATCH_WINDOW: f64 = 0.25;
+
+/// The reference moduli of the inverse's basis, as ratios to G_ref (module docs).
+pub const BASIS_RATIOS: [f64; 3] = [0.25, 1.0, 4.0];
+
 impl LayeredInverse {
-    /// Meshes and assembles the plate (plan `length_m` × `width_m`, dome radii, `elements`
-    /// in plane, one element per layer through the thickness) with the core at `g_ref_pa`, and
-    /// builds the reduced basis of `modes` modes at G_ref/4, G_ref and 4 G_ref.
+    /// Meshes and assembles `plate` with `elements` in plane and the core at `g_ref_pa`, and
+    /// builds the reduced basis of `modes` modes at each of [`BASIS_RATIOS`] times G_ref.
     ///
     /// # Errors
-    /// [`BenchError::Invalid`] for a stack without exactly one core layer, faces with different
-    /// loss factors, or a non-positive size; [`BenchError::Solver`] from the eigen solves.
+    /// [`LayeredError::Invalid`] for a stack without exactly one core layer, faces with different
+    /// loss factors, or a non-positive size; [`LayeredError::Solver`] from the eigen solves.
     pub fn build(
-        plan_m: [f64; 2],
-        radii_m: [f64; 2],
+        plate: &LayeredPlate,
         elements: [usize; 2],
-        layers: &[InverseLayer],
         g_ref_pa: f64,
         modes: usize,
-    ) -> Result<Self, BenchError> {
+    ) -> Result<Self, LayeredError> {
+        Self::build_with_ratios(plate, elements, g_ref_pa, modes, &BASIS_RATIOS)
+    }
+
+    /// [`Self::build`] with the basis at the core-modulus `ratios` (to G_ref): a single ratio
+    /// gives a cheaper model, accurate near G_ref (the core-sensitivity vectors span the first
+    /// order in G), as the convergence ladder's finer meshes use ([`crate::convergence`]).
+    ///
+    /// # Errors
+    /// As [`Self::build`].
+    pub fn build_with_ratios(
+        plate: &LayeredPlate,
+        elements: [usize; 2],
+        g_ref_pa: f64,
+        modes: usize,
+        ratios: &[f64],
+    ) -> Result<Self, LayeredError> {
+        let layers = &plate.layers;
         let cores: Vec<usize> = (0..layers.len())
             .filter(|&i| layers[i].young_pa.is_none())
             .collect();
         let [core] = cores[..] else {
-            return Err(BenchError::Invalid(format!(
+            return Err(LayeredError::Invalid(format!(
                 "the layered inverse needs exactly one core layer (no young_pa), got {}",
                 cores.len()
             )));
         };
         if !(g_ref_pa.is_finite() && g_ref_pa > 0.0) {
-            return Err(BenchError::Invalid(format!(
+            return Err(LayeredError::Invalid(format!(
                 "reference core modulus {g_ref_pa} Pa must be positive"
             )));
         }
@@ -96,7 +134,7 @@ impl LayeredInverse {
             .iter()
             .any(|l| l.young_pa.is_some() && Some(l.loss_factor) != eta_e)
         {
-            return Err(BenchError::Invalid(
+            return Err(LayeredError::Invalid(
                 "the faces must share one loss factor".into(),
             ));
         }
@@ -109,12 +147,13 @@ impl LayeredInverse {
             })
             .collect();
         let mesh = LayeredPlateSpec {
-            length_m: plan_m[0],
-            width_m: plan_m[1],
+            length_m: plate.plan_m[0],
+            width_m: plate.plan_m[1],
             nx: elements[0],
             ny: elements[1],
-            radius_x_m: radii_m[0],
-            radius_y_m: radii_m[1],
+            radius_x_m: plate.radii_m[0],
+            radius_y_m: plate.radii_m[1],
+            edge_grading: plate.edge_grading,
             layers: layers
                 .iter()
                 .map(|l| LayerMesh {
@@ -131,10 +170,10 @@ impl LayeredInverse {
             .top
             .first()
             .copied()
-            .ok_or_else(|| BenchError::Invalid("the mesh has no top surface".into()))?;
+            .ok_or_else(|| LayeredError::Invalid("the mesh has no top surface".into()))?;
         load[3 * node + 2] = 1.0;
         let shift = -(2.0 * std::f64::consts::PI).powi(2);
-        let mut model = ReducedModel::new(&system, core, &[0.25, 1.0, 4.0], modes, &[load], shift)?;
+        let mut model = ReducedModel::new(&system, core, ratios, modes, &[load], shift)?;
         model.set_elastic_loss(eta_e.unwrap_or(0.0))?;
         Ok(Self {
             model: model.free_eigenproblem(),
@@ -174,6 +213,19 @@ impl LayeredInverse {
         self.model.eigenvalues(g_pa / self.g_assembled_pa)
     }
 
+    /// The elastic eigenvalue of `rank` ([`LayeredEstimate::rank`]) at core modulus `g_pa`
+    /// (Re λ above 1e-6 of `target`'s counts as elastic), if the model has that many.
+    pub fn elastic_eigenvalue(
+        &self,
+        g_pa: Complex64,
+        rank: usize,
+        target: Complex64,
+    ) -> Option<Complex64> {
+        self.elastic(g_pa / self.g_assembled_pa, target)
+            .get(rank)
+            .copied()
+    }
+
     /// The elastic eigenvalues (Re λ above 1e-6 of the target's) at scale `s`, increasing.
     fn elastic(&self, s: Complex64, target: Complex64) -> Vec<Complex64> {
         self.model
@@ -189,14 +241,15 @@ impl LayeredInverse {
     /// different moduli: the start picks the branch).
     ///
     /// # Errors
-    /// [`BenchError::Solver`] when the iteration does not converge to 1e-9 relative in 40
-    /// steps or leaves the physical range (G' ≤ 0).
+    /// [`LayeredError::Invalid`] when no elastic mode lies within [`MATCH_WINDOW`] of the target
+    /// in frequency at the start; [`LayeredError::Solver`] when the iteration does not converge
+    /// to 1e-9 relative in 40 steps or leaves the physical range (G' ≤ 0).
     pub fn invert(
         &self,
         target: Complex64,
         g_start: Complex64,
-    ) -> Result<LayeredEstimate, BenchError> {
-        let fail = |why: String| BenchError::Solver(format!("layered inverse: {why}"));
+    ) -> Result<LayeredEstimate, LayeredError> {
+        let fail = |why: String| LayeredError::Solver(format!("layered inverse: {why}"));
         let mut s0 = g_start / self.g_assembled_pa;
         let start = self.elastic(s0, target);
         let rank = (0..start.len())
@@ -206,7 +259,17 @@ impl LayeredInverse {
                     .total_cmp(&(start[b] - target).norm())
             })
             .ok_or_else(|| fail("no elastic eigenvalue".into()))?;
-        let residual = |s: Complex64| -> Result<(Complex64, Complex64), BenchError> {
+        let hz = |l: Complex64| l.re.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
+        if (hz(start[rank]) / hz(target) - 1.0).abs() > MATCH_WINDOW {
+            return Err(LayeredError::Invalid(format!(
+                "the pole at {:.3} Hz matches no mode of the layered model: the nearest lies at {:.3} Hz with G* = {:.4e} Pa (more than {} % off)",
+                hz(target),
+                hz(start[rank]),
+                g_start,
+                100.0 * MATCH_WINDOW
+            )));
+        }
+        let residual = |s: Complex64| -> Result<(Complex64, Complex64), LayeredError> {
             let l = *self
                 .elastic(s, target)
                 .get(rank)
@@ -222,6 +285,7 @@ impl LayeredInverse {
                     core_shear_pa: s1 * self.g_assembled_pa,
                     eigenvalue: lambda,
                     iterations: k,
+                    rank,
                 });
             }
             if r1 == r0 {
@@ -249,6 +313,31 @@ impl LayeredInverse {
     }
 }
 
+/// The tests' small flat laminate: 0.5 × 0.4 m, glass 3 mm / core 0.76 mm / glass 3 mm.
+#[cfg(test)]
+pub(crate) fn small_test_plate() -> LayeredPlate {
+    let face = InverseLayer {
+        thickness_m: 3e-3,
+        density_kg_m3: 2500.0,
+        poisson: 0.22,
+        young_pa: Some(70e9),
+        loss_factor: 0.0,
+    };
+    let core = InverseLayer {
+        thickness_m: 0.76e-3,
+        density_kg_m3: 1070.0,
+        poisson: 0.49,
+        young_pa: None,
+        loss_factor: 0.0,
+    };
+    LayeredPlate {
+        plan_m: [0.5, 0.4],
+        radii_m: [f64::INFINITY, f64::INFINITY],
+        edge_grading: 0.0,
+        layers: vec![face, core, face],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -256,29 +345,8 @@ mod tests {
     /// The forward model's eigenvalue at a known G* is inverted back to that G*.
     #[test]
     fn inverts_its_own_eigenvalues() {
-        let face = InverseLayer {
-            thickness_m: 3e-3,
-            density_kg_m3: 2500.0,
-            poisson: 0.22,
-            young_pa: Some(70e9),
-            loss_factor: 0.0,
-        };
-        let core = InverseLayer {
-            thickness_m: 0.76e-3,
-            density_kg_m3: 1070.0,
-            poisson: 0.49,
-            young_pa: None,
-            loss_factor: 0.0,
-        };
-        let inv = LayeredInverse::build(
-            [0.5, 0.4],
-            [f64::INFINITY, f64::INFINITY],
-            [4, 4],
-            &[face, core, face],
-            5e6,
-            12,
-        )
-        .unwrap();
+        let plate = small_test_plate();
+        let inv = LayeredInverse::build(&plate, [4, 4], 5e6, 12).unwrap();
         let truth = Complex64::new(3e6, 1.5e6);
         let lambdas = inv.eigenvalues(truth);
         let elastic: Vec<Complex64> = lambdas.into_iter().filter(|l| l.re > 1.0).collect();

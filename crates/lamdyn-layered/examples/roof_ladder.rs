@@ -1,0 +1,125 @@
+//! The convergence ladder on the paper's roof (glass 1.715 mm / PVB 0.42 mm / glass, 0.923 ×
+//! 0.8632 m, radii 3 m and 5 m, free), against a truth on a finer, edge-graded mesh:
+//! `roof_ladder TRUTH_N TRUTH_GRADING START_N [TOLERANCE [MAX_LEVELS]]`.
+//!
+//! The truth's poles: for each elastic mode below 80 Hz, λ on the truth mesh at the core's
+//! G*(f) of the demo's fractional Zener law, with f iterated to the mode's own frequency. The
+//! ladder then starts from G* 30 % off and its result is compared with G*(f). Prints one row
+//! per mode and the timings (docs/run.md, "Convergence of the layered inverse").
+
+use lamdyn_layered::convergence::{LadderSettings, build_level, converge};
+use lamdyn_layered::inverse::{InverseLayer, LayeredInverse, LayeredPlate};
+use lamdyn_material::law::FractionalZener;
+use lamdyn_material::law::ViscoelasticLaw;
+use num_complex::Complex64;
+use std::f64::consts::PI;
+use std::time::Instant;
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    let arg = |i: usize, d: &str| a.get(i).cloned().unwrap_or(d.into());
+    let truth_n: usize = arg(1, "32").parse().expect("TRUTH_N");
+    let truth_grading: f64 = arg(2, "0.3").parse().expect("TRUTH_GRADING");
+    let start_n: usize = arg(3, "12").parse().expect("START_N");
+    let settings = LadderSettings {
+        tolerance: arg(4, "1e-4").parse().expect("TOLERANCE"),
+        max_levels: arg(5, "4").parse().expect("MAX_LEVELS"),
+        ..LadderSettings::default()
+    };
+    let glass = InverseLayer {
+        thickness_m: 1.715e-3,
+        density_kg_m3: 2500.0,
+        poisson: 0.22,
+        young_pa: Some(70e9),
+        loss_factor: 0.0,
+    };
+    let pvb = InverseLayer {
+        thickness_m: 0.42e-3,
+        density_kg_m3: 1070.0,
+        poisson: 0.49,
+        young_pa: None,
+        loss_factor: 0.0,
+    };
+    let law = FractionalZener::new(0.8e6, 1.0e9, 3e-7, 0.4).expect("law");
+    let g = |f: f64| law.modulus(2.0 * PI * f);
+    let plate = |grading: f64| LayeredPlate {
+        plan_m: [0.923, 0.8632],
+        radii_m: [3.0, 5.0],
+        edge_grading: grading,
+        layers: vec![glass, pvb, glass],
+    };
+    let g_ref = 16e6;
+    let t = Instant::now();
+    let truth =
+        LayeredInverse::build(&plate(truth_grading), [truth_n; 2], g_ref, 20).expect("truth model");
+    let truth_s = t.elapsed().as_secs_f64();
+    let hz = |l: Complex64| l.re.sqrt() / (2.0 * PI);
+    let mut poles = Vec::new();
+    // Elastic modes: Re λ above 1e-6 of a 10 Hz mode's.
+    let elastic = Complex64::new((2.0 * PI * 10.0f64).powi(2), 0.0);
+    for rank in 0..12 {
+        let mut f = 30.0;
+        let mut lambda = Complex64::new(0.0, 0.0);
+        for _ in 0..30 {
+            lambda = truth.elastic_eigenvalue(g(f), rank, elastic).expect("mode");
+            f = hz(lambda);
+        }
+        if f > 80.0 {
+            break;
+        }
+        poles.push((f, lambda));
+    }
+    let targets: Vec<Complex64> = poles.iter().map(|p| p.1).collect();
+    let starts: Vec<Complex64> = poles.iter().map(|p| g(p.0) * 1.3).collect();
+    let t = Instant::now();
+    let coarsest = LayeredInverse::build(&plate(0.0), [start_n; 2], g_ref, 30).expect("model");
+    let coarsest_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let out = converge(
+        &coarsest,
+        [start_n; 2],
+        &|m| build_level(&plate(0.0), m, g_ref, settings.modes),
+        &targets,
+        &starts,
+        &settings,
+        &|m| eprintln!("{m}"),
+    );
+    let ladder_s = t.elapsed().as_secs_f64();
+    let (dofs, _) = truth.size();
+    println!(
+        "truth {truth_n} x {truth_n} grading {truth_grading} ({dofs} dofs, {truth_s:.1} s); coarsest {start_n} x {start_n} ({coarsest_s:.1} s); ladder {ladder_s:.1} s"
+    );
+    let out = match out {
+        Ok(o) => o,
+        Err(e) => {
+            println!("ladder: {e}");
+            return;
+        }
+    };
+    println!("meshes {:?} dofs {:?}", out.meshes, out.dofs);
+    println!(
+        "f_Hz  G'_err_%  eta_err_%  coarsest_G'_err_%  coarsest_eta_err_%  f_err_finest  eta_err_finest  residual_f  band_G'_%  band_eta_%  p  p_loss"
+    );
+    let eta = |x: Complex64| x.im / x.re;
+    for ((f, _), m) in poles.iter().zip(&out.modes) {
+        let truth = g(*f);
+        match m {
+            Ok(m) => println!(
+                "{f:.3}  {:+.3}  {:+.3}  {:+.2}  {:+.2}  {:+.2e}  {:+.2e}  {:.1e}  {:.2}  {:.2}  {:.2}  {:.2}{}",
+                100.0 * (m.core_shear_pa.re / truth.re - 1.0),
+                100.0 * (eta(m.core_shear_pa) / eta(truth) - 1.0),
+                100.0 * (m.coarsest_pa.re / truth.re - 1.0),
+                100.0 * (eta(m.coarsest_pa) / eta(truth) - 1.0),
+                m.freq_error,
+                m.loss_error,
+                m.residual_freq_error,
+                100.0 * m.storage_band,
+                100.0 * m.loss_band,
+                m.order,
+                m.loss_order,
+                if m.monotone { "" } else { " (not monotone)" }
+            ),
+            Err(e) => println!("{f:.3}  {e}"),
+        }
+    }
+}

@@ -1,0 +1,451 @@
+//! Convergence control of the layered inverse: a ladder of meshes, Richardson extrapolation of
+//! each mode's complex eigenvalue, and the core's G* of the extrapolated model.
+//!
+//! For a glass laminate with a stiff interlayer d ln f / d ln G ≈ 0.03: a model that is
+//! 0.03 % too stiff in frequency puts G about 1 % too low. No affordable mesh is that close,
+//! so the inverse does not trust one mesh. It builds the model on a ladder of in-plane meshes
+//! n_k = round(n_0 r^k) (r = [`LadderSettings::ratio`], h_k = 1/√(n_x n_y)) and, at each mode's
+//! G*, reads the same mode's eigenvalue λ_k(G*) on every level. With λ_k = λ_∞ + C h_k^p the
+//! last three levels a, b, c give the order p from
+//!
+//!   (λ_a − λ_b)/(λ_b − λ_c) = (h_a^p − h_b^p)/(h_b^p − h_c^p)   (real parts, bisection on p),
+//!
+//! and the extrapolated eigenvalue λ_∞ = λ_c + (λ_c − λ_b) h_c^p/(h_b^p − h_c^p) (Richardson);
+//! the imaginary part (the loss, which converges more slowly) gets its own order the same way.
+//! The model used is the coarsest level corrected by δ = λ_∞/λ_0: G* solves λ_0(G*) = λ_meas/δ,
+//! i.e. λ_∞(G*) = λ_meas; two passes re-evaluate δ at the new G*.
+//!
+//! What is reported per mode: the finest level's relative error in frequency √(Re λ_c/Re λ_∞) − 1
+//! and in loss factor η_c/η_∞ − 1 (η = Im λ/Re λ); the change in G* from the coarsest
+//! mesh's uncorrected answer; and the error left in the extrapolated model. That residual is
+//! taken as a quarter of the finest level's error (the safety factor 1.25 of Roache's grid
+//! convergence index over a three-grid study: the band on the fine value is 1.25 times the
+//! Richardson estimate, so the extrapolated value's own error is bounded by the extra 0.25),
+//! and its effect on G* is found by solving again with the target moved by it. The ladder
+//! grows until every mode's residual frequency error is at most [`LadderSettings::tolerance`],
+//! or stops at [`LadderSettings::max_levels`] with [`LayeredError::Tolerance`] saying how far it
+//! got. When the three levels do not converge monotonically in either part (p undefined), that
+//! part is extrapolated with p = 2 and the residual is half the last difference λ_c/λ_b − 1.
+//!
+//! The coarsest level is the caller's [`LayeredInverse`] (its basis spans G_ref/4 … 4 G_ref);
+//! the finer levels have a basis at G_ref alone with its core sensitivities, which spans the
+//! first order in G (`level_basis_is_accurate_over_the_range` in the tests checks its
+//! eigenvalues against the three-modulus basis).
+
+use crate::error::LayeredError;
+use crate::inverse::{LayeredInverse, LayeredPlate};
+use num_complex::Complex64;
+use rayon::prelude::*;
+
+/// Settings of the mesh ladder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LadderSettings {
+    /// Refinement ratio between levels (> 1).
+    pub ratio: f64,
+    /// Largest number of levels (at least 3, the coarsest included).
+    pub max_levels: usize,
+    /// Largest residual relative frequency error accepted (module docs).
+    pub tolerance: f64,
+    /// Modes in each finer level's basis.
+    pub modes: usize,
+}
+
+impl Default for LadderSettings {
+    fn default() -> Self {
+        Self {
+            ratio: 4.0 / 3.0,
+            max_levels: 4,
+            tolerance: 1e-4,
+            modes: 20,
+        }
+    }
+}
+
+/// One mode through the ladder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConvergedMode {
+    /// G* of the core through the extrapolated model, Pa.
+    pub core_shear_pa: Complex64,
+    /// G* through the coarsest mesh alone, uncorrected, Pa.
+    pub coarsest_pa: Complex64,
+    /// The finest level's relative frequency error, √(Re λ_c/Re λ_∞) − 1.
+    pub freq_error: f64,
+    /// The finest level's relative loss-factor error, η_c/η_∞ − 1.
+    pub loss_error: f64,
+    /// Estimated relative frequency error left in the extrapolated model (module docs).
+    pub residual_freq_error: f64,
+    /// Half-width of G' from the residual, relative to G'.
+    pub storage_band: f64,
+    /// Half-width of the core's loss factor from the residual, relative to it.
+    pub loss_band: f64,
+    /// Observed order p of Re λ's convergence (2 when not monotone).
+    pub order: f64,
+    /// Observed order of Im λ's convergence (2 when not monotone).
+    pub loss_order: f64,
+    /// Whether the last three levels converged monotonically, in both parts.
+    pub monotone: bool,
+}
+
+/// The ladder's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Converged {
+    /// Per target: the mode, or why it failed.
+    pub modes: Vec<Result<ConvergedMode, LayeredError>>,
+    /// In-plane elements of each level, coarsest first.
+    pub meshes: Vec<[usize; 2]>,
+    /// Dofs of each level.
+    pub dofs: Vec<usize>,
+}
+
+/// The order p from three levels (module docs), or `None` when they are not monotone.
+pub fn observed_order(h: [f64; 3], y: [f64; 3]) -> Option<f64> {
+    let (d1, d2) = (y[0] - y[1], y[1] - y[2]);
+    if d1 == 0.0 || d2 == 0.0 || (d1 > 0.0) != (d2 > 0.0) {
+        return None;
+    }
+    let want = d1 / d2;
+    let f = |p: f64| (h[0].powf(p) - h[1].powf(p)) / (h[1].powf(p) - h[2].powf(p));
+    let (mut lo, mut hi) = (0.5, 10.0);
+    if want <= f(lo) {
+        return Some(lo);
+    }
+    if want >= f(hi) {
+        return Some(hi);
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) < want { lo = mid } else { hi = mid }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+/// Richardson's extrapolation of the finest two levels (h_b > h_c) with order p.
+pub fn extrapolate(h: [f64; 2], y: [Complex64; 2], p: f64) -> Complex64 {
+    let (b, c) = (h[0].powf(p), h[1].powf(p));
+    y[1] + (y[1] - y[0]) * (c / (b - c))
+}
+
+/// The in-plane mesh of level `k`.
+fn level_mesh(start: [usize; 2], ratio: f64, k: usize) -> [usize; 2] {
+    start.map(|n| (n as f64 * ratio.powi(k as i32)).round() as usize)
+}
+
+/// The mesh parameter h of a level.
+fn h_of(mesh: [usize; 2]) -> f64 {
+    1.0 / ((mesh[0] * mesh[1]) as f64).sqrt()
+}
+
+/// The finer levels' model of `plate` on `elements` (module docs): the basis at G_ref alone,
+/// `modes` modes.
+///
+/// # Errors
+/// As [`LayeredInverse::build`].
+pub fn build_level(
+    plate: &LayeredPlate,
+    elements: [usize; 2],
+    g_ref_pa: f64,
+    modes: usize,
+) -> Result<LayeredInverse, LayeredError> {
+    LayeredInverse::build_with_ratios(plate, elements, g_ref_pa, modes, &[1.0])
+}
+
+/// Runs the ladder (module docs): `coarsest` is the plate's model on `start` elements;
+/// `level` builds a finer level's model on the elements it is given ([`build_level`], or a
+/// cached copy of it); `targets` are the measured −p², `starts` the first guesses of G*.
+///
+/// # Errors
+/// [`LayeredError::Invalid`] for settings out of range or mismatched lengths;
+/// [`LayeredError::Tolerance`] when the ladder stops before the tolerance is met; errors of
+/// the finer levels' builds. A target that fails alone (no matching mode) is an `Err` in
+/// [`Converged::modes`].
+pub fn converge(
+    coarsest: &LayeredInverse,
+    start: [usize; 2],
+    level: &(dyn Fn([usize; 2]) -> Result<LayeredInverse, LayeredError> + Sync),
+    targets: &[Complex64],
+    starts: &[Complex64],
+    settings: &LadderSettings,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Converged, LayeredError> {
+    validate(settings, targets, starts)?;
+    let mut meshes: Vec<[usize; 2]> = (0..3)
+        .map(|k| level_mesh(start, settings.ratio, k))
+        .collect();
+    let build = |m: [usize; 2]| {
+        progress(&format!("layered level {} x {}", m[0], m[1]));
+        level(m)
+    };
+    let mut finer: Vec<LayeredInverse> = meshes[1..]
+        .par_iter()
+        .map(|&m| build(m))
+        .collect::<Result<_, _>>()?;
+    loop {
+        let levels: Vec<&LayeredInverse> = std::iter::once(coarsest).chain(finer.iter()).collect();
+        let h: Vec<f64> = meshes.iter().map(|&m| h_of(m)).collect();
+        let modes: Vec<Result<ConvergedMode, LayeredError>> = targets
+            .iter()
+            .zip(starts)
+            .map(|(&t, &s)| one_mode(&levels, &h, t, s))
+            .collect();
+        let worst = modes
+            .iter()
+            .filter_map(|m| m.as_ref().ok())
+            .map(|m| m.residual_freq_error)
+            .fold(0.0, f64::max);
+        let mut dofs = vec![coarsest.size().0];
+        dofs.extend(finer.iter().map(|l| l.size().0));
+        if worst <= settings.tolerance {
+            return Ok(Converged {
+                modes,
+                meshes,
+                dofs,
+            });
+        }
+        if meshes.len() >= settings.max_levels {
+            let last = meshes[meshes.len() - 1];
+            return Err(LayeredError::Tolerance(format!(
+                "the layered model's estimated frequency error {worst:.2e} is above the tolerance {:.1e} after {} levels up to {} x {} elements ({} dofs); raise inverse.tolerance or the number of levels",
+                settings.tolerance,
+                meshes.len(),
+                last[0],
+                last[1],
+                dofs[dofs.len() - 1]
+            )));
+        }
+        let next = level_mesh(start, settings.ratio, meshes.len());
+        finer.push(build(next)?);
+        meshes.push(next);
+    }
+}
+
+/// Checks the settings and the lengths.
+fn validate(
+    settings: &LadderSettings,
+    targets: &[Complex64],
+    starts: &[Complex64],
+) -> Result<(), LayeredError> {
+    let bad = |why: String| Err(LayeredError::Invalid(why));
+    if !(settings.tolerance.is_finite() && settings.tolerance > 0.0) {
+        return bad(format!(
+            "inverse.tolerance: {} must be a positive relative frequency error",
+            settings.tolerance
+        ));
+    }
+    if !(settings.ratio.is_finite() && settings.ratio >= 1.1) {
+        return bad(format!(
+            "ladder ratio {} must be at least 1.1",
+            settings.ratio
+        ));
+    }
+    if settings.max_levels < 3 {
+        return bad(format!(
+            "the ladder needs at least 3 levels to estimate its order, got {}",
+            settings.max_levels
+        ));
+    }
+    if targets.len() != starts.len() {
+        return bad(format!(
+            "{} targets but {} starting moduli",
+            targets.len(),
+            starts.len()
+        ));
+    }
+    Ok(())
+}
+
+/// One target through the ladder (module docs).
+fn one_mode(
+    levels: &[&LayeredInverse],
+    h: &[f64],
+    target: Complex64,
+    start: Complex64,
+) -> Result<ConvergedMode, LayeredError> {
+    let coarsest = levels[0];
+    let first = coarsest.invert(target, start)?;
+    let rank = first.rank;
+    let mut g = first.core_shear_pa;
+    let mut state = ladder_at(levels, h, g, rank, target)?;
+    for _ in 0..2 {
+        let delta = state.extrapolated / state.values[0];
+        g = coarsest.invert(target / delta, g)?.core_shear_pa;
+        state = ladder_at(levels, h, g, rank, target)?;
+    }
+    let n = state.values.len();
+    let finest = state.values[n - 1];
+    let ext = state.extrapolated;
+    let eta = |l: Complex64| l.im / l.re;
+    let freq_error = (finest.re / ext.re).sqrt() - 1.0;
+    let loss_error = eta(finest) / eta(ext) - 1.0;
+    let (residual, residual_freq_error) = if state.monotone {
+        (0.25 * (finest / ext - 1.0), 0.25 * freq_error.abs())
+    } else {
+        let d = 0.5 * (finest / state.values[n - 2] - 1.0);
+        (d, 0.5 * d.re.abs())
+    };
+    // G* with the target moved by the residual: the band's half-width.
+    let delta = ext / state.values[0];
+    let moved = coarsest
+        .invert(target / (delta * (1.0 + residual)), g)?
+        .core_shear_pa;
+    let eta_g = |x: Complex64| x.im / x.re;
+    Ok(ConvergedMode {
+        core_shear_pa: g,
+        coarsest_pa: first.core_shear_pa,
+        freq_error,
+        loss_error,
+        residual_freq_error,
+        storage_band: (moved.re / g.re - 1.0).abs(),
+        loss_band: (eta_g(moved) / eta_g(g) - 1.0).abs(),
+        order: state.order,
+        loss_order: state.loss_order,
+        monotone: state.monotone,
+    })
+}
+
+/// A mode's eigenvalue on every level at one G*, and its extrapolation.
+struct LadderState {
+    values: Vec<Complex64>,
+    extrapolated: Complex64,
+    order: f64,
+    loss_order: f64,
+    monotone: bool,
+}
+
+/// The eigenvalue of elastic rank `rank` on every level at `g`, extrapolated from the last
+/// three (module docs).
+fn ladder_at(
+    levels: &[&LayeredInverse],
+    h: &[f64],
+    g: Complex64,
+    rank: usize,
+    target: Complex64,
+) -> Result<LadderState, LayeredError> {
+    let values: Vec<Complex64> = levels
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            l.elastic_eigenvalue(g, rank, target).ok_or_else(|| {
+                LayeredError::Solver(format!(
+                    "level {} of the ladder has no elastic mode {}",
+                    k + 1,
+                    rank + 1
+                ))
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    let n = values.len();
+    let hh = [h[n - 3], h[n - 2], h[n - 1]];
+    let part = |f: fn(&Complex64) -> f64| {
+        let y = [f(&values[n - 3]), f(&values[n - 2]), f(&values[n - 1])];
+        let p = observed_order(hh, y);
+        let ext = extrapolate(
+            [hh[1], hh[2]],
+            [Complex64::new(y[1], 0.0), Complex64::new(y[2], 0.0)],
+            p.unwrap_or(2.0),
+        );
+        (ext.re, p)
+    };
+    // Real and imaginary parts each at their own order: the loss converges more slowly.
+    let (re, order_re) = part(|l| l.re);
+    let (im, order_im) = part(|l| l.im);
+    let extrapolated = Complex64::new(re, im);
+    let monotone = order_re.is_some() && order_im.is_some();
+    let order = order_re.unwrap_or(2.0);
+    let loss_order = order_im.unwrap_or(2.0);
+    Ok(LadderState {
+        values,
+        extrapolated,
+        order,
+        loss_order,
+        monotone,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The order of an exact power law is found, and its extrapolation is exact.
+    #[test]
+    fn order_and_extrapolation_of_a_power_law() {
+        let h: [f64; 3] = [1.0 / 12.0, 1.0 / 16.0, 1.0 / 21.0];
+        let y = h.map(|x| 5.0 + 30.0 * x.powf(3.6));
+        let p = observed_order(h, y).unwrap();
+        assert!((p - 3.6).abs() < 1e-9, "{p}");
+        let e = extrapolate(
+            [h[1], h[2]],
+            [Complex64::new(y[1], 0.0), Complex64::new(y[2], 0.0)],
+            p,
+        );
+        assert!((e.re - 5.0).abs() < 1e-12, "{e}");
+        // Not monotone: no order.
+        assert!(observed_order(h, [1.0, 0.9, 0.95]).is_none());
+    }
+
+    /// A tolerance the ladder cannot meet in its levels is an error that says how far it got;
+    /// a met one converges, and the ladder's answer lies nearer the finer meshes' than the
+    /// coarsest's; a target far from every mode is refused for that mode alone.
+    #[test]
+    fn ladder_meets_or_says_how_far_it_got() {
+        let plate = crate::inverse::small_test_plate();
+        let g_ref = 4e6;
+        let start = [3, 3];
+        let coarsest = LayeredInverse::build(&plate, start, g_ref, 12).unwrap();
+        // Targets: the first two elastic modes of a finer model at a known G*.
+        let truth = Complex64::new(3e6, 1.5e6);
+        let fine = build_level(&plate, [8, 8], g_ref, 12).unwrap();
+        let anchor = Complex64::new(1e3, 0.0);
+        let mut targets: Vec<Complex64> = (0..2)
+            .map(|r| fine.elastic_eigenvalue(truth, r, anchor).unwrap())
+            .collect();
+        // A pole at half the first mode's frequency: no mode of the plate.
+        targets.push(targets[0] * 0.25);
+        let starts = vec![truth * 1.2; 3];
+        let level = |m: [usize; 2]| build_level(&plate, m, g_ref, 12);
+        let strict = LadderSettings {
+            tolerance: 1e-12,
+            max_levels: 3,
+            modes: 12,
+            ..LadderSettings::default()
+        };
+        let e = converge(
+            &coarsest,
+            start,
+            &level,
+            &targets,
+            &starts,
+            &strict,
+            &|_| {},
+        )
+        .unwrap_err();
+        let text = e.to_string();
+        assert!(matches!(e, LayeredError::Tolerance(_)), "{e:?}");
+        assert!(
+            text.contains("above the tolerance 1.0e-12 after 3 levels up to 5 x 5"),
+            "{text}"
+        );
+        let loose = LadderSettings {
+            tolerance: 1e-2,
+            ..strict
+        };
+        let out = converge(&coarsest, start, &level, &targets, &starts, &loose, &|_| {}).unwrap();
+        assert_eq!(out.meshes, vec![[3, 3], [4, 4], [5, 5]]);
+        for m in &out.modes[..2] {
+            let m = m.as_ref().unwrap();
+            assert!(m.residual_freq_error <= 1e-2 && m.freq_error > 0.0, "{m:?}");
+            // The correction moves G' the way a too-stiff coarse mesh needs (upwards).
+            assert!(m.core_shear_pa.re > m.coarsest_pa.re, "{m:?}");
+        }
+        let e = out.modes[2].as_ref().unwrap_err().to_string();
+        assert!(e.contains("matches no mode of the layered model"), "{e}");
+        // Settings out of range name what is wrong.
+        let bad = LadderSettings {
+            tolerance: 0.0,
+            ..loose
+        };
+        let e = converge(&coarsest, start, &level, &targets, &starts, &bad, &|_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("inverse.tolerance"), "{e}");
+    }
+}
