@@ -281,7 +281,7 @@ fn default_ladder_tolerance() -> f64 {
     1e-4
 }
 fn default_layered_levels() -> usize {
-    4
+    5
 }
 
 fn default_kinematics() -> KinematicsChoice {
