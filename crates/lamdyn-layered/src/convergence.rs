@@ -35,7 +35,7 @@
 //! eigenvalues against the three-modulus basis).
 
 use crate::error::LayeredError;
-use crate::inverse::{LayeredInverse, LayeredPlate};
+use crate::inverse::{LayeredEstimate, LayeredInverse, LayeredPlate};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -56,7 +56,7 @@ impl Default for LadderSettings {
     fn default() -> Self {
         Self {
             ratio: 4.0 / 3.0,
-            max_levels: 4,
+            max_levels: 5,
             tolerance: 1e-4,
             modes: 20,
         }
@@ -177,6 +177,12 @@ pub fn converge(
         progress(&format!("layered level {} x {}", m[0], m[1]));
         level(m)
     };
+    // Each target on the coarsest mesh alone: the start of every pass, once for all levels.
+    let first: Vec<Result<LayeredEstimate, LayeredError>> = targets
+        .iter()
+        .zip(starts)
+        .map(|(&t, &s)| coarsest.invert(t, s))
+        .collect();
     let mut finer: Vec<LayeredInverse> = meshes[1..]
         .par_iter()
         .map(|&m| build(m))
@@ -186,8 +192,8 @@ pub fn converge(
         let h: Vec<f64> = meshes.iter().map(|&m| h_of(m)).collect();
         let modes: Vec<Result<ConvergedMode, LayeredError>> = targets
             .iter()
-            .zip(starts)
-            .map(|(&t, &s)| one_mode(&levels, &h, t, s))
+            .zip(&first)
+            .map(|(&t, f)| one_mode(&levels, &h, t, f.clone()?))
             .collect();
         let worst = modes
             .iter()
@@ -255,15 +261,15 @@ fn validate(
     Ok(())
 }
 
-/// One target through the ladder (module docs).
+/// One target through the ladder (module docs), from its estimate `first` on the coarsest
+/// mesh alone.
 fn one_mode(
     levels: &[&LayeredInverse],
     h: &[f64],
     target: Complex64,
-    start: Complex64,
+    first: LayeredEstimate,
 ) -> Result<ConvergedMode, LayeredError> {
     let coarsest = levels[0];
-    let first = coarsest.invert(target, start)?;
     let rank = first.rank;
     let mut g = first.core_shear_pa;
     let mut state = ladder_at(levels, h, g, rank, target)?;

@@ -10,6 +10,7 @@ use crate::measurement::ExcitationKind;
 use lamdyn_fem::model::ModelSpec;
 use lamdyn_fit::fit::{Covariance, LawKind};
 use lamdyn_fit::misfit::{MisfitKind, MisfitSpec};
+use lamdyn_layered::convergence::LadderSettings;
 use lamdyn_material::laminate::StackSpec;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -278,10 +279,10 @@ fn default_layered_modes() -> usize {
     30
 }
 fn default_ladder_tolerance() -> f64 {
-    1e-4
+    LadderSettings::default().tolerance
 }
 fn default_layered_levels() -> usize {
-    5
+    LadderSettings::default().max_levels
 }
 
 fn default_kinematics() -> KinematicsChoice {
