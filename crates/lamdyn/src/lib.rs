@@ -41,11 +41,19 @@ pub enum Outcome {
 
 /// Runs the CLI on `args` (program name first), writing results to `out` and messages to `err`.
 /// Returns the process exit code. Never panics on user input.
+///
+/// Every command gives the same bits on any thread count: faer's global parallelism is set to
+/// sequential here, at each call and not only in `main`, so that commands run in one process
+/// (the integration tests run many at once) all see the same setting
+/// ([`lamdyn_pipeline::same_bits_on_any_thread_count`]). The CI once saw `lamdyn fit` differ
+/// in its last digit between two in-process calls because a `run` command beside it had
+/// switched faer to sequential between them.
 pub fn run<I, T>(args: I, out: &mut dyn Write, err: &mut dyn Write) -> u8
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
+    lamdyn_pipeline::same_bits_on_any_thread_count();
     let cli = match cli::Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {

@@ -8,7 +8,6 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    lamdyn_pipeline::same_bits_on_any_thread_count();
     let mut stdout = std::io::stdout();
     let mut stderr = std::io::stderr();
     ExitCode::from(lamdyn::run(std::env::args_os(), &mut stdout, &mut stderr))
