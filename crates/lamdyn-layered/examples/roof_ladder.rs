@@ -1,15 +1,18 @@
 //! The convergence ladder on the paper's roof (glass 1.715 mm / PVB 0.42 mm / glass, 0.923 ×
 //! 0.8632 m, radii 3 m and 5 m, free), against a truth on a finer, edge-graded mesh:
-//! `roof_ladder TRUTH_N TRUTH_GRADING START_N [TOLERANCE [MAX_LEVELS]]`.
+//! `roof_ladder TRUTH_N TRUTH_GRADING START_N [TOLERANCE [MAX_LEVELS [SHIFT]]]`, SHIFT the WLF
+//! factor a_T of the core's law (1: the demo's 20 °C; 7.2: its 14 °C, c1 = 12, c2 = 90 K).
 //!
 //! The truth's poles: for each elastic mode below 80 Hz, λ on the truth mesh at the core's
 //! G*(f) of the demo's fractional Zener law, with f iterated to the mode's own frequency. The
 //! ladder then starts from G* 30 % off and its result is compared with G*(f). Prints one row
 //! per mode and the timings (docs/run.md, "Convergence of the layered inverse").
 
+#[path = "common/roof.rs"]
+mod roof;
+
 use lamdyn_layered::convergence::{LadderSettings, build_level, converge};
-use lamdyn_layered::inverse::{InverseLayer, LayeredInverse, LayeredPlate};
-use lamdyn_material::law::FractionalZener;
+use lamdyn_layered::inverse::LayeredInverse;
 use lamdyn_material::law::ViscoelasticLaw;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -23,32 +26,15 @@ fn main() {
     let start_n: usize = arg(3, "12").parse().expect("START_N");
     let settings = LadderSettings {
         tolerance: arg(4, "1e-4").parse().expect("TOLERANCE"),
-        max_levels: arg(5, "4").parse().expect("MAX_LEVELS"),
+        max_levels: arg(5, "5").parse().expect("MAX_LEVELS"),
         ..LadderSettings::default()
     };
-    let glass = InverseLayer {
-        thickness_m: 1.715e-3,
-        density_kg_m3: 2500.0,
-        poisson: 0.22,
-        young_pa: Some(70e9),
-        loss_factor: 0.0,
-    };
-    let pvb = InverseLayer {
-        thickness_m: 0.42e-3,
-        density_kg_m3: 1070.0,
-        poisson: 0.49,
-        young_pa: None,
-        loss_factor: 0.0,
-    };
-    let law = FractionalZener::new(0.8e6, 1.0e9, 3e-7, 0.4).expect("law");
-    let g = |f: f64| law.modulus(2.0 * PI * f);
-    let plate = |grading: f64| LayeredPlate {
-        plan_m: [0.923, 0.8632],
-        radii_m: [3.0, 5.0],
-        edge_grading: grading,
-        layers: vec![glass, pvb, glass],
-    };
-    let g_ref = 16e6;
+    let law = roof::law();
+    let shift: f64 = arg(6, "1").parse().expect("SHIFT");
+    let g = |f: f64| law.modulus(2.0 * PI * f * shift);
+    let plate = roof::plate;
+    // G_ref as the chain takes it: a power of two near the core's G' mid-band.
+    let g_ref = 2f64.powf(g(40.0).re.log2().round());
     let t = Instant::now();
     let truth =
         LayeredInverse::build(&plate(truth_grading), [truth_n; 2], g_ref, 20).expect("truth model");

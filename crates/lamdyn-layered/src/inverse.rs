@@ -21,8 +21,9 @@
 
 use crate::error::LayeredError;
 use crate::hex20::Elastic;
-use crate::mesh::{LayerMesh, LayeredPlateSpec};
+use crate::mesh::{HexMesh, LayerMesh, LayeredPlateSpec};
 use crate::reduced::{ReducedEigen, ReducedModel};
+use crate::sensitivity::{Input, InputEffect, ModeSensitivity};
 use crate::system::LayeredSystem;
 use num_complex::Complex64;
 
@@ -83,6 +84,60 @@ pub const MATCH_WINDOW: f64 = 0.25;
 /// The reference moduli of the inverse's basis, as ratios to G_ref (module docs).
 pub const BASIS_RATIOS: [f64; 3] = [0.25, 1.0, 4.0];
 
+/// Relative step of the thickness derivatives' central differences ([`crate::sensitivity`]).
+const THICKNESS_STEP: f64 = 1e-4;
+
+/// The index of the stack's one core layer (no Young's modulus).
+fn core_layer(plate: &LayeredPlate) -> Result<usize, LayeredError> {
+    let cores: Vec<usize> = (0..plate.layers.len())
+        .filter(|&i| plate.layers[i].young_pa.is_none())
+        .collect();
+    match cores[..] {
+        [core] => Ok(core),
+        _ => Err(LayeredError::Invalid(format!(
+            "the layered inverse needs exactly one core layer (no young_pa), got {}",
+            cores.len()
+        ))),
+    }
+}
+
+/// The mesh of `plate` with `elements` in plane and its system, the core at `g_ref_pa`.
+fn assemble(
+    plate: &LayeredPlate,
+    elements: [usize; 2],
+    g_ref_pa: f64,
+) -> Result<(HexMesh, LayeredSystem), LayeredError> {
+    let materials: Vec<Elastic> = plate
+        .layers
+        .iter()
+        .map(|l| Elastic {
+            young_pa: l.young_pa.unwrap_or(2.0 * g_ref_pa * (1.0 + l.poisson)),
+            poisson: l.poisson,
+            density_kg_m3: l.density_kg_m3,
+        })
+        .collect();
+    let mesh = LayeredPlateSpec {
+        length_m: plate.plan_m[0],
+        width_m: plate.plan_m[1],
+        nx: elements[0],
+        ny: elements[1],
+        radius_x_m: plate.radii_m[0],
+        radius_y_m: plate.radii_m[1],
+        edge_grading: plate.edge_grading,
+        layers: plate
+            .layers
+            .iter()
+            .map(|l| LayerMesh {
+                thickness_m: l.thickness_m,
+                elements: 1,
+            })
+            .collect(),
+    }
+    .build()?;
+    let system = LayeredSystem::assemble(&mesh, &materials)?;
+    Ok((mesh, system))
+}
+
 impl LayeredInverse {
     /// Meshes and assembles `plate` with `elements` in plane and the core at `g_ref_pa`, and
     /// builds the reduced basis of `modes` modes at each of [`BASIS_RATIOS`] times G_ref.
@@ -112,25 +167,35 @@ impl LayeredInverse {
         modes: usize,
         ratios: &[f64],
     ) -> Result<Self, LayeredError> {
-        let layers = &plate.layers;
-        let cores: Vec<usize> = (0..layers.len())
-            .filter(|&i| layers[i].young_pa.is_none())
-            .collect();
-        let [core] = cores[..] else {
-            return Err(LayeredError::Invalid(format!(
-                "the layered inverse needs exactly one core layer (no young_pa), got {}",
-                cores.len()
-            )));
-        };
+        Self::build_with_inputs(plate, elements, g_ref_pa, modes, ratios, &[])
+    }
+
+    /// [`Self::build_with_ratios`] with the derivatives of the reduced matrices with respect to
+    /// `inputs` ([`crate::sensitivity`]; a thickness costs two more assemblies), for
+    /// [`Self::sensitivity`].
+    ///
+    /// # Errors
+    /// As [`Self::build`].
+    pub fn build_with_inputs(
+        plate: &LayeredPlate,
+        elements: [usize; 2],
+        g_ref_pa: f64,
+        modes: usize,
+        ratios: &[f64],
+        inputs: &[Input],
+    ) -> Result<Self, LayeredError> {
+        let core = core_layer(plate)?;
         if !(g_ref_pa.is_finite() && g_ref_pa > 0.0) {
             return Err(LayeredError::Invalid(format!(
                 "reference core modulus {g_ref_pa} Pa must be positive"
             )));
         }
-        let eta_e = layers
+        let eta_e = plate
+            .layers
             .iter()
             .find_map(|l| l.young_pa.map(|_| l.loss_factor));
-        if layers
+        if plate
+            .layers
             .iter()
             .any(|l| l.young_pa.is_some() && Some(l.loss_factor) != eta_e)
         {
@@ -138,32 +203,7 @@ impl LayeredInverse {
                 "the faces must share one loss factor".into(),
             ));
         }
-        let materials: Vec<Elastic> = layers
-            .iter()
-            .map(|l| Elastic {
-                young_pa: l.young_pa.unwrap_or(2.0 * g_ref_pa * (1.0 + l.poisson)),
-                poisson: l.poisson,
-                density_kg_m3: l.density_kg_m3,
-            })
-            .collect();
-        let mesh = LayeredPlateSpec {
-            length_m: plate.plan_m[0],
-            width_m: plate.plan_m[1],
-            nx: elements[0],
-            ny: elements[1],
-            radius_x_m: plate.radii_m[0],
-            radius_y_m: plate.radii_m[1],
-            edge_grading: plate.edge_grading,
-            layers: layers
-                .iter()
-                .map(|l| LayerMesh {
-                    thickness_m: l.thickness_m,
-                    elements: 1,
-                })
-                .collect(),
-        }
-        .build()?;
-        let system = LayeredSystem::assemble(&mesh, &materials)?;
+        let (mesh, system) = assemble(plate, elements, g_ref_pa)?;
         // A unit load at the first top node: its static residual vector rounds off the basis.
         let mut load = vec![0.0; system.n_dofs];
         let (node, _) = mesh
@@ -175,6 +215,32 @@ impl LayeredInverse {
         let shift = -(2.0 * std::f64::consts::PI).powi(2);
         let mut model = ReducedModel::new(&system, core, ratios, modes, &[load], shift)?;
         model.set_elastic_loss(eta_e.unwrap_or(0.0))?;
+        for &input in inputs {
+            let thick = |sign: f64| -> Result<LayeredSystem, LayeredError> {
+                let mut p = plate.clone();
+                for (l, layer) in p.layers.iter_mut().enumerate() {
+                    let face = l != core;
+                    if (input == Input::FaceThickness && face)
+                        || (input == Input::CoreThickness && !face)
+                    {
+                        layer.thickness_m *= 1.0 + sign * THICKNESS_STEP;
+                    }
+                }
+                Ok(assemble(&p, elements, g_ref_pa)?.1)
+            };
+            match input {
+                Input::FaceThickness | Input::CoreThickness => {
+                    let (plus, minus) = (thick(1.0)?, thick(-1.0)?);
+                    model.add_derivative(
+                        input,
+                        &system,
+                        core,
+                        Some((&plus, &minus, THICKNESS_STEP)),
+                    )?;
+                }
+                _ => model.add_derivative(input, &system, core, None)?,
+            }
+        }
         Ok(Self {
             model: model.free_eigenproblem(),
             g_assembled_pa: g_ref_pa,
@@ -233,6 +299,58 @@ impl LayeredInverse {
             .into_iter()
             .filter(|l| l.re > 1e-6 * target.re)
             .collect()
+    }
+
+    /// How the core's G* found at the mode of `rank` ([`LayeredEstimate::rank`]) moves with the
+    /// eigenvalue and with each input the model has derivatives for
+    /// ([`Self::build_with_inputs`]), at core modulus `g_pa` (the solution for `target`):
+    /// dG/d ln θ = −(∂λ/∂ln θ)/(∂λ/∂G), both by central differences with relative step 1e-4
+    /// ([`crate::sensitivity`]).
+    ///
+    /// # Errors
+    /// [`LayeredError::Solver`] when the mode of `rank` is lost in a perturbed model or λ does
+    /// not depend on G.
+    pub fn sensitivity(
+        &self,
+        g_pa: Complex64,
+        rank: usize,
+        target: Complex64,
+    ) -> Result<ModeSensitivity, LayeredError> {
+        const STEP: f64 = 1e-4;
+        let lost = || LayeredError::Solver(format!("sensitivity: mode {} lost", rank + 1));
+        let pick = |all: Vec<Complex64>| -> Result<Complex64, LayeredError> {
+            all.into_iter()
+                .filter(|l| l.re > 1e-6 * target.re)
+                .nth(rank)
+                .ok_or_else(lost)
+        };
+        let s = g_pa / self.g_assembled_pa;
+        let ds = s * STEP;
+        let dlambda_ds = (pick(self.model.eigenvalues(s + ds))?
+            - pick(self.model.eigenvalues(s - ds))?)
+            / (2.0 * ds);
+        let dlambda_dg = dlambda_ds / self.g_assembled_pa;
+        if dlambda_dg.norm() == 0.0 || !dlambda_dg.is_finite() {
+            return Err(LayeredError::Solver(
+                "sensitivity: the eigenvalue does not depend on the core".into(),
+            ));
+        }
+        let mut inputs = Vec::new();
+        for d in &self.model.derivatives {
+            let at = |eps: f64| -> Result<Complex64, LayeredError> {
+                pick(
+                    self.model
+                        .perturbed_eigenvalues(s, d.input, eps)
+                        .ok_or_else(lost)?,
+                )
+            };
+            let dlambda = (at(STEP)? - at(-STEP)?) / (2.0 * STEP);
+            inputs.push(InputEffect {
+                input: d.input,
+                dg_dln: -dlambda / dlambda_dg,
+            });
+        }
+        Ok(ModeSensitivity { dlambda_dg, inputs })
     }
 
     /// G* of the core that puts an eigenvalue of the model at `target` = −p² (module docs),
@@ -360,5 +478,69 @@ mod tests {
         assert_eq!(back.eigenvalues(truth), inv.eigenvalues(truth));
         assert_eq!(back.size(), inv.size());
         assert!(LayeredInverse::from_bytes(&inv.to_bytes()[..100]).is_none());
+    }
+
+    /// The sensitivities against two routes that share nothing with them: the scaling laws
+    /// λ(αE_f, αG) = αλ and λ(ρ/β) = βλ (face modulus; both densities together), and for the
+    /// thicknesses whole new models (meshed, reduced and inverted again) at t(1 ± 1e-3).
+    #[test]
+    fn sensitivities_follow_scaling_laws_and_rebuilt_models() {
+        let plate = small_test_plate();
+        let (n, modes, g_ref) = ([4, 4], 12, 5e6);
+        let inv =
+            LayeredInverse::build_with_inputs(&plate, n, g_ref, modes, &BASIS_RATIOS, &Input::ALL)
+                .unwrap();
+        let truth = Complex64::new(3e6, 1.5e6);
+        let targets: Vec<Complex64> = inv
+            .eigenvalues(truth)
+            .into_iter()
+            .filter(|l| l.re > 1.0)
+            .take(3)
+            .collect();
+        let start = Complex64::new(4e6, 1e6);
+        for &target in &targets {
+            let est = inv.invert(target, start).unwrap();
+            let g = est.core_shear_pa;
+            let sens = inv.sensitivity(g, est.rank, target).unwrap();
+            let effect = |i: Input| sens.inputs.iter().find(|e| e.input == i).unwrap().dg_dln;
+            // Face modulus: E_f ∂λ/∂E_f + G ∂λ/∂G = λ, so dG/d ln E_f = G − λ/(∂λ/∂G).
+            let scaling = g - target / sens.dlambda_dg;
+            let err = (effect(Input::FaceModulus) - scaling).norm() / g.norm();
+            assert!(err < 1e-6, "face modulus {err:e}");
+            // All densities by β: λ/β, so dG/d ln ρ (faces + core) = λ/(∂λ/∂G).
+            let both = effect(Input::FaceDensity) + effect(Input::CoreDensity);
+            let err = (both - target / sens.dlambda_dg).norm() / g.norm();
+            assert!(err < 1e-6, "densities {err:e}");
+            // Thicknesses: new models at t(1 ± h), the same target inverted on each.
+            for input in [Input::FaceThickness, Input::CoreThickness] {
+                let h = 1e-3;
+                let g_at = |sign: f64| {
+                    let mut p = plate.clone();
+                    for l in p.layers.iter_mut() {
+                        let face = l.young_pa.is_some();
+                        if face == (input == Input::FaceThickness) {
+                            l.thickness_m *= 1.0 + sign * h;
+                        }
+                    }
+                    let m = LayeredInverse::build(&p, n, g_ref, modes).unwrap();
+                    m.invert(target, g).unwrap().core_shear_pa
+                };
+                let rebuilt = (g_at(1.0) - g_at(-1.0)) / (2.0 * h);
+                let err = (effect(input) - rebuilt).norm() / rebuilt.norm();
+                // O(h²) of the difference and the two bases' own Rayleigh–Ritz errors.
+                assert!(
+                    err < 1e-3,
+                    "{input:?}: {err:e} ({} vs {rebuilt})",
+                    effect(input)
+                );
+            }
+        }
+        // The cached form keeps the derivatives.
+        let back = LayeredInverse::from_bytes(&inv.to_bytes()).unwrap();
+        let est = inv.invert(targets[0], start).unwrap();
+        assert_eq!(
+            back.sensitivity(est.core_shear_pa, est.rank, targets[0]),
+            inv.sensitivity(est.core_shear_pa, est.rank, targets[0])
+        );
     }
 }

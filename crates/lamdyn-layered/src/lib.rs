@@ -20,6 +20,7 @@
 //! | [`system`] | sparse K and M per layer, supports; lowest modes by shift-invert Lanczos |
 //! | [`reduced`] | reduced basis over a range of core moduli; FRFs and complex eigenvalues |
 //! | [`inverse`] | the core's G* per measured mode through the reduced model |
+//! | [`sensitivity`] | how G* moves with the face modulus, thicknesses and densities |
 //! | [`convergence`] | a ladder of meshes and Richardson extrapolation: the inverse converged to a tolerance |
 //! | [`seq`] | sequential products and eigenvalues (same bits on any thread count) |
 //!
@@ -34,6 +35,7 @@ pub mod hex20;
 pub mod inverse;
 pub mod mesh;
 pub mod reduced;
+pub mod sensitivity;
 pub mod seq;
 pub mod system;
 

@@ -20,6 +20,7 @@
 //! per line. The direct route factors the sparse complex Z(ω) (faer's sparse LU) per line.
 
 use crate::error::LayeredError;
+use crate::sensitivity::{Input, ReducedDerivative, pencil_eigenvalues};
 use crate::seq;
 use crate::system::LayeredSystem;
 use faer::linalg::solvers::Solve;
@@ -44,6 +45,8 @@ pub struct ReducedModel {
     k_core: Mat<f64>,
     /// Vᵀ M V (≈ I).
     mass: Mat<f64>,
+    /// Derivatives with respect to the inputs ([`crate::sensitivity`]), if computed.
+    derivatives: Vec<ReducedDerivative>,
 }
 
 /// Stiffness scale per layer: 1 everywhere, `core` on layer `core_layer`.
@@ -116,10 +119,7 @@ impl ReducedModel {
             at += c.ncols();
         }
         let basis = m_orthonormal(&v, &sys.m);
-        let project = |a: &SparseColMat<usize, f64>| {
-            let av = seq::sparse_mul(a, basis.as_ref());
-            seq::mul(basis.transpose(), av.as_ref())
-        };
+        let project = |a: &SparseColMat<usize, f64>| project_on(&basis, a);
         let mut k_elastic = Mat::<f64>::zeros(basis.ncols(), basis.ncols());
         for (l, k) in sys.k_layers.iter().enumerate() {
             if l != core_layer {
@@ -138,7 +138,89 @@ impl ReducedModel {
             k_core: project(&sys.k_layers[core_layer]),
             mass: project(&sys.m),
             basis,
+            derivatives: Vec::new(),
         })
+    }
+
+    /// Vᵀ A V.
+    pub fn project(&self, a: &SparseColMat<usize, f64>) -> Mat<f64> {
+        project_on(&self.basis, a)
+    }
+
+    /// Adds the derivatives with respect to `input` ([`crate::sensitivity`]) of this model's
+    /// matrices, `sys` being the system it was built from: the face modulus and the densities
+    /// from `sys`'s own per-layer operators (exact), a thickness from the central difference
+    /// of `plus` and `minus`, the systems assembled with that thickness times 1 ± h (same
+    /// mesh topology).
+    ///
+    /// # Errors
+    /// [`LayeredError::Invalid`] for a thickness without the two systems, a bad step, or
+    /// systems of another size.
+    pub fn add_derivative(
+        &mut self,
+        input: Input,
+        sys: &LayeredSystem,
+        core_layer: usize,
+        thickness: Option<(&LayeredSystem, &LayeredSystem, f64)>,
+    ) -> Result<(), LayeredError> {
+        let m = self.size();
+        let zero = || Mat::<f64>::zeros(m, m);
+        let faces_mass = |s: &LayeredSystem| {
+            let mut out: Option<SparseColMat<usize, f64>> = None;
+            for (l, ml) in s.m_layers.iter().enumerate() {
+                if l != core_layer {
+                    out = Some(match out {
+                        Some(o) => &o + ml,
+                        None => ml.clone(),
+                    });
+                }
+            }
+            out
+        };
+        let (dk_elastic, dk_core, dmass) = match input {
+            Input::FaceModulus => (self.k_elastic.clone(), zero(), zero()),
+            Input::FaceDensity => (
+                zero(),
+                zero(),
+                faces_mass(sys).map_or_else(zero, |mf| self.project(&mf)),
+            ),
+            Input::CoreDensity => (zero(), zero(), self.project(&sys.m_layers[core_layer])),
+            Input::FaceThickness | Input::CoreThickness => {
+                let Some((plus, minus, h)) = thickness else {
+                    return Err(LayeredError::Invalid(format!(
+                        "the {} derivative needs the systems at 1 ± h",
+                        input.name()
+                    )));
+                };
+                crate::sensitivity::check_step(h)?;
+                if plus.n_dofs != sys.n_dofs || minus.n_dofs != sys.n_dofs {
+                    return Err(LayeredError::Invalid(
+                        "perturbed systems of another size".into(),
+                    ));
+                }
+                let n_layers = sys.k_layers.len();
+                let no_core = scales(n_layers, core_layer, 0.0);
+                let diff = |a: SparseColMat<usize, f64>, b: SparseColMat<usize, f64>| {
+                    self.project(&(&a - &b)) * (1.0 / (2.0 * h))
+                };
+                (
+                    diff(plus.stiffness(&no_core), minus.stiffness(&no_core)),
+                    diff(
+                        plus.k_layers[core_layer].clone(),
+                        minus.k_layers[core_layer].clone(),
+                    ),
+                    diff(plus.m.clone(), minus.m.clone()),
+                )
+            }
+        };
+        self.derivatives.retain(|d| d.input != input);
+        self.derivatives.push(ReducedDerivative {
+            input,
+            dk_elastic,
+            dk_core,
+            dmass,
+        });
+        Ok(())
     }
 
     /// Sets the constant loss factor η_e of the elastic layers.
@@ -204,6 +286,7 @@ impl ReducedModel {
             k_elastic: self.k_elastic.clone(),
             k_core: self.k_core.clone(),
             elastic_loss: self.elastic_loss,
+            derivatives: self.derivatives.clone(),
         }
     }
 
@@ -256,35 +339,67 @@ pub struct ReducedEigen {
     pub k_core: Mat<f64>,
     /// Loss factor of the elastic layers.
     pub elastic_loss: f64,
+    /// Derivatives with respect to the inputs known within a tolerance
+    /// ([`crate::sensitivity`]); empty if not computed.
+    pub derivatives: Vec<ReducedDerivative>,
 }
 
-/// First bytes of [`ReducedEigen::to_bytes`] (format version 1).
-const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v1\n";
+/// First bytes of [`ReducedEigen::to_bytes`] (format version 2: with the derivatives).
+const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v2\n";
 
 impl ReducedEigen {
     /// Complex eigenvalues λ = ω²(1 + iη) at core scale s, increasing real part.
     pub fn eigenvalues(&self, core_scale: Complex64) -> Vec<Complex64> {
-        let m = self.k_elastic.nrows();
-        let e = Complex64::new(1.0, self.elastic_loss);
-        let z = Mat::from_fn(m, m, |i, j| {
-            let v = e * self.k_elastic[(i, j)] + core_scale * self.k_core[(i, j)];
-            c64::new(v.re, v.im)
-        });
-        seq::eigenvalues(z.as_ref())
+        pencil_eigenvalues(
+            &self.k_elastic,
+            &self.k_core,
+            self.elastic_loss,
+            core_scale,
+            None,
+        )
     }
 
-    /// The matrices as bytes: a magic line, the size (u64) and η_e, K_e, K_c (f64,
-    /// little-endian, column-major).
+    /// [`Self::eigenvalues`] with `input` changed by the relative amount `eps` (first order in
+    /// the reduced matrices, [`crate::sensitivity`]); `None` if the model has no derivative for
+    /// it.
+    pub fn perturbed_eigenvalues(
+        &self,
+        core_scale: Complex64,
+        input: Input,
+        eps: f64,
+    ) -> Option<Vec<Complex64>> {
+        let d = self.derivatives.iter().find(|d| d.input == input)?;
+        Some(pencil_eigenvalues(
+            &self.k_elastic,
+            &self.k_core,
+            self.elastic_loss,
+            core_scale,
+            Some((d, eps)),
+        ))
+    }
+
+    /// The matrices as bytes: a magic line, the size m (u64) and η_e, K_e, K_c, then the
+    /// number of derivatives (u64) and for each its input's index (u64) and dK_e, dK_c, dM
+    /// (f64, little-endian, column-major).
     pub fn to_bytes(&self) -> Vec<u8> {
         let m = self.k_elastic.nrows();
         let mut out = EIGEN_MAGIC.to_vec();
         out.extend_from_slice(&(m as u64).to_le_bytes());
         out.extend_from_slice(&self.elastic_loss.to_le_bytes());
-        for a in [&self.k_elastic, &self.k_core] {
+        let put = |a: &Mat<f64>, out: &mut Vec<u8>| {
             for j in 0..m {
                 for i in 0..m {
                     out.extend_from_slice(&a[(i, j)].to_le_bytes());
                 }
+            }
+        };
+        put(&self.k_elastic, &mut out);
+        put(&self.k_core, &mut out);
+        out.extend_from_slice(&(self.derivatives.len() as u64).to_le_bytes());
+        for d in &self.derivatives {
+            out.extend_from_slice(&(d.input.index() as u64).to_le_bytes());
+            for a in [&d.dk_elastic, &d.dk_core, &d.dmass] {
+                put(a, &mut out);
             }
         }
         out
@@ -295,21 +410,35 @@ impl ReducedEigen {
     pub fn from_bytes(bytes: &[u8]) -> Option<Self> {
         let body = bytes.strip_prefix(EIGEN_MAGIC)?;
         let word = |k: usize| -> Option<[u8; 8]> { body.get(8 * k..8 * k + 8)?.try_into().ok() };
-        let m = usize::try_from(u64::from_le_bytes(word(0)?)).ok()?;
-        if body.len() != 8 * (2 + 2 * m.checked_mul(m)?) {
-            return None;
-        }
+        let int = |k: usize| usize::try_from(u64::from_le_bytes(word(k)?)).ok();
+        let m = int(0)?;
+        let mm = m.checked_mul(m)?;
         let v = |k: usize| word(k).map(f64::from_le_bytes).filter(|x| x.is_finite());
         let elastic_loss = v(1)?;
         let read = |at: usize| -> Option<Mat<f64>> {
-            let vals: Option<Vec<f64>> = (0..m * m).map(|k| v(at + k)).collect();
+            let vals: Option<Vec<f64>> = (0..mm).map(|k| v(at + k)).collect();
             let vals = vals?;
             Some(Mat::from_fn(m, m, |i, j| vals[j * m + i]))
         };
+        let count = int(2 + 2 * mm)?;
+        if count > Input::ALL.len() || body.len() != 8 * (3 + 2 * mm + count * (1 + 3 * mm)) {
+            return None;
+        }
+        let mut derivatives = Vec::with_capacity(count);
+        for k in 0..count {
+            let at = 3 + 2 * mm + k * (1 + 3 * mm);
+            derivatives.push(ReducedDerivative {
+                input: *Input::ALL.get(int(at)?)?,
+                dk_elastic: read(at + 1)?,
+                dk_core: read(at + 1 + mm)?,
+                dmass: read(at + 1 + 2 * mm)?,
+            });
+        }
         Some(Self {
             k_elastic: read(2)?,
-            k_core: read(2 + m * m)?,
+            k_core: read(2 + mm)?,
             elastic_loss,
+            derivatives,
         })
     }
 }
@@ -317,6 +446,12 @@ impl ReducedEigen {
 /// The columns of `v` made M-orthonormal by modified Gram–Schmidt in the M inner product,
 /// applied twice ("twice is enough", Giraud et al. 2005) after scaling each column to unit
 /// M-norm; a column whose M-norm falls below 1e-8 after projection is dependent and dropped.
+/// Vᵀ A V.
+fn project_on(basis: &Mat<f64>, a: &SparseColMat<usize, f64>) -> Mat<f64> {
+    let av = seq::sparse_mul(a, basis.as_ref());
+    seq::mul(basis.transpose(), av.as_ref())
+}
+
 fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
     let n = v.nrows();
     let mut kept: Vec<Mat<f64>> = Vec::new();

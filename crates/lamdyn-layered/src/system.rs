@@ -1,8 +1,9 @@
 //! Assembly of the layered hexahedral model into sparse K and M, and its lowest modes by the
 //! shift-invert Lanczos of lamdyn-fem on a faer sparse Cholesky of K − σM.
 //!
-//! Each layer has its own material; K = Σ_layers K_l, so a layer's stiffness can later be
-//! scaled by a frequency-dependent modulus (the core). Free-free models have six zero
+//! Each layer has its own material; K = Σ_l a_l K_l and M = Σ_l b_l M_l, so a layer's stiffness
+//! can later be scaled by a frequency-dependent modulus (the core) and each layer's stiffness
+//! and mass by its own factor (a face modulus, a density: [`crate::sensitivity`]). Free-free models have six zero
 //! eigenvalues; a negative shift σ keeps K − σM positive definite.
 
 use crate::error::LayeredError;
@@ -22,8 +23,10 @@ use rayon::prelude::*;
 pub struct LayeredSystem {
     /// Stiffness of each layer's elements (full symmetric storage), N/m.
     pub k_layers: Vec<SparseColMat<usize, f64>>,
-    /// Consistent mass, kg.
+    /// Consistent mass, kg: the sum of `m_layers`.
     pub m: SparseColMat<usize, f64>,
+    /// Consistent mass of each layer's elements, kg.
+    pub m_layers: Vec<SparseColMat<usize, f64>>,
     /// Dofs: 3 per node (u_x, u_y, u_z).
     pub n_dofs: usize,
     /// Grounded springs (supports) on single dofs, N/m, added to every stiffness.
@@ -38,7 +41,7 @@ impl LayeredSystem {
     /// with a non-positive Jacobian.
     pub fn assemble(mesh: &HexMesh, materials: &[Elastic]) -> Result<Self, LayeredError> {
         let n_layers = mesh.layer.iter().max().map_or(0, |l| l + 1);
-        if materials.len() != n_layers {
+        if n_layers == 0 || materials.len() != n_layers {
             return Err(LayeredError::Invalid(format!(
                 "{} materials for {n_layers} layers",
                 materials.len()
@@ -63,14 +66,14 @@ impl LayeredSystem {
             std::array::from_fn(|q| 3 * conn[q / 3] + q % 3)
         };
         let mut k_trip: Vec<Vec<Triplet<usize, usize, f64>>> = vec![Vec::new(); n_layers];
-        let mut m_trip = Vec::with_capacity(mesh.elements.len() * 3600);
+        let mut m_trip: Vec<Vec<Triplet<usize, usize, f64>>> = vec![Vec::new(); n_layers];
         for (conn, (l, k, m)) in mesh.elements.iter().zip(&element) {
             let d = dofs(conn);
             for p in 0..60 {
                 for q in 0..60 {
                     k_trip[*l].push(Triplet::new(d[p], d[q], k[p * 60 + q]));
                     if m[p * 60 + q] != 0.0 {
-                        m_trip.push(Triplet::new(d[p], d[q], m[p * 60 + q]));
+                        m_trip[*l].push(Triplet::new(d[p], d[q], m[p * 60 + q]));
                     }
                 }
             }
@@ -79,9 +82,16 @@ impl LayeredSystem {
             SparseColMat::try_new_from_triplets(n, n, t)
                 .map_err(|e| LayeredError::Solver(format!("sparse assembly: {e:?}")))
         };
+        let m_layers: Vec<SparseColMat<usize, f64>> =
+            m_trip.iter().map(|t| build(t)).collect::<Result<_, _>>()?;
+        let mut m = m_layers[0].clone();
+        for ml in &m_layers[1..] {
+            m = &m + ml;
+        }
         Ok(Self {
             k_layers: k_trip.iter().map(|t| build(t)).collect::<Result<_, _>>()?,
-            m: build(&m_trip)?,
+            m,
+            m_layers,
             n_dofs: n,
             springs: None,
         })

@@ -400,6 +400,7 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         "layered f err, finest mesh",
         "layered eta err, finest mesh",
         "G' change by convergence [%]",
+        "layered band's main source (G'; eta)",
     ];
     if truth {
         header.extend([
@@ -414,7 +415,7 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         ]);
     }
     let mut csv = String::from(
-        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_storage_lo_pa,g_layered_storage_hi_pa,g_layered_loss_factor,g_layered_loss_factor_lo,g_layered_loss_factor_hi,layered_freq_error_finest,layered_loss_error_finest,layered_residual_freq_error,g_layered_coarsest_storage_pa,g_layered_coarsest_loss_factor",
+        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_storage_lo_pa,g_layered_storage_hi_pa,g_layered_loss_factor,g_layered_loss_factor_lo,g_layered_loss_factor_hi,layered_freq_error_finest,layered_loss_error_finest,layered_residual_freq_error,g_layered_coarsest_storage_pa,g_layered_coarsest_loss_factor,layered_discretization_half_width_storage,layered_discretization_half_width_loss_factor,layered_band_main_source",
     );
     if truth {
         csv.push_str(",g_true_storage_pa,g_true_loss_factor,err_g_paper_storage,err_g_paper_loss_factor,err_g_exact_storage,err_g_exact_loss_factor,err_g_layered_storage,err_g_layered_loss_factor");
@@ -448,6 +449,7 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             lb.freq_error.map_or("-".into(), |e| format!("{e:+.1e}")),
             lb.loss_error.map_or("-".into(), |e| format!("{e:+.1e}")),
             pct(lb.coarsest.and_then(|c| rel_err(storage(gl), Some(c.re)))),
+            lb.dominant.clone().unwrap_or_else(|| "-".into()),
         ];
         let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
         let lo = |b: Option<Band>| opt(b.map(|b| b[0]));
@@ -481,6 +483,11 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             opt(lb.residual),
             opt(storage(lb.coarsest)),
             opt(loss(lb.coarsest)),
+            lb.discretization_half_width
+                .map_or(String::new(), |h| h[0].to_string()),
+            lb.discretization_half_width
+                .map_or(String::new(), |h| h[1].to_string()),
+            lb.dominant.clone().unwrap_or_default(),
         ];
         if let Some(t) = &r.truth {
             let g = t.at(p.freq_hz);
@@ -505,12 +512,15 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
     (header, rows, csv)
 }
 
-/// The layered inverse's convergence columns of one modal point: its 95 % band from the
-/// discretization residual alone, the finest mesh's errors, the residual, and the coarsest
-/// mesh's uncorrected G*.
+/// The layered inverse's columns of one modal point: its 95 % band (inputs, pole scatter and
+/// discretization, [`crate::layered::LayeredBand`]; the discretization residual alone when the
+/// band could not be made), the main sources, the finest mesh's errors, the residual, and the
+/// coarsest mesh's uncorrected G*.
 struct LayeredColumns {
     storage: Option<Band>,
     loss: Option<Band>,
+    discretization_half_width: Option<[f64; 2]>,
+    dominant: Option<String>,
     freq_error: Option<f64>,
     loss_error: Option<f64>,
     residual: Option<f64>,
@@ -521,13 +531,21 @@ impl LayeredColumns {
     fn of(p: &CorePoint) -> Self {
         let c = p.layered_convergence;
         let g = p.layered_g();
+        let full = p.layered_band.as_ref().and_then(|b| b.as_ref().ok());
+        let half = full
+            .map(|b| b.half_width)
+            .or(c.map(|c| [c.storage_band, c.loss_band]));
         let band = |v: Option<f64>, rel: Option<f64>| match (v, rel) {
-            (Some(v), Some(r)) => Some([v * (1.0 - r), v * (1.0 + r)]),
+            // Log-normal: G' and η are positive, and a band of tens of per cent is not
+            // symmetric about them (the same as v(1 ± r) for small r).
+            (Some(v), Some(r)) => Some([v * (-r).exp(), v * r.exp()]),
             _ => None,
         };
         Self {
-            storage: band(storage(g), c.map(|c| c.storage_band)),
-            loss: band(loss(g), c.map(|c| c.loss_band)),
+            storage: band(storage(g), half.map(|h| h[0])),
+            loss: band(loss(g), half.map(|h| h[1])),
+            discretization_half_width: c.map(|c| [c.storage_band, c.loss_band]),
+            dominant: full.map(|b| format!("{}; {}", b.dominant(0), b.dominant(1))),
             freq_error: c.map(|c| c.freq_error),
             loss_error: c.map(|c| c.loss_error),
             residual: c.map(|c| c.residual_freq_error),
@@ -601,7 +619,7 @@ fn lead_section(
         row.push(pct(rel_err(loss(p.paper_g()), loss(best))));
     }
     let caption = if layered {
-        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below). Its band holds the discretization error left after extrapolation only: the EMA's scatter and the faces' uncertainty are not in it yet (the Monte Carlo covers the paper's and the exact routes, below); the last columns show how far the paper's route lies from this answer"
+        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below). Its 95 % band holds, in quadrature, the inputs known within a tolerance ([uncertainty]: face modulus, thicknesses, densities, each through its sensitivity on the layered model), the pole's scatter over the stabilization diagram and the discretization error left after extrapolation; the modal table names each band's main source. It does not hold a model-form error (a core law that is not one modulus per mode, an unmodelled support); the last columns show how far the paper's route lies from this answer"
     } else {
         "G*(f) of the core at each identified mode by the exact Mead-Markus inverse of the fitted effective modulus, with 95 % Monte Carlo bands (the layered inverse did not run); the last columns show how far the paper's route lies from it"
     };

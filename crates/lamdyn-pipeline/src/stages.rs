@@ -59,6 +59,9 @@ pub struct CorePoint {
     pub layered: Option<Result<Complex64, String>>,
     /// The layered inverse's convergence over its mesh ladder (with a layered result).
     pub layered_convergence: Option<ConvergedMode>,
+    /// The layered result's 95 % band and what makes it, or why it has none (with a layered
+    /// result).
+    pub layered_band: Option<std::result::Result<crate::layered::LayeredBand, String>>,
 }
 
 impl CorePoint {
@@ -564,6 +567,7 @@ fn core_point(
         exact: exact_inverse(stack, w, e, options.kinematics).map_err(|e| e.to_string()),
         layered: None,
         layered_convergence: None,
+        layered_band: None,
     }
 }
 

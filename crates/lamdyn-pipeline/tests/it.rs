@@ -144,6 +144,26 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
             p.freq_hz
         );
         assert!(p.paper_g().is_some() && p.exact_g().is_some());
+        // Its band holds every source it names and the truth: the faces' priors (1 % modulus,
+        // 0.01 mm, 0.5 % density), the pole's scatter and the discretization. The face
+        // modulus and thickness dominate a stiff core (sensitivities of -10 to -60).
+        let band = p.layered_band.as_ref().expect("a band").as_ref().unwrap();
+        let names: Vec<&str> = band.sources.iter().map(|s| s.0.as_str()).collect();
+        for n in [
+            "face modulus",
+            "face thickness",
+            "core thickness",
+            "discretization",
+        ] {
+            assert!(names.contains(&n), "{names:?}");
+        }
+        assert!(
+            eg.ln_1p().abs() < band.half_width[0] && ee.ln_1p().abs() < band.half_width[1],
+            "truth outside the band at {:.2} Hz: {eg:+.3} / {ee:+.3} against {:?}",
+            p.freq_hz,
+            band.half_width
+        );
+        assert!(band.dominant(0).starts_with("face"), "{band:?}");
     }
     // The modal table as CSV, with the validity mark.
     let csv = std::fs::read_to_string(report.join("core_modal.csv")).unwrap();

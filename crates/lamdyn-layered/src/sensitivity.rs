@@ -1,0 +1,171 @@
+//! How the core's G* found by the layered inverse moves with the inputs a user knows only
+//! within a tolerance: the faces' Young's modulus, the thicknesses and the densities.
+//!
+//! The reduced model keeps the derivative of its matrices with respect to each input, per
+//! unit relative change of that input (d/d ln θ): with the basis V of the nominal model,
+//!
+//!   ∂K_e/∂ln θ ≈ Vᵀ (∂K_e/∂ln θ) V,  ∂K_c/∂ln θ ≈ Vᵀ (∂K_c/∂ln θ) V,  ∂M/∂ln θ ≈ Vᵀ (∂M/∂ln θ) V.
+//!
+//! The face modulus scales the elastic layers' stiffness (∂K_e/∂ln E_f = K_e), a density its
+//! layers' mass (∂M/∂ln ρ = M_l), both exactly; a thickness changes the geometry, and its
+//! derivative is a central difference of two assemblies at θ(1 ± h), h = 1e-4 (the matrices
+//! are smooth in θ: the truncation error is O(h²), the rounding O(10⁻¹⁶/h)). Because V holds
+//! the nominal modes, the Rayleigh–Ritz eigenvalues of the perturbed reduced pencil are exact
+//! to first order in the perturbation (the eigenvalue derivative needs only the nominal mode),
+//! so the eigenvalue derivatives below are those of the full model on its mesh.
+//!
+//! At a mode matched to the measured eigenvalue λ_m, λ(G, θ) = λ_m fixes G as a function of θ:
+//!
+//!   dG/d ln θ = −(∂λ/∂ln θ) / (∂λ/∂G),
+//!
+//! both derivatives by central differences of the reduced eigenvalues (λ is analytic in G, so a
+//! real step in G gives the complex derivative). A measured eigenvalue off by δλ moves G by
+//! δλ / (∂λ/∂G) in the same way.
+
+use crate::error::LayeredError;
+use faer::linalg::solvers::Solve;
+use faer::{Mat, c64};
+use num_complex::Complex64;
+
+/// An input of the layered model known within a tolerance. "Faces" are every layer but the
+/// core, changed together (one glass, one float process: the same draw for both faces).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Input {
+    /// Young's modulus of the faces.
+    FaceModulus,
+    /// Thickness of the faces.
+    FaceThickness,
+    /// Thickness of the core.
+    CoreThickness,
+    /// Density of the faces.
+    FaceDensity,
+    /// Density of the core.
+    CoreDensity,
+}
+
+impl Input {
+    /// Every input, in the order the reduced model stores them.
+    pub const ALL: [Input; 5] = [
+        Input::FaceModulus,
+        Input::FaceThickness,
+        Input::CoreThickness,
+        Input::FaceDensity,
+        Input::CoreDensity,
+    ];
+
+    /// A short name for tables ("face modulus", ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Input::FaceModulus => "face modulus",
+            Input::FaceThickness => "face thickness",
+            Input::CoreThickness => "core thickness",
+            Input::FaceDensity => "face density",
+            Input::CoreDensity => "core density",
+        }
+    }
+
+    /// Position in [`Input::ALL`] (the tag of the cached form).
+    pub fn index(self) -> usize {
+        Input::ALL.iter().position(|&i| i == self).unwrap_or(0)
+    }
+}
+
+/// The derivatives of the reduced matrices with respect to one input, per unit relative change
+/// (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReducedDerivative {
+    /// The input.
+    pub input: Input,
+    /// ∂(Vᵀ K_e V)/∂ln θ.
+    pub dk_elastic: Mat<f64>,
+    /// ∂(Vᵀ K_c V)/∂ln θ (core at its assembled modulus).
+    pub dk_core: Mat<f64>,
+    /// ∂(Vᵀ M V)/∂ln θ.
+    pub dmass: Mat<f64>,
+}
+
+/// Complex eigenvalues of the reduced pencil (e(K_e + ε dK_e) + s(K_c + ε dK_c)) x =
+/// λ (I + ε dM) x, e = 1 + iη_e, increasing real part (ε = 0 or `d` = None: the nominal model,
+/// Vᵀ M V = I).
+pub fn pencil_eigenvalues(
+    k_elastic: &Mat<f64>,
+    k_core: &Mat<f64>,
+    elastic_loss: f64,
+    core_scale: Complex64,
+    perturbation: Option<(&ReducedDerivative, f64)>,
+) -> Vec<Complex64> {
+    let m = k_elastic.nrows();
+    let e = Complex64::new(1.0, elastic_loss);
+    let z = Mat::from_fn(m, m, |i, j| {
+        let (ke, kc) = match perturbation {
+            Some((d, eps)) => (
+                k_elastic[(i, j)] + eps * d.dk_elastic[(i, j)],
+                k_core[(i, j)] + eps * d.dk_core[(i, j)],
+            ),
+            None => (k_elastic[(i, j)], k_core[(i, j)]),
+        };
+        let v = e * ke + core_scale * kc;
+        c64::new(v.re, v.im)
+    });
+    let a = match perturbation {
+        Some((d, eps)) => {
+            let mass = Mat::from_fn(m, m, |i, j| {
+                let identity = if i == j { 1.0 } else { 0.0 };
+                c64::new(identity + eps * d.dmass[(i, j)], 0.0)
+            });
+            mass.partial_piv_lu().solve(&z)
+        }
+        None => z,
+    };
+    crate::seq::eigenvalues(a.as_ref())
+}
+
+/// How one input moves the core's G* at one mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InputEffect {
+    /// The input.
+    pub input: Input,
+    /// dG*/d ln θ, Pa (complex): the change of G* per unit relative change of the input.
+    pub dg_dln: Complex64,
+}
+
+impl InputEffect {
+    /// The relative standard deviations (G', η) this input gives the core's modulus `g` for a
+    /// relative standard deviation `rel_sd` of the input, to first order ([`relative_parts`]).
+    pub fn relative_sd(&self, g: Complex64, rel_sd: f64) -> [f64; 2] {
+        relative_parts(self.dg_dln * rel_sd, g)
+    }
+}
+
+/// The relative changes (magnitudes) of G' and η for a small change `dg` of G* = `g`:
+/// δG'/G' = Re δG/G', δη/η = Im δG/G'' − Re δG/G' (η = G''/G').
+pub fn relative_parts(dg: Complex64, g: Complex64) -> [f64; 2] {
+    [(dg.re / g.re).abs(), (dg.im / g.im - dg.re / g.re).abs()]
+}
+
+/// The sensitivities of the core's G* at one mode (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeSensitivity {
+    /// ∂λ/∂G of the matched mode, rad²/(s² Pa).
+    pub dlambda_dg: Complex64,
+    /// One effect per input the model has derivatives for.
+    pub inputs: Vec<InputEffect>,
+}
+
+impl ModeSensitivity {
+    /// dG* for a change `dlambda` (rad²/s²) of the measured eigenvalue, Pa.
+    pub fn dg_for_eigenvalue(&self, dlambda: Complex64) -> Complex64 {
+        dlambda / self.dlambda_dg
+    }
+}
+
+/// Checks a relative step for the central differences.
+pub(crate) fn check_step(h: f64) -> Result<(), LayeredError> {
+    if h.is_finite() && h > 0.0 && h < 0.1 {
+        Ok(())
+    } else {
+        Err(LayeredError::Invalid(format!(
+            "relative difference step {h} must lie in (0, 0.1)"
+        )))
+    }
+}
