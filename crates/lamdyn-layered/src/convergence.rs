@@ -86,6 +86,8 @@ pub struct ConvergedMode {
     pub loss_order: f64,
     /// Whether the last three levels converged monotonically, in both parts.
     pub monotone: bool,
+    /// Rank of the mode among the elastic ones (0: the lowest; [`LayeredEstimate::rank`]).
+    pub rank: usize,
 }
 
 /// The ladder's result.
@@ -309,6 +311,7 @@ fn one_mode(
         .core_shear_pa;
     let eta_g = |x: Complex64| x.im / x.re;
     Ok(ConvergedMode {
+        rank,
         core_shear_pa: g,
         coarsest_pa: first.core_shear_pa,
         freq_error,

@@ -312,7 +312,7 @@ fn band(
     // corrects that model by a factor per mode, and its relative sensitivities there agree
     // with a 21 x 21 mesh's within 6 % on the demo roof (at its own, coarse solution they fall
     // 5-40 % short; example roof_sensitivity).
-    let rank = coarsest.invert(target, mode.coarsest_pa)?.rank;
+    let rank = mode.rank;
     let g0 = mode.core_shear_pa;
     let at = coarsest
         .elastic_eigenvalue(g0, rank, target)
