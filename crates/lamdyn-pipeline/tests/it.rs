@@ -259,6 +259,34 @@ fn bad_job_files_name_the_field() {
         ),
         "inverse.layered_levels: 2 must lie in 3..=6",
     );
+    // Priors of the layered band and the Monte Carlo (issue 15.4): a negative standard
+    // deviation, each named.
+    for (field, value, expect) in [
+        (
+            "face_modulus_rel_sd",
+            "-0.01",
+            "uncertainty.face_modulus_rel_sd: -0.01 must be a relative standard deviation",
+        ),
+        (
+            "density_rel_sd",
+            "-0.005",
+            "uncertainty.density_rel_sd: -0.005 must be a relative standard deviation",
+        ),
+        (
+            "thickness_sd_m",
+            "-1e-5",
+            "uncertainty.thickness_sd_m: -0.00001 must be in m",
+        ),
+    ] {
+        check(
+            &format!("{field}.toml"),
+            good.replace(
+                "[uncertainty]\n",
+                &format!("[uncertainty]\n{field} = {value}\n"),
+            ),
+            expect,
+        );
+    }
     // A temperature in degrees Celsius: refused with the kelvin it probably meant; in K, read.
     check(
         "celsius.toml",
