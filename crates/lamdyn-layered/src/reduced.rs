@@ -165,24 +165,13 @@ impl ReducedModel {
     ) -> Result<(), LayeredError> {
         let m = self.size();
         let zero = || Mat::<f64>::zeros(m, m);
-        let faces_mass = |s: &LayeredSystem| {
-            let mut out: Option<SparseColMat<usize, f64>> = None;
-            for (l, ml) in s.m_layers.iter().enumerate() {
-                if l != core_layer {
-                    out = Some(match out {
-                        Some(o) => &o + ml,
-                        None => ml.clone(),
-                    });
-                }
-            }
-            out
-        };
         let (dk_elastic, dk_core, dmass) = match input {
             Input::FaceModulus => (self.k_elastic.clone(), zero(), zero()),
+            // The faces' mass is all but the core's: Vᵀ M V − Vᵀ M_c V.
             Input::FaceDensity => (
                 zero(),
                 zero(),
-                faces_mass(sys).map_or_else(zero, |mf| self.project(&mf)),
+                &self.mass - self.project(&sys.m_layers[core_layer]),
             ),
             Input::CoreDensity => (zero(), zero(), self.project(&sys.m_layers[core_layer])),
             Input::FaceThickness | Input::CoreThickness => {
@@ -443,15 +432,15 @@ impl ReducedEigen {
     }
 }
 
-/// The columns of `v` made M-orthonormal by modified Gram–Schmidt in the M inner product,
-/// applied twice ("twice is enough", Giraud et al. 2005) after scaling each column to unit
-/// M-norm; a column whose M-norm falls below 1e-8 after projection is dependent and dropped.
 /// Vᵀ A V.
 fn project_on(basis: &Mat<f64>, a: &SparseColMat<usize, f64>) -> Mat<f64> {
     let av = seq::sparse_mul(a, basis.as_ref());
     seq::mul(basis.transpose(), av.as_ref())
 }
 
+/// The columns of `v` made M-orthonormal by modified Gram–Schmidt in the M inner product,
+/// applied twice ("twice is enough", Giraud et al. 2005) after scaling each column to unit
+/// M-norm; a column whose M-norm falls below 1e-8 after projection is dependent and dropped.
 fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
     let n = v.nrows();
     let mut kept: Vec<Mat<f64>> = Vec::new();
