@@ -138,7 +138,7 @@ pub struct MasterCurve {
 }
 
 /// The model of the module docs on the internal parameters.
-fn law_of(u: &[f64]) -> Option<FractionalZener> {
+pub(crate) fn law_of(u: &[f64]) -> Option<FractionalZener> {
     let alpha = 1.0 / (1.0 + (-u[3]).exp());
     FractionalZener::new(u[0].exp(), u[1].exp(), u[2].exp(), alpha).ok()
 }
@@ -311,7 +311,8 @@ pub fn fit_master_curve(
         .ok_or_else(|| inconsistent("master curve", "the weighted fit failed".into()))?;
     let (m, p) = (fit.residuals.len(), fit.x.len());
     let s2 = fit.cost / (m - p) as f64;
-    let (inv, undetermined) = pseudo_inverse(&(fit.jacobian.transpose() * &fit.jacobian))?;
+    let (inv, undetermined) =
+        pseudo_inverse(&(fit.jacobian.transpose() * &fit.jacobian), "master curve")?;
     let covariance = Mat::from_fn(p, p, |a, b| s2 * inv[(a, b)]);
     let t95 = t975(m - p);
     let residual_sd = [
@@ -375,11 +376,14 @@ pub fn fit_master_curve(
 
 /// (JᵀJ)⁺ by its eigendecomposition, eigenvalues below 1e-12 of the largest left out, with
 /// the eigenvectors left out (directions the data do not determine).
-fn pseudo_inverse(jtj: &Mat<f64>) -> Result<(Mat<f64>, Vec<Vec<f64>>), FitError> {
+pub(crate) fn pseudo_inverse(
+    jtj: &Mat<f64>,
+    context: &str,
+) -> Result<(Mat<f64>, Vec<Vec<f64>>), FitError> {
     let p = jtj.nrows();
     let evd = jtj
         .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| inconsistent("master curve", "the eigensolver of JᵀJ failed".into()))?;
+        .map_err(|_| inconsistent(context, "the eigensolver of JᵀJ failed".into()))?;
     let (u, lam) = (evd.U(), evd.S().column_vector());
     let top = (0..p).map(|k| lam[k]).fold(0.0, f64::max);
     let mut inv = Mat::zeros(p, p);
@@ -399,7 +403,7 @@ fn pseudo_inverse(jtj: &Mat<f64>) -> Result<(Mat<f64>, Vec<Vec<f64>>), FitError>
 }
 
 /// "g_inf_pa and tau_s" for the parameters with a weight above 0.2 in direction `v`.
-fn describe_direction(names: &[&str], v: &[f64]) -> String {
+pub(crate) fn describe_direction(names: &[&str], v: &[f64]) -> String {
     let big: Vec<&str> = names
         .iter()
         .zip(v)

@@ -137,10 +137,16 @@ impl InputEffect {
     }
 }
 
-/// The relative changes (magnitudes) of G' and η for a small change `dg` of G* = `g`:
-/// δG'/G' = Re δG/G', δη/η = Im δG/G'' − Re δG/G' (η = G''/G').
+/// The relative changes (magnitudes) of G' and η for a small change `dg` of G* = `g`
+/// ([`log_parts`] without their signs).
 pub fn relative_parts(dg: Complex64, g: Complex64) -> [f64; 2] {
-    [(dg.re / g.re).abs(), (dg.im / g.im - dg.re / g.re).abs()]
+    log_parts(dg, g).map(f64::abs)
+}
+
+/// The changes of ln G' and ln η for a small change `dg` of G* = `g`, signed:
+/// δ ln G' = Re δG/G', δ ln η = Im δG/G'' − Re δG/G' (η = G''/G').
+pub fn log_parts(dg: Complex64, g: Complex64) -> [f64; 2] {
+    [dg.re / g.re, dg.im / g.im - dg.re / g.re]
 }
 
 /// The sensitivities of the core's G* at one mode (module docs).

@@ -270,6 +270,23 @@ pub struct InverseOptions {
     /// Edge grading of the layered meshes in [0, 1) (lamdyn_layered::mesh; 0: uniform).
     #[serde(default)]
     pub layered_edge_grading: f64,
+    /// The core's law fitted to all layered modes at once with the faces' inputs shared
+    /// (lamdyn_fit::joint): `fractional_zener` (default), `per_mode` or `none`.
+    #[serde(default)]
+    pub core_law: CoreLawChoice,
+}
+
+/// The core law of the joint fit (`inverse.core_law`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CoreLawChoice {
+    /// Fractional Zener: four parameters, needs two modes or more.
+    #[default]
+    FractionalZener,
+    /// One G' and η per mode, the inputs shared.
+    PerMode,
+    /// No law: the per-mode results only.
+    None,
 }
 
 fn default_layered_elements() -> [usize; 2] {
@@ -300,6 +317,7 @@ impl Default for InverseOptions {
             tolerance: default_ladder_tolerance(),
             layered_levels: default_layered_levels(),
             layered_edge_grading: 0.0,
+            core_law: CoreLawChoice::default(),
         }
     }
 }

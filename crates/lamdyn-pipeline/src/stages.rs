@@ -130,6 +130,9 @@ pub struct ChainResult {
     pub model_line: String,
     /// A line describing the layered inverse's model (None: not run).
     pub layered_line: Option<String>,
+    /// The core's law fitted to all layered modes with the inputs shared (None: not asked
+    /// for, or no layered mode with a band), or why it failed.
+    pub core_law: Option<std::result::Result<lamdyn_fit::joint::CoreLawFit, String>>,
     /// The fit.
     pub fit: FitResult,
     /// Lines of the misfit.
@@ -286,6 +289,7 @@ pub fn run_job(
             layered::run(&job, &base, &ema, &mut modal, &cache, spinner)
         })?;
     }
+    let core_law = layered::fit_law(&job, &modal);
     let mc = if job.uncertainty.samples > 0 {
         Some(stage("uncertainty", spinner, &mut timings, || {
             let input = uncertainty::McInput {
@@ -324,6 +328,7 @@ pub fn run_job(
         ema,
         model_line,
         layered_line,
+        core_law,
         fit: fit_result,
         fit_lines,
         measured_rms,

@@ -165,6 +165,43 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         );
         assert!(band.dominant(0).starts_with("face"), "{band:?}");
     }
+    // Issue 15.3: the fractional Zener law fitted to all modes at once with the inputs shared.
+    // Against the truth (a finer, graded mesh) between the first and the last mode: G' within
+    // 2 %, eta within the 5 % the per-mode points are held to above (measured on this plate:
+    // 0.7 % and 3.7 %, both largest at the last mode, 213 Hz; on the demo roof 1.3 % and
+    // 2.4 %). Its G' band holds the
+    // truth at every mode. Its eta band (mostly the discretization) does not at every mode:
+    // the EMA's damping carries a bias of about 1.4 % and the truth mesh is itself about
+    // 0.8 % off in eta (docs/run.md), neither in a band yet, so that is not asserted.
+    let law = result
+        .core_law
+        .as_ref()
+        .expect("a core law")
+        .as_ref()
+        .unwrap();
+    assert_eq!(law.at_modes.len(), result.modal.len());
+    for p in law.curve(30) {
+        let t = truth.at(p.freq_hz).unwrap();
+        let (eg, ee) = (
+            p.storage_pa / t.re - 1.0,
+            p.loss_factor / (t.im / t.re) - 1.0,
+        );
+        assert!(
+            eg.abs() < 0.02 && ee.abs() < 0.05,
+            "law off at {:.2} Hz: G' {eg:+.4}, eta {ee:+.4}",
+            p.freq_hz
+        );
+    }
+    for p in &law.at_modes {
+        let t = truth.at(p.freq_hz).unwrap();
+        assert!(
+            p.storage_ci95[0] <= t.re && t.re <= p.storage_ci95[1],
+            "{p:?} vs {t}"
+        );
+    }
+    assert!(html.contains("The core&#39;s law over all modes"));
+    let law_csv = std::fs::read_to_string(report.join("core_law.csv")).unwrap();
+    assert_eq!(law_csv.lines().count(), 61);
     // The modal table as CSV, with the validity mark.
     let csv = std::fs::read_to_string(report.join("core_modal.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains("within_phi_limit"));
