@@ -435,11 +435,12 @@ fn fit_law_with(
     let keep: Vec<bool> = priors.iter().map(|p| p.rel_sd > 0.0).collect();
     priors.retain(|p| p.rel_sd > 0.0);
     for pt in &mut points {
-        let mut k = 0;
-        pt.effects.retain(|_| {
-            k += 1;
-            keep[k - 1]
-        });
+        pt.effects = pt
+            .effects
+            .iter()
+            .zip(&keep)
+            .filter_map(|(e, &k)| k.then_some(*e))
+            .collect();
     }
     Some(fit_core_law(&points, &priors, law).map_err(|e| e.to_string()))
 }

@@ -430,7 +430,8 @@ fn a_job_measures_a_swept_sine() {
 }
 
 /// Issue 15.6: the chain gives the same bits on one and on two threads: the law's parameters,
-/// the EMA's poles, and G* per mode by the layered, the paper's and the exact inverse (the
+/// the EMA's poles, G* per mode by the layered, the paper's and the exact inverse, and the core
+/// law fitted to all modes with its bands (the
 /// layered inverse differed by 3e-6 in G' before faer's kernels were made sequential).
 #[test]
 fn same_bits_on_one_and_two_threads() {
@@ -457,6 +458,18 @@ fn same_bits_on_one_and_two_threads() {
                 g.iter()
                     .flatten()
                     .flat_map(|g| [g.re.to_bits(), g.im.to_bits()]),
+            );
+        }
+        // The core's law fitted to all modes: its parameters, the inputs it finds and its
+        // bands at the modes.
+        let law = r.core_law.as_ref().unwrap().as_ref().unwrap();
+        out.extend(law.parameters.iter().map(|p| p.value.to_bits()));
+        for p in &law.at_modes {
+            out.extend(
+                [p.storage_ci95, p.loss_factor_ci95]
+                    .iter()
+                    .flatten()
+                    .map(|v| v.to_bits()),
             );
         }
         out
