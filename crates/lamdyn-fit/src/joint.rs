@@ -91,6 +91,19 @@ pub struct ModePoint {
     pub noise: Vec<(String, [f64; 2])>,
 }
 
+impl ModePoint {
+    /// Σ_j e_kj δ_j: how far the inputs' changes `delta` move this mode's ln G' and ln η.
+    fn input_shift(&self, delta: &[f64]) -> [f64; 2] {
+        let part = |c: usize| self.effects.iter().zip(delta).map(|(e, d)| e[c] * d).sum();
+        [part(0), part(1)]
+    }
+}
+
+/// ln G' and ln η of G* = `g`.
+fn log_parts(g: Complex64) -> [f64; 2] {
+    [g.re.ln(), (g.im / g.re).ln()]
+}
+
 /// The law's value and its 95 % band at one frequency.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LawPoint {
@@ -166,7 +179,7 @@ fn log_law(law: CoreLaw, u: &[f64], log_freqs: &[f64], f_hz: f64) -> Option<[f64
     match law {
         CoreLaw::FractionalZener => {
             let g = law_of(u)?.modulus(2.0 * PI * f_hz);
-            (g.re > 0.0 && g.im > 0.0).then(|| [g.re.ln(), (g.im / g.re).ln()])
+            (g.re > 0.0 && g.im > 0.0).then(|| log_parts(g))
         }
         CoreLaw::PerMode => {
             let x = f_hz.ln();
@@ -274,11 +287,10 @@ fn residuals(
     let mut r = Vec::with_capacity(2 * points.len() + priors.len());
     for (k, p) in points.iter().enumerate() {
         let m = log_law(law, &u[..np], log_freqs, p.freq_hz)?;
-        let g = p.core_shear_pa;
-        let data = [g.re.ln(), (g.im / g.re).ln()];
+        let data = log_parts(p.core_shear_pa);
+        let shift = p.input_shift(delta);
         for c in 0..2 {
-            let shift: f64 = p.effects.iter().zip(delta).map(|(e, d)| e[c] * d).sum();
-            r.push((m[c] - data[c] - shift) / sd[k][c]);
+            r.push((m[c] - data[c] - shift[c]) / sd[k][c]);
         }
     }
     r.extend(delta.iter().zip(priors).map(|(d, p)| d / p.rel_sd));
@@ -292,10 +304,7 @@ fn starts(law: CoreLaw, points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>
         CoreLaw::PerMode => vec![
             points
                 .iter()
-                .flat_map(|p| {
-                    let g = p.core_shear_pa;
-                    [g.re.ln(), (g.im / g.re).ln()]
-                })
+                .flat_map(|p| log_parts(p.core_shear_pa))
                 .collect(),
         ],
         CoreLaw::FractionalZener => {
@@ -318,9 +327,9 @@ fn starts(law: CoreLaw, points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>
                         let cost: f64 = points
                             .iter()
                             .map(|p| {
-                                let g = p.core_shear_pa;
+                                let d = log_parts(p.core_shear_pa);
                                 log_law(law, &u, log_freqs, p.freq_hz).map_or(f64::INFINITY, |m| {
-                                    (m[0] - g.re.ln()).powi(2) + (m[1] - (g.im / g.re).ln()).powi(2)
+                                    (m[0] - d[0]).powi(2) + (m[1] - d[1]).powi(2)
                                 })
                             })
                             .sum();
@@ -397,16 +406,10 @@ pub fn fit_core_law(
     let corrected_points = points
         .iter()
         .map(|pt| {
-            let shift = |c: usize| -> f64 {
-                pt.effects
-                    .iter()
-                    .zip(&best.x[np..])
-                    .map(|(e, d)| e[c] * d)
-                    .sum()
-            };
+            let shift = pt.input_shift(&best.x[np..]);
             let g = pt.core_shear_pa;
-            let storage = g.re * shift(0).exp();
-            Complex64::new(storage, storage * g.im / g.re * shift(1).exp())
+            let storage = g.re * shift[0].exp();
+            Complex64::new(storage, storage * g.im / g.re * shift[1].exp())
         })
         .collect();
     let mut out = CoreLawFit {

@@ -129,14 +129,6 @@ pub struct InputEffect {
     pub dg_dln: Complex64,
 }
 
-impl InputEffect {
-    /// The relative standard deviations (G', η) this input gives the core's modulus `g` for a
-    /// relative standard deviation `rel_sd` of the input, to first order ([`relative_parts`]).
-    pub fn relative_sd(&self, g: Complex64, rel_sd: f64) -> [f64; 2] {
-        relative_parts(self.dg_dln * rel_sd, g)
-    }
-}
-
 /// The relative changes (magnitudes) of G' and η for a small change `dg` of G* = `g`
 /// ([`log_parts`] without their signs).
 pub fn relative_parts(dg: Complex64, g: Complex64) -> [f64; 2] {
