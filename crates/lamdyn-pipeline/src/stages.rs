@@ -55,7 +55,9 @@ pub struct CorePoint {
     pub paper: Result<CoreEstimate, String>,
     /// Exact Mead–Markus inverse.
     pub exact: Result<ExactCoreEstimate, String>,
-    /// The layered inverse at a modal frequency (None: not run here).
+    /// The layered inverse at the mode's (real) frequency, Pa: found at its pole's complex
+    /// frequency and moved here by [`crate::layered::to_real_frequency`] (the value as found is
+    /// the band's `found_pa`). None: not run here.
     pub layered: Option<Result<Complex64, String>>,
     /// The layered inverse's convergence over its mesh ladder (with a layered result).
     pub layered_convergence: Option<ConvergedMode>,
@@ -290,6 +292,7 @@ pub fn run_job(
         })?;
     }
     let core_law = layered::fit_law(&job, &modal);
+    layered::to_real_frequency(&mut modal, core_law.as_ref());
     let mc = if job.uncertainty.samples > 0 {
         Some(stage("uncertainty", spinner, &mut timings, || {
             let input = uncertainty::McInput {

@@ -120,9 +120,11 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         let header = &table[..table.find("</tr>").unwrap()];
         assert!(header.matches("<th>").count() <= 12, "{header}");
     }
-    // The core at each modal frequency against the truth. The layered inverse is converged
-    // over its mesh ladder and the truth is a finer graded mesh, so what is left is the
-    // identification's error and the truth's own discretization error.
+    // The core at each modal frequency against the truth, within issue 15's 2 % (G') and 3 %
+    // (eta); measured 0.54 % and 2.2 %. The layered inverse is converged over its mesh ladder,
+    // its points moved from their poles' complex frequencies to the real axis, and the truth is
+    // a finer graded mesh, so what is left is the identification's error and the truth's own
+    // discretization error.
     let truth = result
         .truth
         .as_ref()
@@ -139,7 +141,7 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         );
         let (eg, ee) = (g.re / t.re - 1.0, (g.im / g.re) / (t.im / t.re) - 1.0);
         assert!(
-            eg.abs() < 0.04 && ee.abs() < 0.05,
+            eg.abs() < 0.02 && ee.abs() < 0.03,
             "layered inverse off at {:.2} Hz: G' {eg:+.3}, eta {ee:+.3}",
             p.freq_hz
         );
@@ -167,12 +169,10 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
     }
     // Issue 15.3: the fractional Zener law fitted to all modes at once with the inputs shared.
     // Against the truth (a finer, graded mesh) between the first and the last mode: G' within
-    // 2 %, eta within the 5 % the per-mode points are held to above (measured on this plate:
-    // 0.7 % and 3.7 %, both largest at the last mode, 213 Hz; on the demo roof 1.3 % and
-    // 2.4 %). Its G' band holds the
-    // truth at every mode. Its eta band (mostly the discretization) does not at every mode:
-    // the EMA's damping carries a bias of about 1.4 % and the truth mesh is itself about
-    // 0.8 % off in eta (docs/run.md), neither in a band yet, so that is not asserted.
+    // 2 %, eta within 3 % (measured at this plate's modes: 0.8 % and 0.95 %; on the demo
+    // roof 1.0 % and 1.0 %). Its bands hold the truth at every mode, in G' and in eta (since the points
+    // are compared with the law at their poles' complex frequencies: before, eta was 2-4 %
+    // high and its band missed).
     let law = result
         .core_law
         .as_ref()
@@ -187,16 +187,21 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
             p.loss_factor / (t.im / t.re) - 1.0,
         );
         assert!(
-            eg.abs() < 0.02 && ee.abs() < 0.05,
+            eg.abs() < 0.02 && ee.abs() < 0.03,
             "law off at {:.2} Hz: G' {eg:+.4}, eta {ee:+.4}",
             p.freq_hz
         );
     }
     for p in &law.at_modes {
         let t = truth.at(p.freq_hz).unwrap();
+        let eta = t.im / t.re;
         assert!(
             p.storage_ci95[0] <= t.re && t.re <= p.storage_ci95[1],
             "{p:?} vs {t}"
+        );
+        assert!(
+            p.loss_factor_ci95[0] <= eta && eta <= p.loss_factor_ci95[1],
+            "{p:?} vs eta {eta}"
         );
     }
     assert!(html.contains("The core&#39;s law over all modes"));

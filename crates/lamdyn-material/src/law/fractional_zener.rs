@@ -88,6 +88,16 @@ impl ViscoelasticLaw for FractionalZener {
         (self.g0_pa + self.g_inf_pa * s) / (1.0 + s)
     }
 
+    /// Exact: (iωτ)^α on the principal branch for ω = ω' + iσ (arg iωτ just past π/2 for
+    /// σ ≪ ω'), the same expression as on the real axis.
+    fn modulus_at_complex(&self, omega: Complex64) -> Complex64 {
+        if omega.im == 0.0 {
+            return self.modulus(omega.re);
+        }
+        let s = (Complex64::new(0.0, 1.0) * omega * self.tau_s).powf(self.alpha);
+        (self.g0_pa + self.g_inf_pa * s) / (1.0 + s)
+    }
+
     fn describe(&self) -> String {
         format!(
             "fractional Zener: G0 = {:.6e} Pa, Ginf = {:.6e} Pa, tau = {:.6e} s, alpha = {}",

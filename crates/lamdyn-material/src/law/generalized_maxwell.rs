@@ -74,6 +74,16 @@ impl ViscoelasticLaw for GeneralizedMaxwell {
         g
     }
 
+    /// Exact: the same sum with iωτ_k at complex ω.
+    fn modulus_at_complex(&self, omega: Complex64) -> Complex64 {
+        let mut g = Complex64::new(self.g_e_pa, 0.0);
+        for t in &self.terms {
+            let iwt = Complex64::new(0.0, 1.0) * omega * t.tau_s;
+            g += t.g_pa * iwt / (1.0 + iwt);
+        }
+        g
+    }
+
     fn describe(&self) -> String {
         let terms: Vec<String> = self
             .terms

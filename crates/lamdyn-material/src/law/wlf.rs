@@ -99,6 +99,10 @@ impl<L: ViscoelasticLaw> ViscoelasticLaw for TemperatureShifted<L> {
         self.law.modulus(self.a_t * omega_rad_s)
     }
 
+    fn modulus_at_complex(&self, omega: Complex64) -> Complex64 {
+        self.law.modulus_at_complex(self.a_t * omega)
+    }
+
     fn describe(&self) -> String {
         format!(
             "{} shifted to T = {} K by WLF (C1 = {}, C2 = {} K, Tref = {} K, a_T = {:.6e})",
