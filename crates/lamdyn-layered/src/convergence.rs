@@ -135,8 +135,8 @@ pub fn extrapolate(h: [f64; 2], y: [Complex64; 2], p: f64) -> Complex64 {
     y[1] + (y[1] - y[0]) * (c / (b - c))
 }
 
-/// The in-plane mesh of level `k`.
-fn level_mesh(start: [usize; 2], ratio: f64, k: usize) -> [usize; 2] {
+/// The in-plane mesh of level `k` (0: `start`): each count times ratio^k, rounded.
+pub fn level_mesh(start: [usize; 2], ratio: f64, k: usize) -> [usize; 2] {
     start.map(|n| (n as f64 * ratio.powi(k as i32)).round() as usize)
 }
 
@@ -186,8 +186,9 @@ pub fn converge(
         level(m)
     };
     // Each target on the coarsest mesh alone: the start of every pass, once for all levels.
+    // Modes in parallel: each is sequential inside, so the bits do not depend on the schedule.
     let first: Vec<Result<LayeredEstimate, LayeredError>> = targets
-        .iter()
+        .par_iter()
         .zip(starts)
         .map(|(&t, &s)| coarsest.invert(t, s))
         .collect();
@@ -199,7 +200,7 @@ pub fn converge(
         let levels: Vec<&LayeredInverse> = std::iter::once(coarsest).chain(finer.iter()).collect();
         let h: Vec<f64> = meshes.iter().map(|&m| h_of(m)).collect();
         let modes: Vec<Result<ConvergedMode, LayeredError>> = targets
-            .iter()
+            .par_iter()
             .zip(&first)
             .map(|(&t, f)| one_mode(&levels, &h, t, f.clone()?))
             .collect();

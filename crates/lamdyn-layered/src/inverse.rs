@@ -325,10 +325,21 @@ impl LayeredInverse {
                 .ok_or_else(lost)
         };
         let s = g_pa / self.g_assembled_pa;
+        // The mode's eigenvalue at s by its rank; the perturbed ones nearest it (a step of
+        // 1e-4 moves it far less than the distance to any other mode), by rank if that fails.
+        let at_s = pick(self.model.eigenvalues(s))?;
+        let near =
+            |tracked: Option<Complex64>, all: &dyn Fn() -> Option<Vec<Complex64>>| match tracked {
+                Some(l) => Ok(l),
+                None => pick(all().ok_or_else(lost)?),
+            };
         let ds = s * STEP;
-        let dlambda_ds = (pick(self.model.eigenvalues(s + ds))?
-            - pick(self.model.eigenvalues(s - ds))?)
-            / (2.0 * ds);
+        let at_scale = |x: Complex64| {
+            near(self.model.eigenvalue_near(x, at_s), &|| {
+                Some(self.model.eigenvalues(x))
+            })
+        };
+        let dlambda_ds = (at_scale(s + ds)? - at_scale(s - ds)?) / (2.0 * ds);
         let dlambda_dg = dlambda_ds / self.g_assembled_pa;
         if dlambda_dg.norm() == 0.0 || !dlambda_dg.is_finite() {
             return Err(LayeredError::Solver(
@@ -338,10 +349,9 @@ impl LayeredInverse {
         let mut inputs = Vec::new();
         for d in &self.model.derivatives {
             let at = |eps: f64| -> Result<Complex64, LayeredError> {
-                pick(
-                    self.model
-                        .perturbed_eigenvalues(s, d.input, eps)
-                        .ok_or_else(lost)?,
+                near(
+                    self.model.perturbed_eigenvalue_near(s, d.input, eps, at_s),
+                    &|| self.model.perturbed_eigenvalues(s, d.input, eps),
                 )
             };
             let dlambda = (at(STEP)? - at(-STEP)?) / (2.0 * STEP);
@@ -368,7 +378,7 @@ impl LayeredInverse {
         g_start: Complex64,
     ) -> Result<LayeredEstimate, LayeredError> {
         let fail = |why: String| LayeredError::Solver(format!("layered inverse: {why}"));
-        let mut s0 = g_start / self.g_assembled_pa;
+        let s0 = g_start / self.g_assembled_pa;
         let start = self.elastic(s0, target);
         let rank = (0..start.len())
             .min_by(|&a, &b| {
@@ -387,14 +397,43 @@ impl LayeredInverse {
                 100.0 * MATCH_WINDOW
             )));
         }
-        let residual = |s: Complex64| -> Result<(Complex64, Complex64), LayeredError> {
-            let l = *self
-                .elastic(s, target)
-                .get(rank)
-                .ok_or_else(|| fail(format!("mode {} lost", rank + 1)))?;
+        // Fast: each step's eigenvalue tracked from the last by inverse iteration, the result
+        // checked against the mode of that rank; if the tracking left the mode, every step
+        // again by rank from all eigenvalues.
+        let tracked = self.secant(target, s0, start[rank], rank, true);
+        if let Ok(est) = &tracked {
+            let by_rank = self.elastic_eigenvalue(est.core_shear_pa, rank, target);
+            if by_rank.is_some_and(|l| (l - est.eigenvalue).norm() <= 1e-8 * target.norm()) {
+                return tracked;
+            }
+        }
+        self.secant(target, s0, start[rank], rank, false)
+    }
+
+    /// The secant iteration of [`Self::invert`] from core scale `s0`, where the mode of `rank`
+    /// has eigenvalue `lambda0`; with `track`, each step's eigenvalue is the one nearest the
+    /// last step's ([`ReducedEigen::eigenvalue_near`]), else the elastic one of `rank`.
+    fn secant(
+        &self,
+        target: Complex64,
+        mut s0: Complex64,
+        lambda0: Complex64,
+        rank: usize,
+        track: bool,
+    ) -> Result<LayeredEstimate, LayeredError> {
+        let fail = |why: String| LayeredError::Solver(format!("layered inverse: {why}"));
+        let mut last = lambda0;
+        let mut residual = |s: Complex64| -> Result<(Complex64, Complex64), LayeredError> {
+            let l = if track {
+                self.model.eigenvalue_near(s, last)
+            } else {
+                self.elastic(s, target).get(rank).copied()
+            }
+            .ok_or_else(|| fail(format!("mode {} lost", rank + 1)))?;
+            last = l;
             Ok((l - target, l))
         };
-        let mut r0 = start[rank] - target;
+        let mut r0 = lambda0 - target;
         let mut s1 = s0 * 1.05;
         for k in 1..=40 {
             let (r1, lambda) = residual(s1)?;
@@ -478,6 +517,49 @@ mod tests {
         assert_eq!(back.eigenvalues(truth), inv.eigenvalues(truth));
         assert_eq!(back.size(), inv.size());
         assert!(LayeredInverse::from_bytes(&inv.to_bytes()[..100]).is_none());
+    }
+
+    /// Inverse iteration finds the same eigenvalue as the full eigensolver (faer's complex QR),
+    /// nearest a guess 1 % off it, on the nominal and on a perturbed pencil: within 1e-13 of
+    /// the largest eigenvalue's size (a backward-stable QR of an m × m matrix, m ≈ 100, errs
+    /// by a few hundred ε of the matrix's norm; the tracked value by far less).
+    #[test]
+    fn inverse_iteration_finds_the_nearest_eigenvalue() {
+        let plate = small_test_plate();
+        let inv = LayeredInverse::build_with_inputs(
+            &plate,
+            [4, 4],
+            5e6,
+            12,
+            &BASIS_RATIOS,
+            &[Input::FaceDensity],
+        )
+        .unwrap();
+        let s = Complex64::new(0.7, 0.4);
+        let all = inv.model.eigenvalues(s);
+        let perturbed = inv
+            .model
+            .perturbed_eigenvalues(s, Input::FaceDensity, 0.01)
+            .unwrap();
+        let scale = all.iter().map(|l| l.norm()).fold(0.0, f64::max);
+        for k in (0..all.len()).filter(|&k| all[k].re > 1.0).take(6) {
+            let guess = all[k] * Complex64::new(1.01, 0.002);
+            let near = inv.model.eigenvalue_near(s, guess).unwrap();
+            assert!(
+                (near - all[k]).norm() < 1e-13 * scale,
+                "{near} vs {}",
+                all[k]
+            );
+            let want = perturbed
+                .iter()
+                .min_by(|a, b| (*a - guess).norm().total_cmp(&(*b - guess).norm()))
+                .unwrap();
+            let got = inv
+                .model
+                .perturbed_eigenvalue_near(s, Input::FaceDensity, 0.01, guess)
+                .unwrap();
+            assert!((got - want).norm() < 1e-13 * scale, "{got} vs {want}");
+        }
     }
 
     /// The sensitivities against two routes that share nothing with them: the scaling laws

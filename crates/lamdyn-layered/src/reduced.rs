@@ -20,7 +20,7 @@
 //! per line. The direct route factors the sparse complex Z(ω) (faer's sparse LU) per line.
 
 use crate::error::LayeredError;
-use crate::sensitivity::{Input, ReducedDerivative, pencil_eigenvalues};
+use crate::sensitivity::{Input, ReducedDerivative, pencil_eigenvalue_near, pencil_eigenvalues};
 use crate::seq;
 use crate::system::LayeredSystem;
 use faer::linalg::solvers::Solve;
@@ -345,6 +345,39 @@ impl ReducedEigen {
             self.elastic_loss,
             core_scale,
             None,
+        )
+    }
+
+    /// The eigenvalue at core scale s nearest `guess` (inverse iteration,
+    /// [`crate::sensitivity::pencil_eigenvalue_near`]), or `None` when it does not converge.
+    pub fn eigenvalue_near(&self, core_scale: Complex64, guess: Complex64) -> Option<Complex64> {
+        pencil_eigenvalue_near(
+            &self.k_elastic,
+            &self.k_core,
+            self.elastic_loss,
+            core_scale,
+            None,
+            guess,
+        )
+    }
+
+    /// [`Self::eigenvalue_near`] with `input` changed by the relative amount `eps`; `None`
+    /// also if the model has no derivative for it.
+    pub fn perturbed_eigenvalue_near(
+        &self,
+        core_scale: Complex64,
+        input: Input,
+        eps: f64,
+        guess: Complex64,
+    ) -> Option<Complex64> {
+        let d = self.derivatives.iter().find(|d| d.input == input)?;
+        pencil_eigenvalue_near(
+            &self.k_elastic,
+            &self.k_core,
+            self.elastic_loss,
+            core_scale,
+            Some((d, eps)),
+            guess,
         )
     }
 

@@ -84,16 +84,15 @@ pub struct ReducedDerivative {
     pub dmass: Mat<f64>,
 }
 
-/// Complex eigenvalues of the reduced pencil (e(K_e + ε dK_e) + s(K_c + ε dK_c)) x =
-/// λ (I + ε dM) x, e = 1 + iη_e, increasing real part (ε = 0 or `d` = None: the nominal model,
-/// Vᵀ M V = I).
-pub fn pencil_eigenvalues(
+/// The reduced pencil (Z, B) = (e(K_e + ε dK_e) + s(K_c + ε dK_c), I + ε dM), e = 1 + iη_e;
+/// B = None for the nominal model (Vᵀ M V = I).
+fn pencil(
     k_elastic: &Mat<f64>,
     k_core: &Mat<f64>,
     elastic_loss: f64,
     core_scale: Complex64,
     perturbation: Option<(&ReducedDerivative, f64)>,
-) -> Vec<Complex64> {
+) -> (Mat<c64>, Option<Mat<c64>>) {
     let m = k_elastic.nrows();
     let e = Complex64::new(1.0, elastic_loss);
     let z = Mat::from_fn(m, m, |i, j| {
@@ -107,17 +106,90 @@ pub fn pencil_eigenvalues(
         let v = e * ke + core_scale * kc;
         c64::new(v.re, v.im)
     });
-    let a = match perturbation {
-        Some((d, eps)) => {
-            let mass = Mat::from_fn(m, m, |i, j| {
-                let identity = if i == j { 1.0 } else { 0.0 };
-                c64::new(identity + eps * d.dmass[(i, j)], 0.0)
-            });
-            mass.partial_piv_lu().solve(&z)
-        }
+    let mass = perturbation.map(|(d, eps)| {
+        Mat::from_fn(m, m, |i, j| {
+            let identity = if i == j { 1.0 } else { 0.0 };
+            c64::new(identity + eps * d.dmass[(i, j)], 0.0)
+        })
+    });
+    (z, mass)
+}
+
+/// Complex eigenvalues of the reduced pencil (e(K_e + ε dK_e) + s(K_c + ε dK_c)) x =
+/// λ (I + ε dM) x, e = 1 + iη_e, increasing real part (ε = 0 or `d` = None: the nominal model,
+/// Vᵀ M V = I).
+pub fn pencil_eigenvalues(
+    k_elastic: &Mat<f64>,
+    k_core: &Mat<f64>,
+    elastic_loss: f64,
+    core_scale: Complex64,
+    perturbation: Option<(&ReducedDerivative, f64)>,
+) -> Vec<Complex64> {
+    let (z, mass) = pencil(k_elastic, k_core, elastic_loss, core_scale, perturbation);
+    let a = match mass {
+        Some(mass) => mass.partial_piv_lu().solve(&z),
         None => z,
     };
     crate::seq::eigenvalues(a.as_ref())
+}
+
+/// The eigenvalue of the same pencil nearest `guess`, by inverse iteration with the fixed shift
+/// σ = `guess` [Golub & Van Loan 2013, §7.6.1]: x ← (Z − σB)⁻¹ B x, λ = xᵀZx / xᵀBx (the
+/// unconjugated Rayleigh quotient of a complex symmetric pencil: its left and right
+/// eigenvectors are transposes, so the quotient is second-order accurate). It converges as
+/// |λ − σ| / |λ' − σ| per step, λ' the next nearest eigenvalue: fast when the guess is the
+/// same mode's eigenvalue at a nearby core modulus, as in a secant iteration. One LU and
+/// O(m²) per step against the O(10 m³) of every eigenvalue. `None` when it has not
+/// converged to 1e-13 relative in 60 steps (the caller falls back to
+/// [`pencil_eigenvalues`]).
+pub fn pencil_eigenvalue_near(
+    k_elastic: &Mat<f64>,
+    k_core: &Mat<f64>,
+    elastic_loss: f64,
+    core_scale: Complex64,
+    perturbation: Option<(&ReducedDerivative, f64)>,
+    guess: Complex64,
+) -> Option<Complex64> {
+    let (z, mass) = pencil(k_elastic, k_core, elastic_loss, core_scale, perturbation);
+    let m = z.nrows();
+    let b = |x: &Mat<c64>| match &mass {
+        Some(mass) => mass * x,
+        None => x.clone(),
+    };
+    // A shift exactly on an eigenvalue makes Z − σB singular: nudge it off by 1e-10.
+    let sigma = c64::new(guess.re * (1.0 + 1e-10), guess.im);
+    let shifted = match &mass {
+        Some(mass) => Mat::from_fn(m, m, |i, j| z[(i, j)] - sigma * mass[(i, j)]),
+        None => Mat::from_fn(m, m, |i, j| {
+            z[(i, j)] - if i == j { sigma } else { c64::new(0.0, 0.0) }
+        }),
+    };
+    let lu = shifted.partial_piv_lu();
+    // A start with a part along every eigenvector (no symmetry of the basis picks it out).
+    let mut x = Mat::from_fn(m, 1, |i, _| c64::new(1.0 + 0.37 * (i % 7) as f64, 0.0));
+    let mut lambda = guess;
+    for _ in 0..60 {
+        let y = lu.solve(&b(&x));
+        let norm = y.norm_l2();
+        if !(norm.is_finite() && norm > 0.0) {
+            return None;
+        }
+        let y = Mat::from_fn(m, 1, |i, _| y[(i, 0)] / norm);
+        let (num, den) = (
+            (y.transpose() * &z * &y)[(0, 0)],
+            (y.transpose() * b(&y))[(0, 0)],
+        );
+        let next = Complex64::new(num.re, num.im) / Complex64::new(den.re, den.im);
+        if !(next.re.is_finite() && next.im.is_finite()) {
+            return None;
+        }
+        let done = (next - lambda).norm() <= 1e-13 * next.norm();
+        (lambda, x) = (next, y);
+        if done {
+            return Some(lambda);
+        }
+    }
+    None
 }
 
 /// How one input moves the core's G* at one mode.

@@ -33,10 +33,11 @@ use lamdyn_ema::identify::EmaResult;
 use lamdyn_fem::model::{MeshSpec, ModelSpec};
 use lamdyn_fit::joint::{CoreLaw, CoreLawFit, InputPrior, ModePoint, fit_core_law};
 use lamdyn_layered::LayeredError;
-use lamdyn_layered::convergence::{LadderSettings, build_level, converge};
+use lamdyn_layered::convergence::{LadderSettings, build_level, converge, level_mesh};
 use lamdyn_layered::inverse::{BASIS_RATIOS, InverseLayer, LayeredInverse, LayeredPlate};
 use lamdyn_layered::sensitivity::{Input, ModeSensitivity, log_parts, relative_parts};
 use num_complex::Complex64;
+use rayon::prelude::*;
 use std::path::Path;
 
 /// The rectangle's plan and radii of the job's model.
@@ -170,12 +171,57 @@ pub fn run(
     // G_ref snapped to a power of two (within √2 of the median start, well inside the basis's
     // G_ref/4 .. 4 G_ref): a re-run with another law finds the same model in the cache.
     let g_ref = 2f64.powf(g.get(g.len() / 2).copied().unwrap_or(10e6).log2().round());
-    spinner.stage("stage 'layered inverse': coarsest layered model and its reduced basis");
     let t = std::time::Instant::now();
     let start = job.inverse.layered_elements;
     let modes = job.inverse.layered_modes;
-    let (coarsest, cached) = cached_model(cache, &plate, start, g_ref, modes, true)
-        .context("cannot build the layered model")?;
+    let settings = LadderSettings {
+        max_levels: job.inverse.layered_levels,
+        tolerance: job.inverse.tolerance,
+        modes: (modes * 2 / 3).max(12),
+        ..LadderSettings::default()
+    };
+    let all_cached = std::sync::atomic::AtomicBool::new(true);
+    let finer_level = |m: [usize; 2]| {
+        let (model, hit) = cached_model(cache, &plate, m, g_ref, settings.modes, false)?;
+        if !hit {
+            all_cached.store(false, std::sync::atomic::Ordering::Relaxed);
+        }
+        Ok(model)
+    };
+    // The coarsest model and the first finer levels at once, on two lanes, the largest level
+    // alone on one (longest first; each build is sequential inside, so the bits do not depend
+    // on the schedule): the ladder always needs two finer levels and on a glass laminate
+    // usually a third, built here on speculation.
+    let ahead: Vec<[usize; 2]> = (1..=3)
+        .filter(|&k| k < settings.max_levels)
+        .map(|k| level_mesh(start, settings.ratio, k))
+        .collect();
+    spinner.stage(&format!(
+        "stage 'layered inverse': coarsest layered model and its reduced basis, levels {} built alongside",
+        ahead
+            .iter()
+            .map(|m| format!("{} x {}", m[0], m[1]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    let (rest, largest) = ahead.split_at(ahead.len().saturating_sub(1));
+    let (largest, (coarsest, mut prebuilt)) = rayon::join(
+        || {
+            largest
+                .iter()
+                .map(|&m| (m, finer_level(m)))
+                .collect::<Vec<_>>()
+        },
+        || {
+            let coarsest = cached_model(cache, &plate, start, g_ref, modes, true);
+            let rest: Vec<_> = rest.iter().map(|&m| (m, finer_level(m))).collect();
+            (coarsest, rest)
+        },
+    );
+    prebuilt.extend(largest);
+    let (coarsest, cached) = coarsest.context("cannot build the layered model")?;
+    all_cached.fetch_and(cached, std::sync::atomic::Ordering::Relaxed);
+    let prebuilt = std::sync::Mutex::new(prebuilt);
     // The modal points with a pole: the ladder's targets.
     let with_pole: Vec<(usize, Complex64)> = modal
         .iter()
@@ -188,21 +234,14 @@ pub fn run(
             p.freq_hz
         )));
     }
-    let settings = LadderSettings {
-        max_levels: job.inverse.layered_levels,
-        tolerance: job.inverse.tolerance,
-        modes: (modes * 2 / 3).max(12),
-        ..LadderSettings::default()
-    };
     let targets: Vec<Complex64> = with_pole.iter().map(|w| w.1).collect();
     let first: Vec<Complex64> = with_pole.iter().map(|w| starts[w.0]).collect();
-    let all_cached = std::sync::atomic::AtomicBool::new(cached);
     let level = |m: [usize; 2]| {
-        let (model, hit) = cached_model(cache, &plate, m, g_ref, settings.modes, false)?;
-        if !hit {
-            all_cached.store(false, std::sync::atomic::Ordering::Relaxed);
-        }
-        Ok(model)
+        let ready = prebuilt.lock().ok().and_then(|mut p| {
+            let i = p.iter().position(|b| b.0 == m)?;
+            Some(p.swap_remove(i).1)
+        });
+        ready.unwrap_or_else(|| finer_level(m))
     };
     let out = converge(
         &coarsest,
@@ -231,13 +270,26 @@ pub fn run(
         );
         modal[k].layered_convergence = m.as_ref().ok().copied();
     }
-    for (&(k, target), m) in with_pole.iter().zip(&out.modes) {
-        if let Ok(m) = m {
+    // Each mode's band on its own (in parallel; sequential inside, so the same bits).
+    let bands: Vec<_> = with_pole
+        .par_iter()
+        .zip(&out.modes)
+        .map(|(&(k, target), m)| {
+            let m = m.as_ref().ok()?;
             let scatter = pole_scatter(ema, modal[k].freq_hz);
-            modal[k].layered_band = Some(
-                band(&coarsest, &plate, &job.uncertainty, m, target, scatter)
-                    .map_err(|e| e.to_string()),
-            );
+            Some(band(
+                &coarsest,
+                &plate,
+                &job.uncertainty,
+                m,
+                target,
+                scatter,
+            ))
+        })
+        .collect();
+    for (&(k, _), b) in with_pole.iter().zip(bands) {
+        if let Some(b) = b {
+            modal[k].layered_band = Some(b.map_err(|e| e.to_string()));
         }
     }
     let meshes: Vec<String> = out
