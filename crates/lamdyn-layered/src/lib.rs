@@ -23,6 +23,7 @@
 //! | [`sensitivity`] | how G* moves with the face modulus, thicknesses and densities |
 //! | [`convergence`] | a ladder of meshes and Richardson extrapolation: the inverse converged to a tolerance |
 //! | [`seq`] | sequential products and eigenvalues (same bits on any thread count) |
+//! | [`supports`] | springs and dashpots at points of the bottom surface |
 //!
 //! Units: m, kg, s, N, Pa; eigenvalues ω² in rad²/s².
 
@@ -37,6 +38,7 @@ pub mod mesh;
 pub mod reduced;
 pub mod sensitivity;
 pub mod seq;
+pub mod supports;
 pub mod system;
 
 pub use error::LayeredError;

@@ -20,7 +20,9 @@
 //! per line. The direct route factors the sparse complex Z(ω) (faer's sparse LU) per line.
 
 use crate::error::LayeredError;
-use crate::sensitivity::{Input, ReducedDerivative, pencil_eigenvalue_near, pencil_eigenvalues};
+use crate::sensitivity::{
+    Input, PencilSupports, ReducedDerivative, pencil_eigenvalue_near, pencil_eigenvalues,
+};
 use crate::seq;
 use crate::system::LayeredSystem;
 use faer::linalg::solvers::Solve;
@@ -248,6 +250,41 @@ impl ReducedModel {
         Ok(())
     }
 
+    /// Adds the supports' dashpots c (Vᵀw)(Vᵀw)ᵀ ([`crate::supports::SupportTerm`]).
+    ///
+    /// # Errors
+    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite damping.
+    pub fn add_support_dashpots(
+        &mut self,
+        terms: &[crate::supports::SupportTerm],
+    ) -> Result<(), LayeredError> {
+        let n = self.basis.nrows();
+        let m = self.size();
+        for term in terms {
+            let c = term.damping_n_s_m;
+            if !(c.is_finite() && c >= 0.0) || term.weights.iter().any(|w| w.0 >= n) {
+                return Err(LayeredError::Invalid(format!(
+                    "support dashpot of {c} N s/m on dofs {:?} of {n}",
+                    term.weights.iter().map(|w| w.0).collect::<Vec<_>>()
+                )));
+            }
+            let v: Vec<f64> = (0..m)
+                .map(|j| {
+                    term.weights
+                        .iter()
+                        .map(|&(d, w)| w * self.basis[(d, j)])
+                        .sum()
+                })
+                .collect();
+            for i in 0..m {
+                for j in 0..m {
+                    self.c_dampers[(i, j)] += c * v[i] * v[j];
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Entry (i, j) of the reduced dynamic stiffness Vᵀ Z(ω) V (module docs).
     fn dynamic_stiffness(&self, i: usize, j: usize, omega: f64, core_scale: Complex64) -> c64 {
         let v = Complex64::new(1.0, self.elastic_loss) * self.k_elastic[(i, j)]
@@ -275,6 +312,8 @@ impl ReducedModel {
             k_elastic: self.k_elastic.clone(),
             k_core: self.k_core.clone(),
             elastic_loss: self.elastic_loss,
+            k_supports: self.k_springs.clone(),
+            c_supports: self.c_dampers.clone(),
             derivatives: self.derivatives.clone(),
         }
     }
@@ -328,35 +367,57 @@ pub struct ReducedEigen {
     pub k_core: Mat<f64>,
     /// Loss factor of the elastic layers.
     pub elastic_loss: f64,
+    /// Vᵀ K_s V: the supports' springs (zero for a free part).
+    pub k_supports: Mat<f64>,
+    /// Vᵀ C_s V: the supports' dashpots (zero without).
+    pub c_supports: Mat<f64>,
     /// Derivatives with respect to the inputs known within a tolerance
     /// ([`crate::sensitivity`]); empty if not computed.
     pub derivatives: Vec<ReducedDerivative>,
 }
 
-/// First bytes of [`ReducedEigen::to_bytes`] (format version 2: with the derivatives).
-const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v2\n";
+/// First bytes of [`ReducedEigen::to_bytes`] (format version 3: with the supports).
+const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v3\n";
 
 impl ReducedEigen {
-    /// Complex eigenvalues λ = ω²(1 + iη) at core scale s, increasing real part.
-    pub fn eigenvalues(&self, core_scale: Complex64) -> Vec<Complex64> {
+    /// The supports' part of the pencil with the dashpots at angular frequency `omega`.
+    fn supports(&self, omega: Complex64) -> Option<PencilSupports<'_>> {
+        Some(PencilSupports {
+            springs: &self.k_supports,
+            dashpots: &self.c_supports,
+            omega,
+        })
+    }
+
+    /// Complex eigenvalues λ = ω²(1 + iη) at core scale s, the dashpots acting at angular
+    /// frequency `omega` (rad/s; complex at a pole: exact when λ = ω²), increasing real part.
+    pub fn eigenvalues(&self, core_scale: Complex64, omega: Complex64) -> Vec<Complex64> {
         pencil_eigenvalues(
             &self.k_elastic,
             &self.k_core,
             self.elastic_loss,
             core_scale,
             None,
+            self.supports(omega),
         )
     }
 
-    /// The eigenvalue at core scale s nearest `guess` (inverse iteration,
-    /// [`crate::sensitivity::pencil_eigenvalue_near`]), or `None` when it does not converge.
-    pub fn eigenvalue_near(&self, core_scale: Complex64, guess: Complex64) -> Option<Complex64> {
+    /// The eigenvalue at core scale s (dashpots at `omega`) nearest `guess` (inverse
+    /// iteration, [`crate::sensitivity::pencil_eigenvalue_near`]), or `None` when it does not
+    /// converge.
+    pub fn eigenvalue_near(
+        &self,
+        core_scale: Complex64,
+        omega: Complex64,
+        guess: Complex64,
+    ) -> Option<Complex64> {
         pencil_eigenvalue_near(
             &self.k_elastic,
             &self.k_core,
             self.elastic_loss,
             core_scale,
             None,
+            self.supports(omega),
             guess,
         )
     }
@@ -366,6 +427,7 @@ impl ReducedEigen {
     pub fn perturbed_eigenvalue_near(
         &self,
         core_scale: Complex64,
+        omega: Complex64,
         input: Input,
         eps: f64,
         guess: Complex64,
@@ -377,6 +439,7 @@ impl ReducedEigen {
             self.elastic_loss,
             core_scale,
             Some((d, eps)),
+            self.supports(omega),
             guess,
         )
     }
@@ -387,6 +450,7 @@ impl ReducedEigen {
     pub fn perturbed_eigenvalues(
         &self,
         core_scale: Complex64,
+        omega: Complex64,
         input: Input,
         eps: f64,
     ) -> Option<Vec<Complex64>> {
@@ -397,10 +461,11 @@ impl ReducedEigen {
             self.elastic_loss,
             core_scale,
             Some((d, eps)),
+            self.supports(omega),
         ))
     }
 
-    /// The matrices as bytes: a magic line, the size m (u64) and η_e, K_e, K_c, then the
+    /// The matrices as bytes: a magic line, the size m (u64) and η_e, K_e, K_c, K_s, C_s, then the
     /// number of derivatives (u64) and for each its input's index (u64) and dK_e, dK_c, dM
     /// (f64, little-endian, column-major).
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -415,8 +480,14 @@ impl ReducedEigen {
                 }
             }
         };
-        put(&self.k_elastic, &mut out);
-        put(&self.k_core, &mut out);
+        for a in [
+            &self.k_elastic,
+            &self.k_core,
+            &self.k_supports,
+            &self.c_supports,
+        ] {
+            put(a, &mut out);
+        }
         out.extend_from_slice(&(self.derivatives.len() as u64).to_le_bytes());
         for d in &self.derivatives {
             out.extend_from_slice(&(d.input.index() as u64).to_le_bytes());
@@ -442,13 +513,13 @@ impl ReducedEigen {
             let vals = vals?;
             Some(Mat::from_fn(m, m, |i, j| vals[j * m + i]))
         };
-        let count = int(2 + 2 * mm)?;
-        if count > Input::ALL.len() || body.len() != 8 * (3 + 2 * mm + count * (1 + 3 * mm)) {
+        let count = int(2 + 4 * mm)?;
+        if count > Input::ALL.len() || body.len() != 8 * (3 + 4 * mm + count * (1 + 3 * mm)) {
             return None;
         }
         let mut derivatives = Vec::with_capacity(count);
         for k in 0..count {
-            let at = 3 + 2 * mm + k * (1 + 3 * mm);
+            let at = 3 + 4 * mm + k * (1 + 3 * mm);
             derivatives.push(ReducedDerivative {
                 input: *Input::ALL.get(int(at)?)?,
                 dk_elastic: read(at + 1)?,
@@ -459,6 +530,8 @@ impl ReducedEigen {
         Some(Self {
             k_elastic: read(2)?,
             k_core: read(2 + mm)?,
+            k_supports: read(2 + 2 * mm)?,
+            c_supports: read(2 + 3 * mm)?,
             elastic_loss,
             derivatives,
         })

@@ -122,6 +122,42 @@ impl LayeredSystem {
         Ok(())
     }
 
+    /// Adds the supports' springs k w wᵀ ([`crate::supports::SupportTerm`]).
+    ///
+    /// # Errors
+    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite stiffness.
+    pub fn add_support_springs(
+        &mut self,
+        terms: &[crate::supports::SupportTerm],
+    ) -> Result<(), LayeredError> {
+        let mut t: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        for term in terms {
+            let k = term.stiffness_n_m;
+            if !(k.is_finite() && k >= 0.0) || term.weights.iter().any(|w| w.0 >= self.n_dofs) {
+                return Err(LayeredError::Invalid(format!(
+                    "support spring of {k} N/m on dofs {:?} of {}",
+                    term.weights.iter().map(|w| w.0).collect::<Vec<_>>(),
+                    self.n_dofs
+                )));
+            }
+            for &(i, wi) in &term.weights {
+                for &(j, wj) in &term.weights {
+                    t.push(Triplet::new(i, j, k * wi * wj));
+                }
+            }
+        }
+        if t.is_empty() {
+            return Ok(());
+        }
+        let add = SparseColMat::try_new_from_triplets(self.n_dofs, self.n_dofs, &t)
+            .map_err(|e| LayeredError::Solver(format!("support springs: {e:?}")))?;
+        self.springs = Some(match self.springs.take() {
+            Some(s) => &s + &add,
+            None => add,
+        });
+        Ok(())
+    }
+
     /// Total stiffness with layer l's stiffness scaled by `scale[l]`, springs included.
     pub fn stiffness(&self, scale: &[f64]) -> SparseColMat<usize, f64> {
         let mut k = &self.k_layers[0] * scale[0];

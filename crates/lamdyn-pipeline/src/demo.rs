@@ -177,15 +177,32 @@ fn job_text(d: &Description, hits: usize, sampling: DemoSampling) -> Result<Stri
          [inverse]\nkinematics = \"plate\"\n\
          # The layered model: meshes from 12 x 12 refined by 4/3 until the extrapolated frequency\n\
          # error is below the tolerance (the bench's truth is an {ex} x {ey} mesh of its own).\n\
-         layered_elements = [12, 12]\ntolerance = 1e-4\n\n\
+         layered_elements = [12, 12]\ntolerance = 1e-4\n{supports}\n\
          [uncertainty]\nsamples = {samples}\nseed = {seed}\n\n{stack}\n",
         tol = h,
         temperature = temperature_k.map_or(String::new(), |t| format!("temperature_k = {t}\n")),
         ex = d.mesh.elements[0],
         ey = d.mesh.elements[1],
         hi = d.test.max_hz,
+        supports = supports_text(d),
         stack = toml_text(&stack)?.replace("[[layers]]", "[[stack.layers]]"),
     ))
+}
+
+/// The bench's supports as the job's `[[inverse.supports]]` (the layered model is told what
+/// the part rested on; empty when it hung free).
+fn supports_text(d: &Description) -> String {
+    d.supports.as_ref().map_or(String::new(), |s| {
+        s.points
+            .iter()
+            .map(|p| {
+                format!(
+                    "\n[[inverse.supports]]\nxy_fraction = {:?}\nstiffness_n_m = {:?}\ndamping_n_s_m = {:?}\n",
+                    p.xy_fraction, p.stiffness_n_m, p.damping_n_s_m
+                )
+            })
+            .collect()
+    })
 }
 
 /// The input files of the chain from the simulated test.

@@ -274,6 +274,24 @@ pub struct InverseOptions {
     /// (lamdyn_fit::joint): `fractional_zener` (default), `per_mode` or `none`.
     #[serde(default)]
     pub core_law: CoreLawChoice,
+    /// The supports the part rested on in the test, in the layered model
+    /// (`[[inverse.supports]]`; none: free).
+    #[serde(default)]
+    pub supports: Vec<SupportSpec>,
+}
+
+/// One support of the tested part (`[[inverse.supports]]`): grounded springs and dashpots at
+/// the bottom-surface node nearest a point of the plan (lamdyn_layered::supports).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupportSpec {
+    /// Position as fractions (0..1) of the plan's extent along x and y.
+    pub xy_fraction: [f64; 2],
+    /// Stiffness along the global x, y, z axes, N/m.
+    pub stiffness_n_m: [f64; 3],
+    /// Viscous damping along the global x, y, z axes, N·s/m [default: none].
+    #[serde(default)]
+    pub damping_n_s_m: [f64; 3],
 }
 
 /// The core law of the joint fit (`inverse.core_law`).
@@ -318,6 +336,7 @@ impl Default for InverseOptions {
             layered_levels: default_layered_levels(),
             layered_edge_grading: 0.0,
             core_law: CoreLawChoice::default(),
+            supports: Vec::new(),
         }
     }
 }
@@ -551,6 +570,24 @@ impl Job {
                 "inverse.layered_edge_grading: {} must lie in [0, 1)",
                 inv.layered_edge_grading
             ));
+        }
+        for (i, sup) in inv.supports.iter().enumerate() {
+            let [fx, fy] = sup.xy_fraction;
+            if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
+                return Err(err!(
+                    "inverse.supports[{i}].xy_fraction = [{fx}, {fy}]: the support lies outside the plate (fractions of its plan must lie in [0, 1])"
+                ));
+            }
+            for (field, v) in [
+                ("stiffness_n_m", sup.stiffness_n_m),
+                ("damping_n_s_m", sup.damping_n_s_m),
+            ] {
+                if !v.iter().all(|k| k.is_finite() && *k >= 0.0) {
+                    return Err(err!(
+                        "inverse.supports[{i}].{field} = {v:?}: must be finite and non-negative (N/m, N s/m)"
+                    ));
+                }
+            }
         }
         let u = &self.uncertainty;
         for (name, v) in [

@@ -36,6 +36,7 @@ use lamdyn_layered::LayeredError;
 use lamdyn_layered::convergence::{LadderSettings, build_level, converge, level_mesh};
 use lamdyn_layered::inverse::{BASIS_RATIOS, InverseLayer, LayeredInverse, LayeredPlate};
 use lamdyn_layered::sensitivity::{Input, ModeSensitivity, log_parts, relative_parts};
+use lamdyn_layered::supports::PointSupport;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::path::Path;
@@ -98,6 +99,16 @@ fn layered_plate(job: &Job, base: &Path) -> Result<LayeredPlate> {
         radii_m,
         edge_grading: job.inverse.layered_edge_grading,
         layers,
+        supports: job
+            .inverse
+            .supports
+            .iter()
+            .map(|s| PointSupport {
+                xy_fraction: s.xy_fraction,
+                stiffness_n_m: s.stiffness_n_m,
+                damping_n_s_m: s.damping_n_s_m,
+            })
+            .collect(),
     })
 }
 
@@ -115,8 +126,8 @@ fn cached_model(
         .f64(g_ref)
         .bytes(
             format!(
-                "{:?} {:?} {} {elements:?} {modes} {coarsest}",
-                plate.plan_m, plate.radii_m, plate.edge_grading
+                "{:?} {:?} {} {elements:?} {modes} {coarsest} {:?}",
+                plate.plan_m, plate.radii_m, plate.edge_grading, plate.supports
             )
             .as_bytes(),
         );
@@ -571,6 +582,7 @@ mod tests {
             radii_m: [3.0, 4.0],
             edge_grading: 0.0,
             layers: vec![face, core, face],
+            supports: Vec::new(),
         }
     }
 

@@ -287,6 +287,15 @@ fn bad_job_files_name_the_field() {
         good.replacen("young_pa = 70000000000.0", "young_pa = 70.0", 1),
         "young_pa = 70 is outside [1e8, 2e12]: moduli are in Pa",
     );
+    // A support of the layered model outside the plate (issue 15's error list).
+    check(
+        "support.toml",
+        good.replace(
+            "tolerance = 1e-4\n",
+            "tolerance = 1e-4\n\n[[inverse.supports]]\nxy_fraction = [1.2, 0.5]\nstiffness_n_m = [100.0, 100.0, 500.0]\n",
+        ),
+        "inverse.supports[0].xy_fraction = [1.2, 0.5]: the support lies outside the plate",
+    );
     // The layered ladder's tolerance and levels (issue 15.2).
     check(
         "tolerance.toml",

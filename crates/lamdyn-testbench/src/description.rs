@@ -17,7 +17,7 @@
 
 use crate::error::BenchError;
 use crate::impact::{HitSettings, Hits, ImpactTest, Support, simulate, simulate_hits};
-use crate::impact::{check_layout, hammer_load, support_springs};
+use crate::impact::{check_layout, hammer_load, support_terms};
 use lamdyn_frf::FrfSet;
 use lamdyn_layered::hex20::Elastic;
 use lamdyn_layered::mesh::{HexMesh, LayerMesh, LayeredPlateSpec};
@@ -452,7 +452,7 @@ impl Description {
         let mesh = self.mesh_spec()?.build()?;
         progress("assembly");
         let mut system = LayeredSystem::assemble(&mesh, &elastic)?;
-        let dampers = match &self.supports {
+        let supports = match &self.supports {
             Some(s) => {
                 let pts: Vec<Support> = s
                     .points
@@ -463,9 +463,9 @@ impl Description {
                         damping_n_s_m: p.damping_n_s_m,
                     })
                     .collect();
-                let (springs, dampers) = support_springs(&mesh, &pts)?;
-                system.add_springs(&springs)?;
-                dampers
+                let terms = support_terms(&mesh, &pts)?;
+                system.add_support_springs(&terms)?;
+                terms
             }
             None => Vec::new(),
         };
@@ -491,7 +491,7 @@ impl Description {
             shift,
         )?;
         model.set_elastic_loss(eta_e)?;
-        model.add_dampers(&dampers)?;
+        model.add_support_dashpots(&supports)?;
         Ok(Bench {
             mesh,
             system,

@@ -593,64 +593,22 @@ pub fn simulate_hits(
     })
 }
 
-/// An elastic support of the tested part: grounded springs on the bottom-surface node nearest
-/// a point of the plan (foam blocks, bungee cords, air cushions). Its springs give the part's
-/// rigid-body modes on the supports, the support resonances of a real test.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Support {
-    /// Position as fractions (0..1) of the plan extent along x and y.
-    pub xy_fraction: [f64; 2],
-    /// Stiffness along the global x, y, z axes, N/m.
-    pub stiffness_n_m: [f64; 3],
-    /// Viscous damping along the global x, y, z axes, N·s/m (causal, unlike a loss factor).
-    pub damping_n_s_m: [f64; 3],
-}
+/// An elastic support of the tested part ([`lamdyn_layered::supports`]): its springs give the
+/// part's rigid-body modes on the supports, the support resonances of a real test.
+pub use lamdyn_layered::supports::PointSupport as Support;
 
-/// The springs (dof, N/m) and dashpots (dof, N·s/m) of `supports` on the bottom surface of
-/// `mesh`, for [`lamdyn_layered::system::LayeredSystem::add_springs`] and
-/// [`lamdyn_layered::reduced::ReducedModel::add_dampers`].
+/// The springs and dashpots of `supports` on the bottom surface of `mesh`, through the shape
+/// functions of the face holding each point ([`lamdyn_layered::supports::support_terms`]).
 ///
 /// # Errors
 /// [`BenchError::Invalid`] naming the support for a position outside the plan or a negative
 /// or non-finite stiffness.
-#[allow(clippy::type_complexity)]
-pub fn support_springs(
+pub fn support_terms(
     mesh: &HexMesh,
     supports: &[Support],
-) -> Result<(Vec<(usize, f64)>, Vec<(usize, f64)>), BenchError> {
-    let (lo, hi) = plan_extent(mesh);
-    let (mut springs, mut dampers) = (Vec::new(), Vec::new());
-    for (i, s) in supports.iter().enumerate() {
-        let [fx, fy] = s.xy_fraction;
-        if !(0.0..=1.0).contains(&fx) || !(0.0..=1.0).contains(&fy) {
-            return Err(BenchError::Invalid(format!(
-                "supports[{i}].xy_fraction = [{fx}, {fy}]: must lie in [0, 1]"
-            )));
-        }
-        for (field, v) in [
-            ("stiffness_n_m", s.stiffness_n_m),
-            ("damping_n_s_m", s.damping_n_s_m),
-        ] {
-            if !v.iter().all(|k| k.is_finite() && *k >= 0.0) {
-                return Err(BenchError::Invalid(format!(
-                    "supports[{i}].{field} = {v:?}: must be finite and non-negative"
-                )));
-            }
-        }
-        let (x, y) = (lo[0] + fx * (hi[0] - lo[0]), lo[1] + fy * (hi[1] - lo[1]));
-        let node = mesh
-            .bottom
-            .iter()
-            .map(|(n, _)| *n)
-            .min_by(|a, b| {
-                let d = |p: &[f64; 3]| (p[0] - x).powi(2) + (p[1] - y).powi(2);
-                d(&mesh.nodes[*a]).total_cmp(&d(&mesh.nodes[*b]))
-            })
-            .ok_or_else(|| BenchError::Invalid("the mesh has no bottom surface".into()))?;
-        springs.extend((0..3).map(|c| (3 * node + c, s.stiffness_n_m[c])));
-        dampers.extend((0..3).map(|c| (3 * node + c, s.damping_n_s_m[c])));
-    }
-    Ok((springs, dampers))
+) -> Result<Vec<lamdyn_layered::supports::SupportTerm>, BenchError> {
+    lamdyn_layered::supports::support_terms(mesh, supports)
+        .map_err(|e| BenchError::Invalid(e.to_string()))
 }
 
 /// Seeded standard normal numbers (xorshift64*, Box–Muller).

@@ -25,6 +25,7 @@ pub fn plate(grading: f64) -> LayeredPlate {
         radii_m: [3.0, 5.0],
         edge_grading: grading,
         layers: vec![glass, pvb, glass],
+        supports: Vec::new(),
     }
 }
 
