@@ -7,7 +7,7 @@
 //!
 //! (K_e the elastic layers with a constant loss factor η_e, zero unless set by
 //! [`ReducedModel::set_elastic_loss`] — a constant loss factor is not causal, keep it small for
-//! time signals; K_s the supports' springs and C_s their dashpots, [`ReducedModel::add_dampers`],
+//! time signals; K_s the supports' springs and C_s their dashpots, [`ReducedModel::add_support_dashpots`],
 //! causal viscous damping; K_c the core: scaling the whole core matrix by one complex factor
 //! assumes a constant Poisson's ratio of the core) and the receptance to a load f is
 //! u = Z(ω)⁻¹ f. The reduced basis V holds, at each reference core modulus G_j with
@@ -225,28 +225,6 @@ impl ReducedModel {
             )));
         }
         self.elastic_loss = eta;
-        Ok(())
-    }
-
-    /// Adds grounded dashpots (dof, N·s/m): C_s += Σ c e_d e_dᵀ, projected on the basis.
-    ///
-    /// # Errors
-    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite coefficient.
-    pub fn add_dampers(&mut self, dampers: &[(usize, f64)]) -> Result<(), LayeredError> {
-        let n = self.basis.nrows();
-        for &(d, c) in dampers {
-            if d >= n || !(c.is_finite() && c >= 0.0) {
-                return Err(LayeredError::Invalid(format!(
-                    "dashpot on dof {d} of {n} with {c} N s/m"
-                )));
-            }
-            let m = self.size();
-            for i in 0..m {
-                for j in 0..m {
-                    self.c_dampers[(i, j)] += c * self.basis[(d, i)] * self.basis[(d, j)];
-                }
-            }
-        }
         Ok(())
     }
 

@@ -24,6 +24,33 @@ pub struct PointSupport {
     pub damping_n_s_m: [f64; 3],
 }
 
+impl PointSupport {
+    /// Checks the support numbered `i` (from 0): its point inside the plate, its stiffness and
+    /// damping finite and non-negative; the error names `supports[i]` and the field.
+    ///
+    /// # Errors
+    /// [`LayeredError::Invalid`] with the reason.
+    pub fn check(&self, i: usize) -> Result<(), LayeredError> {
+        let [fx, fy] = self.xy_fraction;
+        if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
+            return Err(LayeredError::Invalid(format!(
+                "supports[{i}].xy_fraction = [{fx}, {fy}]: the support lies outside the plate (fractions of its plan must lie in [0, 1])"
+            )));
+        }
+        for (field, v) in [
+            ("stiffness_n_m", self.stiffness_n_m),
+            ("damping_n_s_m", self.damping_n_s_m),
+        ] {
+            if !v.iter().all(|k| k.is_finite() && *k >= 0.0) {
+                return Err(LayeredError::Invalid(format!(
+                    "supports[{i}].{field} = {v:?}: must be finite and non-negative (N/m, N s/m)"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The plan's extent of `mesh` (its bottom surface): lowest and highest x and y, m.
 fn plan_extent(mesh: &HexMesh) -> ([f64; 2], [f64; 2]) {
     mesh.bottom.iter().fold(
@@ -67,22 +94,8 @@ pub fn support_terms(
     let (lo, hi) = plan_extent(mesh);
     let mut terms = Vec::new();
     for (i, s) in supports.iter().enumerate() {
+        s.check(i)?;
         let [fx, fy] = s.xy_fraction;
-        if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
-            return Err(LayeredError::Invalid(format!(
-                "supports[{i}].xy_fraction = [{fx}, {fy}]: the support lies outside the plate (fractions of its plan must lie in [0, 1])"
-            )));
-        }
-        for (field, v) in [
-            ("stiffness_n_m", s.stiffness_n_m),
-            ("damping_n_s_m", s.damping_n_s_m),
-        ] {
-            if !v.iter().all(|k| k.is_finite() && *k >= 0.0) {
-                return Err(LayeredError::Invalid(format!(
-                    "supports[{i}].{field} = {v:?}: must be finite and non-negative"
-                )));
-            }
-        }
         let (x, y) = (lo[0] + fx * (hi[0] - lo[0]), lo[1] + fy * (hi[1] - lo[1]));
         let face = bottom_point(mesh, [x, y]).ok_or_else(|| {
             LayeredError::Invalid(format!(

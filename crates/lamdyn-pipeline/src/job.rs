@@ -294,6 +294,17 @@ pub struct SupportSpec {
     pub damping_n_s_m: [f64; 3],
 }
 
+impl SupportSpec {
+    /// The layered model's support.
+    pub fn to_point(&self) -> lamdyn_layered::supports::PointSupport {
+        lamdyn_layered::supports::PointSupport {
+            xy_fraction: self.xy_fraction,
+            stiffness_n_m: self.stiffness_n_m,
+            damping_n_s_m: self.damping_n_s_m,
+        }
+    }
+}
+
 /// The core law of the joint fit (`inverse.core_law`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -572,22 +583,7 @@ impl Job {
             ));
         }
         for (i, sup) in inv.supports.iter().enumerate() {
-            let [fx, fy] = sup.xy_fraction;
-            if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
-                return Err(err!(
-                    "inverse.supports[{i}].xy_fraction = [{fx}, {fy}]: the support lies outside the plate (fractions of its plan must lie in [0, 1])"
-                ));
-            }
-            for (field, v) in [
-                ("stiffness_n_m", sup.stiffness_n_m),
-                ("damping_n_s_m", sup.damping_n_s_m),
-            ] {
-                if !v.iter().all(|k| k.is_finite() && *k >= 0.0) {
-                    return Err(err!(
-                        "inverse.supports[{i}].{field} = {v:?}: must be finite and non-negative (N/m, N s/m)"
-                    ));
-                }
-            }
+            sup.to_point().check(i).map_err(|e| err!("inverse.{e}"))?;
         }
         let u = &self.uncertainty;
         for (name, v) in [

@@ -36,7 +36,6 @@ use lamdyn_layered::LayeredError;
 use lamdyn_layered::convergence::{LadderSettings, build_level, converge, level_mesh};
 use lamdyn_layered::inverse::{BASIS_RATIOS, InverseLayer, LayeredInverse, LayeredPlate};
 use lamdyn_layered::sensitivity::{Input, ModeSensitivity, log_parts, relative_parts};
-use lamdyn_layered::supports::PointSupport;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::path::Path;
@@ -99,16 +98,7 @@ fn layered_plate(job: &Job, base: &Path) -> Result<LayeredPlate> {
         radii_m,
         edge_grading: job.inverse.layered_edge_grading,
         layers,
-        supports: job
-            .inverse
-            .supports
-            .iter()
-            .map(|s| PointSupport {
-                xy_fraction: s.xy_fraction,
-                stiffness_n_m: s.stiffness_n_m,
-                damping_n_s_m: s.damping_n_s_m,
-            })
-            .collect(),
+        supports: job.inverse.supports.iter().map(|s| s.to_point()).collect(),
     })
 }
 
