@@ -359,25 +359,63 @@ const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v3\n";
 
 impl ReducedEigen {
     /// The supports' part of the pencil with the dashpots at angular frequency `omega`.
-    fn supports(&self, omega: Complex64) -> Option<PencilSupports<'_>> {
-        Some(PencilSupports {
+    fn supports(&self, omega: Complex64) -> PencilSupports<'_> {
+        PencilSupports {
             springs: &self.k_supports,
             dashpots: &self.c_supports,
             omega,
-        })
+        }
     }
 
-    /// Complex eigenvalues λ = ω²(1 + iη) at core scale s, the dashpots acting at angular
-    /// frequency `omega` (rad/s; complex at a pole: exact when λ = ω²), increasing real part.
-    pub fn eigenvalues(&self, core_scale: Complex64, omega: Complex64) -> Vec<Complex64> {
+    /// The derivative for `input` scaled by `eps`, if the model has it.
+    fn perturbation(&self, input: Input, eps: f64) -> Option<(&ReducedDerivative, f64)> {
+        self.derivatives
+            .iter()
+            .find(|d| d.input == input)
+            .map(|d| (d, eps))
+    }
+
+    /// Every eigenvalue of the pencil, nominal or perturbed ([`pencil_eigenvalues`]).
+    fn all(
+        &self,
+        core_scale: Complex64,
+        omega: Complex64,
+        perturbation: Option<(&ReducedDerivative, f64)>,
+    ) -> Vec<Complex64> {
         pencil_eigenvalues(
             &self.k_elastic,
             &self.k_core,
             self.elastic_loss,
             core_scale,
-            None,
-            self.supports(omega),
+            perturbation,
+            Some(self.supports(omega)),
         )
+    }
+
+    /// The pencil's eigenvalue nearest `guess`, nominal or perturbed
+    /// ([`pencil_eigenvalue_near`]).
+    fn near(
+        &self,
+        core_scale: Complex64,
+        omega: Complex64,
+        perturbation: Option<(&ReducedDerivative, f64)>,
+        guess: Complex64,
+    ) -> Option<Complex64> {
+        pencil_eigenvalue_near(
+            &self.k_elastic,
+            &self.k_core,
+            self.elastic_loss,
+            core_scale,
+            perturbation,
+            Some(self.supports(omega)),
+            guess,
+        )
+    }
+
+    /// Complex eigenvalues λ = ω²(1 + iη) at core scale s, the dashpots acting at angular
+    /// frequency `omega` (rad/s; complex at a pole: exact when λ = ω²), increasing real part.
+    pub fn eigenvalues(&self, core_scale: Complex64, omega: Complex64) -> Vec<Complex64> {
+        self.all(core_scale, omega, None)
     }
 
     /// The eigenvalue at core scale s (dashpots at `omega`) nearest `guess` (inverse
@@ -389,15 +427,7 @@ impl ReducedEigen {
         omega: Complex64,
         guess: Complex64,
     ) -> Option<Complex64> {
-        pencil_eigenvalue_near(
-            &self.k_elastic,
-            &self.k_core,
-            self.elastic_loss,
-            core_scale,
-            None,
-            self.supports(omega),
-            guess,
-        )
+        self.near(core_scale, omega, None, guess)
     }
 
     /// [`Self::eigenvalue_near`] with `input` changed by the relative amount `eps`; `None`
@@ -410,14 +440,10 @@ impl ReducedEigen {
         eps: f64,
         guess: Complex64,
     ) -> Option<Complex64> {
-        let d = self.derivatives.iter().find(|d| d.input == input)?;
-        pencil_eigenvalue_near(
-            &self.k_elastic,
-            &self.k_core,
-            self.elastic_loss,
+        self.near(
             core_scale,
-            Some((d, eps)),
-            self.supports(omega),
+            omega,
+            Some(self.perturbation(input, eps)?),
             guess,
         )
     }
@@ -432,15 +458,7 @@ impl ReducedEigen {
         input: Input,
         eps: f64,
     ) -> Option<Vec<Complex64>> {
-        let d = self.derivatives.iter().find(|d| d.input == input)?;
-        Some(pencil_eigenvalues(
-            &self.k_elastic,
-            &self.k_core,
-            self.elastic_loss,
-            core_scale,
-            Some((d, eps)),
-            self.supports(omega),
-        ))
+        Some(self.all(core_scale, omega, Some(self.perturbation(input, eps)?)))
     }
 
     /// The matrices as bytes: a magic line, the size m (u64) and η_e, K_e, K_c, K_s, C_s, then the

@@ -113,13 +113,7 @@ impl LayeredSystem {
             }
             t.push(Triplet::new(d, d, k));
         }
-        let add = SparseColMat::try_new_from_triplets(self.n_dofs, self.n_dofs, &t)
-            .map_err(|e| LayeredError::Solver(format!("springs: {e:?}")))?;
-        self.springs = Some(match self.springs.take() {
-            Some(s) => &s + &add,
-            None => add,
-        });
-        Ok(())
+        self.accumulate_springs(&t)
     }
 
     /// Adds the supports' springs k w wᵀ ([`crate::supports::SupportTerm`]).
@@ -146,11 +140,16 @@ impl LayeredSystem {
                 }
             }
         }
+        self.accumulate_springs(&t)
+    }
+
+    /// Adds the spring entries `t` (summed where they repeat) to K_s.
+    fn accumulate_springs(&mut self, t: &[Triplet<usize, usize, f64>]) -> Result<(), LayeredError> {
         if t.is_empty() {
             return Ok(());
         }
-        let add = SparseColMat::try_new_from_triplets(self.n_dofs, self.n_dofs, &t)
-            .map_err(|e| LayeredError::Solver(format!("support springs: {e:?}")))?;
+        let add = SparseColMat::try_new_from_triplets(self.n_dofs, self.n_dofs, t)
+            .map_err(|e| LayeredError::Solver(format!("springs: {e:?}")))?;
         self.springs = Some(match self.springs.take() {
             Some(s) => &s + &add,
             None => add,
