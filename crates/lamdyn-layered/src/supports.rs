@@ -8,6 +8,14 @@
 //! stiffness k (N/m) into K_s and viscous damping c (N·s/m) into C_s
 //! ([`crate::system::LayeredSystem::add_support_springs`],
 //! [`crate::reduced::ReducedModel::add_support_dashpots`]).
+//!
+//! A support with a contact patch (a foam block's face, [`PointSupport::patch_m`]) spreads k
+//! and c evenly over a fixed grid of [`PATCH_POINTS`] × [`PATCH_POINTS`] points of the patch
+//! (the midpoint rule of a uniform elastic bed). A point spring on a laminate with a soft
+//! core is a load the meshes of an identification cannot resolve: the faces shear apart
+//! around it over the length √(D_faces/S) (about 20 mm on the paper's roof, S the core's
+//! shear stiffness), so the ladder of meshes converges irregularly there; a patch of a few
+//! centimetres is both the physical support and a load the ladder resolves.
 
 use crate::LayeredError;
 use crate::hex20::{NODES, shape};
@@ -22,7 +30,13 @@ pub struct PointSupport {
     pub stiffness_n_m: [f64; 3],
     /// Viscous damping along the global x, y, z axes, N·s/m (causal, unlike a loss factor).
     pub damping_n_s_m: [f64; 3],
+    /// Size of the contact patch along x and y, m, centred on the point ([0, 0]: a point; a
+    /// size of 0 along one axis: a line). The stiffness and damping are the patch's totals.
+    pub patch_m: [f64; 2],
 }
+
+/// Points per side of the grid that spreads a patch support (module docs).
+pub const PATCH_POINTS: usize = 6;
 
 impl PointSupport {
     /// Checks the support numbered `i` (from 0): its point inside the plate, its stiffness and
@@ -35,6 +49,12 @@ impl PointSupport {
         if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
             return Err(LayeredError::Invalid(format!(
                 "supports[{i}].xy_fraction = [{fx}, {fy}]: the support lies outside the plate (fractions of its plan must lie in [0, 1])"
+            )));
+        }
+        let [px, py] = self.patch_m;
+        if !(px.is_finite() && py.is_finite() && px >= 0.0 && py >= 0.0) {
+            return Err(LayeredError::Invalid(format!(
+                "supports[{i}].patch_m = [{px}, {py}]: the patch's size must be finite and non-negative (m)"
             )));
         }
         for (field, v) in [
@@ -96,21 +116,45 @@ pub fn support_terms(
     for (i, s) in supports.iter().enumerate() {
         s.check(i)?;
         let [fx, fy] = s.xy_fraction;
-        let (x, y) = (lo[0] + fx * (hi[0] - lo[0]), lo[1] + fy * (hi[1] - lo[1]));
-        let face = bottom_point(mesh, [x, y]).ok_or_else(|| {
-            LayeredError::Invalid(format!(
-                "supports[{i}]: no bottom face of the mesh holds ({x:.4}, {y:.4}) m"
-            ))
-        })?;
-        for c in 0..3 {
-            terms.push(SupportTerm {
-                weights: face.iter().map(|&(n, w)| (3 * n + c, w)).collect(),
-                stiffness_n_m: s.stiffness_n_m[c],
-                damping_n_s_m: s.damping_n_s_m[c],
-            });
+        let centre = [lo[0] + fx * (hi[0] - lo[0]), lo[1] + fy * (hi[1] - lo[1])];
+        let points = patch_points(centre, s.patch_m);
+        let share = 1.0 / points.len() as f64;
+        for [x, y] in points {
+            let face = bottom_point(mesh, [x, y]).ok_or_else(|| {
+                LayeredError::Invalid(format!(
+                    "supports[{i}]: no bottom face of the mesh holds ({x:.4}, {y:.4}) m (its patch {:?} m reaches beyond the plate?)",
+                    s.patch_m
+                ))
+            })?;
+            for c in 0..3 {
+                terms.push(SupportTerm {
+                    weights: face.iter().map(|&(n, w)| (3 * n + c, w)).collect(),
+                    stiffness_n_m: share * s.stiffness_n_m[c],
+                    damping_n_s_m: share * s.damping_n_s_m[c],
+                });
+            }
         }
     }
     Ok(terms)
+}
+
+/// The plan points a support acts at: its centre, or the midpoints of a [`PATCH_POINTS`]-wide
+/// grid over each axis along which its patch has a size.
+fn patch_points(centre: [f64; 2], patch_m: [f64; 2]) -> Vec<[f64; 2]> {
+    let along = |c: f64, size: f64| -> Vec<f64> {
+        if size > 0.0 {
+            (0..PATCH_POINTS)
+                .map(|k| c + size * ((k as f64 + 0.5) / PATCH_POINTS as f64 - 0.5))
+                .collect()
+        } else {
+            vec![c]
+        }
+    };
+    let ys = along(centre[1], patch_m[1]);
+    along(centre[0], patch_m[0])
+        .into_iter()
+        .flat_map(|x| ys.iter().map(move |&y| [x, y]))
+        .collect()
 }
 
 /// The bottom face holding the plan point `xy` and the shape functions there: (node, N_a) of

@@ -281,7 +281,7 @@ pub struct InverseOptions {
 }
 
 /// One support of the tested part (`[[inverse.supports]]`): grounded springs and dashpots at
-/// the bottom-surface node nearest a point of the plan (lamdyn_layered::supports).
+/// a point of the bottom surface or spread over a patch around it (lamdyn_layered::supports).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SupportSpec {
@@ -292,6 +292,10 @@ pub struct SupportSpec {
     /// Viscous damping along the global x, y, z axes, N·s/m [default: none].
     #[serde(default)]
     pub damping_n_s_m: [f64; 3],
+    /// Size of the contact patch along x and y, m, the stiffness and damping spread evenly
+    /// over it [default: a point]. A foam block's face: a few centimetres.
+    #[serde(default)]
+    pub patch_m: [f64; 2],
 }
 
 impl SupportSpec {
@@ -301,6 +305,7 @@ impl SupportSpec {
             xy_fraction: self.xy_fraction,
             stiffness_n_m: self.stiffness_n_m,
             damping_n_s_m: self.damping_n_s_m,
+            patch_m: self.patch_m,
         }
     }
 }

@@ -62,13 +62,9 @@ fn plate(job: &Job, base: &Path) -> Result<([f64; 2], [f64; 2])> {
     }
 }
 
-/// The target eigenvalue −p² of the EMA mode within 2 % of `f`, positive imaginary part.
+/// The target eigenvalue −p² of the EMA mode nearest `f` within 2 %, positive imaginary part.
 fn target(ema: &EmaResult, f: f64) -> Option<Complex64> {
-    let m = ema
-        .modes
-        .iter()
-        .filter(|m| (m.freq_hz / f - 1.0).abs() < 0.02)
-        .min_by(|a, b| (a.freq_hz - f).abs().total_cmp(&(b.freq_hz - f).abs()))?;
+    let m = &ema.modes[crate::stages::nearest_within(ema, f, 0.02)?];
     let l = -(m.pole * m.pole);
     Some(if l.im < 0.0 { l.conj() } else { l })
 }
@@ -112,7 +108,7 @@ fn cached_model(
     modes: usize,
     coarsest: bool,
 ) -> std::result::Result<(LayeredInverse, bool), LayeredError> {
-    let mut key = Key::new(concat!("layered ", env!("CARGO_PKG_VERSION")))
+    let mut key = Key::new(concat!("layered basis v4 ", env!("CARGO_PKG_VERSION")))
         .f64(g_ref)
         .bytes(
             format!(
@@ -300,11 +296,13 @@ pub fn run(
         .map(|(m, d)| format!("{} x {} ({d} dofs)", m[0], m[1]))
         .collect();
     let cached = all_cached.load(std::sync::atomic::Ordering::Relaxed);
+    let met = out.modes.iter().filter(|m| m.is_ok()).count();
     let line = format!(
-        "C3D20, one per layer through the thickness, edge grading {}; meshes {} extrapolated to a frequency error below {:.1e}; coarsest basis at G_ref {:.4e} Pa ({build_s:.1} s{}); targets: the EMA poles",
+        "C3D20, one per layer through the thickness, edge grading {}; meshes {} extrapolated to a frequency error below {:.1e} at {met} of {} modes; coarsest basis at G_ref {:.4e} Pa ({build_s:.1} s{}); targets: the EMA poles",
         plate.edge_grading,
         meshes.join(", "),
         settings.tolerance,
+        out.modes.len(),
         g_ref,
         if cached { ", cached" } else { "" }
     );
@@ -343,12 +341,16 @@ impl LayeredBand {
 }
 
 /// Standard deviations (Hz, damping ratio) of the stable poles of the stabilization diagram
-/// within 1 % of `f` (at least three), else `None`.
+/// within 1 % of the EMA mode nearest `f` and nearer it than any other mode (a close pair's
+/// poles are not pooled), at least three; else `None`.
 fn pole_scatter(ema: &EmaResult, f: f64) -> Option<[f64; 2]> {
+    let mode = crate::stages::nearest_within(ema, f, 0.02)?;
     let near: Vec<[f64; 2]> = ema
         .diagram
         .iter()
-        .filter(|p| p.is_stable() && (p.freq_hz / f - 1.0).abs() < 0.01)
+        .filter(|p| {
+            p.is_stable() && crate::stages::nearest_within(ema, p.freq_hz, 0.01) == Some(mode)
+        })
         .map(|p| [p.freq_hz, p.damping])
         .collect();
     if near.len() < 3 {
@@ -613,7 +615,7 @@ mod tests {
     /// (`ConvergedMode` with zero bands).
     #[test]
     fn bands_cover_the_truth_with_inputs_drawn_from_their_priors() {
-        let (elements, modes, g_ref) = ([6, 5], 12, 8e6);
+        let (elements, modes, g_ref) = ([6, 5], 20, 8e6);
         let nominal = LayeredInverse::build_with_inputs(
             &plate([0.0; 5]),
             elements,

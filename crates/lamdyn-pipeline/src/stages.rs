@@ -151,7 +151,8 @@ pub struct ChainResult {
     pub kinematics: Kinematics,
     /// The paper inverse's options.
     pub paper_options: PaperInverseOptions,
-    /// The inverse at the modal frequencies (the fit's peaks).
+    /// The inverse at the modal frequencies ([`modal_frequencies`]: the fit's peaks and the
+    /// EMA modes no peak claims).
     pub modal: Vec<CorePoint>,
     /// The inverse on the curve grid.
     pub curve: Vec<CorePoint>,
@@ -269,7 +270,7 @@ pub fn run_job(
         );
         Ok(((stack, kin, opts), false))
     })?;
-    let modal_hz: Vec<f64> = fit_result.peaks.iter().map(|p| p.freq_hz).collect();
+    let modal_hz = modal_frequencies(&fit_result, &ema);
     let curve_hz = curve_grid(&job, &fit_result, &measured.set);
     let (modal, curve, causality) = stage("inverse", spinner, &mut timings, || {
         let at = |f: &[f64]| {
@@ -531,6 +532,40 @@ fn run_fit(job: &Job, model: &ModalModel, set: &FrfSet) -> Result<(FitResult, Fi
     ))
 }
 
+/// The modal frequencies, Hz, increasing: the fit's RMS peaks (paper Table 3) and every EMA
+/// mode that no peak claims. A peak claims the EMA mode nearest it within 2 %; a mode left
+/// unclaimed (weakly excited, one of a close pair, or a support's bounce that the free shell
+/// model lacks) still has a pole, and the layered inverse needs nothing else.
+pub fn modal_frequencies(r: &FitResult, ema: &EmaResult) -> Vec<f64> {
+    let peaks: Vec<f64> = r.peaks.iter().map(|p| p.freq_hz).collect();
+    let claimed: Vec<usize> = peaks
+        .iter()
+        .filter_map(|&f| nearest_within(ema, f, 0.02))
+        .collect();
+    let mut hz: Vec<f64> = peaks
+        .into_iter()
+        .chain(
+            ema.modes
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| !claimed.contains(k))
+                .map(|(_, m)| m.freq_hz),
+        )
+        .collect();
+    hz.sort_by(f64::total_cmp);
+    hz
+}
+
+/// The EMA mode nearest `f` Hz within the relative distance `within`, if any.
+pub(crate) fn nearest_within(ema: &EmaResult, f: f64, within: f64) -> Option<usize> {
+    ema.modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| (m.freq_hz / f - 1.0).abs() < within)
+        .min_by(|a, b| (a.1.freq_hz - f).abs().total_cmp(&(b.1.freq_hz - f).abs()))
+        .map(|(k, _)| k)
+}
+
 /// Lines of the curves: the job's, else 40 log-spaced lines over the modal frequencies
 /// (per-mode law: only there is it identified) or the fit band.
 fn curve_grid(job: &Job, r: &FitResult, set: &FrfSet) -> Vec<f64> {
@@ -654,7 +689,7 @@ fn collect_warnings(
     for m in &ema.modes {
         if !fe.iter().any(|f| (f / m.freq_hz - 1.0).abs() < 0.02) {
             out.push(format!(
-                "EMA mode at {:.3} Hz has no RMS peak in the fit (weakly excited or a close pair): not used for the core",
+                "EMA mode at {:.3} Hz has no RMS peak in the fit (weakly excited, a close pair, or a mode the shell model lacks): the paper's and the exact inverse read the fitted law there, the layered inverse its pole",
                 m.freq_hz
             ));
         }

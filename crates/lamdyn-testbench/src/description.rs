@@ -113,6 +113,9 @@ pub struct SupportPoint {
     /// Viscous damping along global x, y, z, N·s/m (default none).
     #[serde(default)]
     pub damping_n_s_m: [f64; 3],
+    /// Size of the contact patch along x and y, m (default a point; lamdyn_layered::supports).
+    #[serde(default)]
+    pub patch_m: [f64; 2],
 }
 
 /// `[test]`.
@@ -461,6 +464,7 @@ impl Description {
                         xy_fraction: p.xy_fraction,
                         stiffness_n_m: p.stiffness_n_m,
                         damping_n_s_m: p.damping_n_s_m,
+                        patch_m: p.patch_m,
                     })
                     .collect();
                 let terms = support_terms(&mesh, &pts)?;

@@ -2,6 +2,7 @@
 //! 0.8632 m, radii 3 m and 5 m, free; the demo's core law at 20 °C (fractional Zener).
 
 use lamdyn_layered::inverse::{InverseLayer, LayeredPlate};
+use lamdyn_layered::supports::PointSupport;
 use lamdyn_material::law::FractionalZener;
 
 /// The roof with in-plane edge grading `grading`.
@@ -32,4 +33,19 @@ pub fn plate(grading: f64) -> LayeredPlate {
 /// The demo's core at 20 °C: G0 0.8 MPa, G∞ 1 GPa, τ 3e-7 s, α 0.4.
 pub fn law() -> FractionalZener {
     FractionalZener::new(0.8e6, 1.0e9, 3e-7, 0.4).expect("law")
+}
+
+/// Four supports at 15 % and 85 % of the plan: vertical stiffness `kz` N/m each, horizontal a
+/// fifth of it; dashpots `cz` N s/m vertical, half that horizontal; square contact patches of
+/// side `patch` m (0: points).
+#[allow(dead_code)]
+pub fn corner_supports(kz: f64, cz: f64, patch: f64) -> Vec<PointSupport> {
+    [[0.15, 0.15], [0.85, 0.15], [0.15, 0.85], [0.85, 0.85]]
+        .map(|xy_fraction| PointSupport {
+            xy_fraction,
+            stiffness_n_m: [kz / 5.0, kz / 5.0, kz],
+            damping_n_s_m: [cz / 2.0, cz / 2.0, cz],
+            patch_m: [patch; 2],
+        })
+        .to_vec()
 }
