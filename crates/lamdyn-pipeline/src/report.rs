@@ -698,7 +698,7 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
         law.dof,
         if law.scale > 1.0 {
             format!(
-                "; the scatter about the law exceeds the stated noise by {:.2}x, and the bands are widened by it (Student t)",
+                "; the scatter about the law exceeds the stated noise by {:.2}x, so the fit scales the modes' noise by that much (the inputs' priors keep their weight) and the bands use Student's t",
                 law.scale
             )
         } else {
