@@ -254,6 +254,10 @@ impl LayeredInverse {
         )?;
         model.set_elastic_loss(eta_e.unwrap_or(0.0))?;
         model.add_support_dashpots(&supports)?;
+        // The supports' inputs only where there are supports (on a free part they are zero).
+        let inputs = inputs
+            .iter()
+            .filter(|i| !i.of_supports() || !plate.supports.is_empty());
         for &input in inputs {
             let thick = |sign: f64| -> Result<LayeredSystem, LayeredError> {
                 let mut p = plate.clone();
@@ -779,6 +783,104 @@ mod tests {
                 .unwrap();
             assert!((got - want).norm() < 1e-13 * scale, "{got} vs {want}");
         }
+    }
+
+    /// The supports' stiffness and damping as inputs: their effects on G* against whole new
+    /// models with every support's springs (dashpots) scaled by 1 ± 1e-3, the same targets (the
+    /// supported model's complex fixed points, dashpots at the pole's frequency) inverted on
+    /// each; and a free plate has no support input.
+    #[test]
+    fn support_sensitivities_follow_rebuilt_models() {
+        let supported = |k: f64, c: f64| {
+            let mut plate = small_test_plate();
+            plate.supports = [[0.1, 0.1], [0.9, 0.1], [0.1, 0.9], [0.9, 0.9]]
+                .map(|xy_fraction| PointSupport {
+                    xy_fraction,
+                    stiffness_n_m: [2e4 * k, 2e4 * k, 2e5 * k],
+                    damping_n_s_m: [5.0 * c, 5.0 * c, 20.0 * c],
+                    patch_m: [0.0, 0.0],
+                })
+                .to_vec();
+            plate
+        };
+        let (n, modes, g_ref) = ([4, 4], 12, 5e6);
+        let inv = LayeredInverse::build_with_inputs(
+            &supported(1.0, 1.0),
+            n,
+            g_ref,
+            modes,
+            &BASIS_RATIOS,
+            &Input::ALL,
+        )
+        .unwrap();
+        let truth = Complex64::new(3e6, 1.5e6);
+        let s = truth / inv.g_assembled_pa;
+        let start = Complex64::new(4e6, 1e6);
+        let mut checked = 0;
+        let mut largest: f64 = 0.0;
+        for first in inv.eigenvalues(truth).into_iter().filter(|l| l.re > 1.0) {
+            let mut target = first;
+            for _ in 0..50 {
+                target = inv.model.eigenvalue_near(s, target.sqrt(), target).unwrap();
+            }
+            let Ok(est) = inv.invert(target, start) else {
+                continue;
+            };
+            if checked == 3 {
+                break;
+            }
+            checked += 1;
+            let sens = inv
+                .sensitivity(est.core_shear_pa, est.rank, target)
+                .unwrap();
+            for (input, k, c) in [
+                (Input::SupportStiffness, 1.0, 0.0),
+                (Input::SupportDamping, 0.0, 1.0),
+            ] {
+                let effect = sens
+                    .inputs
+                    .iter()
+                    .find(|e| e.input == input)
+                    .unwrap()
+                    .dg_dln;
+                let h: f64 = 1e-3;
+                let g_at = |sign: f64| {
+                    let plate = supported(1.0 + sign * h * k, 1.0 + sign * h * c);
+                    let m = LayeredInverse::build(&plate, n, g_ref, modes).unwrap();
+                    m.invert(target, est.core_shear_pa).unwrap().core_shear_pa
+                };
+                let rebuilt = (g_at(1.0) - g_at(-1.0)) / (2.0 * h);
+                let err = (effect - rebuilt).norm() / rebuilt.norm().max(1e-3 * truth.norm());
+                eprintln!(
+                    "{input:?} at {:.2} Hz: dG/dln = {:.3e} G, {err:.1e} off the rebuilt models",
+                    target.re.sqrt() / (2.0 * std::f64::consts::PI),
+                    effect.norm() / truth.norm()
+                );
+                // O(h²) of the difference and the bases' Rayleigh–Ritz errors.
+                assert!(err < 1e-3, "{input:?} at {target}: {effect} vs {rebuilt}");
+                largest = largest.max(effect.norm() / truth.norm());
+            }
+        }
+        assert_eq!(checked, 3);
+        // The supports matter to these modes (else the check above proves nothing).
+        assert!(largest > 1e-2, "{largest}");
+        let free = LayeredInverse::build_with_inputs(
+            &small_test_plate(),
+            n,
+            g_ref,
+            modes,
+            &BASIS_RATIOS,
+            &Input::ALL,
+        )
+        .unwrap();
+        assert!(
+            free.model
+                .derivatives
+                .iter()
+                .all(|d| !d.input.of_supports())
+        );
+        let back = LayeredInverse::from_bytes(&inv.to_bytes()).unwrap();
+        assert_eq!(back.model, inv.model);
     }
 
     /// The sensitivities against two routes that share nothing with them: the scaling laws

@@ -192,7 +192,9 @@ impl ReducedModel {
 
     /// Adds the derivatives with respect to `input` ([`crate::sensitivity`]) of this model's
     /// matrices, `sys` being the system it was built from: the face modulus and the densities
-    /// from `sys`'s own per-layer operators (exact), a thickness from the central difference
+    /// from `sys`'s own per-layer operators (exact), the supports' stiffness and damping from
+    /// this model's springs and dashpots (exact; add the dashpots first,
+    /// [`Self::add_support_dashpots`]), a thickness from the central difference
     /// of `plus` and `minus`, the systems assembled with that thickness times 1 ± h (same
     /// mesh topology).
     ///
@@ -208,8 +210,17 @@ impl ReducedModel {
     ) -> Result<(), LayeredError> {
         let m = self.size();
         let zero = || Mat::<f64>::zeros(m, m);
+        let (mut dk_supports, mut dc_supports) = (zero(), zero());
         let (dk_elastic, dk_core, dmass) = match input {
             Input::FaceModulus => (self.k_elastic.clone(), zero(), zero()),
+            Input::SupportStiffness => {
+                dk_supports = self.k_springs.clone();
+                (zero(), zero(), zero())
+            }
+            Input::SupportDamping => {
+                dc_supports = self.c_dampers.clone();
+                (zero(), zero(), zero())
+            }
             // The faces' mass is all but the core's: Vᵀ M V − Vᵀ M_c V.
             Input::FaceDensity => (
                 zero(),
@@ -251,6 +262,8 @@ impl ReducedModel {
             dk_elastic,
             dk_core,
             dmass,
+            dk_supports,
+            dc_supports,
         });
         Ok(())
     }
@@ -395,8 +408,9 @@ pub struct ReducedEigen {
     pub derivatives: Vec<ReducedDerivative>,
 }
 
-/// First bytes of [`ReducedEigen::to_bytes`] (format version 3: with the supports).
-const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v3\n";
+/// First bytes of [`ReducedEigen::to_bytes`] (format version 4: with the supports and their
+/// derivatives).
+const EIGEN_MAGIC: &[u8] = b"lamdyn reduced eigenproblem v4\n";
 
 impl ReducedEigen {
     /// The supports' part of the pencil with the dashpots at angular frequency `omega`.
@@ -503,8 +517,8 @@ impl ReducedEigen {
     }
 
     /// The matrices as bytes: a magic line, the size m (u64) and η_e, K_e, K_c, K_s, C_s, then the
-    /// number of derivatives (u64) and for each its input's index (u64) and dK_e, dK_c, dM
-    /// (f64, little-endian, column-major).
+    /// number of derivatives (u64) and for each its input's index (u64) and dK_e, dK_c, dM,
+    /// dK_s, dC_s (f64, little-endian, column-major).
     pub fn to_bytes(&self) -> Vec<u8> {
         let m = self.k_elastic.nrows();
         let mut out = EIGEN_MAGIC.to_vec();
@@ -528,7 +542,13 @@ impl ReducedEigen {
         out.extend_from_slice(&(self.derivatives.len() as u64).to_le_bytes());
         for d in &self.derivatives {
             out.extend_from_slice(&(d.input.index() as u64).to_le_bytes());
-            for a in [&d.dk_elastic, &d.dk_core, &d.dmass] {
+            for a in [
+                &d.dk_elastic,
+                &d.dk_core,
+                &d.dmass,
+                &d.dk_supports,
+                &d.dc_supports,
+            ] {
                 put(a, &mut out);
             }
         }
@@ -551,17 +571,19 @@ impl ReducedEigen {
             Some(Mat::from_fn(m, m, |i, j| vals[j * m + i]))
         };
         let count = int(2 + 4 * mm)?;
-        if count > Input::ALL.len() || body.len() != 8 * (3 + 4 * mm + count * (1 + 3 * mm)) {
+        if count > Input::ALL.len() || body.len() != 8 * (3 + 4 * mm + count * (1 + 5 * mm)) {
             return None;
         }
         let mut derivatives = Vec::with_capacity(count);
         for k in 0..count {
-            let at = 3 + 4 * mm + k * (1 + 3 * mm);
+            let at = 3 + 4 * mm + k * (1 + 5 * mm);
             derivatives.push(ReducedDerivative {
                 input: *Input::ALL.get(int(at)?)?,
                 dk_elastic: read(at + 1)?,
                 dk_core: read(at + 1 + mm)?,
                 dmass: read(at + 1 + 2 * mm)?,
+                dk_supports: read(at + 1 + 3 * mm)?,
+                dc_supports: read(at + 1 + 4 * mm)?,
             });
         }
         Some(Self {

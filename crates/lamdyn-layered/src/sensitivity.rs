@@ -1,13 +1,17 @@
 //! How the core's G* found by the layered inverse moves with the inputs a user knows only
-//! within a tolerance: the faces' Young's modulus, the thicknesses and the densities.
+//! within a tolerance: the faces' Young's modulus, the thicknesses, the densities, and the
+//! stiffness and damping of the supports the part rests on.
 //!
 //! The reduced model keeps the derivative of its matrices with respect to each input, per
 //! unit relative change of that input (d/d ln θ): with the basis V of the nominal model,
 //!
-//!   ∂K_e/∂ln θ ≈ Vᵀ (∂K_e/∂ln θ) V,  ∂K_c/∂ln θ ≈ Vᵀ (∂K_c/∂ln θ) V,  ∂M/∂ln θ ≈ Vᵀ (∂M/∂ln θ) V.
+//!   ∂K_e/∂ln θ ≈ Vᵀ (∂K_e/∂ln θ) V,  ∂K_c/∂ln θ ≈ Vᵀ (∂K_c/∂ln θ) V,  ∂M/∂ln θ ≈ Vᵀ (∂M/∂ln θ) V,
 //!
-//! The face modulus scales the elastic layers' stiffness (∂K_e/∂ln E_f = K_e), a density its
-//! layers' mass (∂M/∂ln ρ = M_l), both exactly; a thickness changes the geometry, and its
+//! and likewise for the supports' springs K_s and dashpots C_s. The face modulus scales the
+//! elastic layers' stiffness (∂K_e/∂ln E_f = K_e), a density its layers' mass
+//! (∂M/∂ln ρ = M_l), the supports' stiffness their springs (∂K_s/∂ln k = K_s: every support
+//! by the same factor, one foam, one batch) and their damping their dashpots
+//! (∂C_s/∂ln c = C_s), all exactly; a thickness changes the geometry, and its
 //! derivative is a central difference of two assemblies at θ(1 ± h), h = 1e-4 (the matrices
 //! are smooth in θ: the truncation error is O(h²), the rounding O(10⁻¹⁶/h)). Because V holds
 //! the nominal modes, the Rayleigh–Ritz eigenvalues of the perturbed reduced pencil are exact
@@ -41,17 +45,28 @@ pub enum Input {
     FaceDensity,
     /// Density of the core.
     CoreDensity,
+    /// Stiffness of the supports (all by one factor).
+    SupportStiffness,
+    /// Damping of the supports' dashpots (all by one factor).
+    SupportDamping,
 }
 
 impl Input {
     /// Every input, in the order the reduced model stores them.
-    pub const ALL: [Input; 5] = [
+    pub const ALL: [Input; 7] = [
         Input::FaceModulus,
         Input::FaceThickness,
         Input::CoreThickness,
         Input::FaceDensity,
         Input::CoreDensity,
+        Input::SupportStiffness,
+        Input::SupportDamping,
     ];
+
+    /// Whether the input belongs to the supports (it has no effect on a free part).
+    pub fn of_supports(self) -> bool {
+        matches!(self, Input::SupportStiffness | Input::SupportDamping)
+    }
 
     /// A short name for tables ("face modulus", ...).
     pub fn name(self) -> &'static str {
@@ -61,6 +76,8 @@ impl Input {
             Input::CoreThickness => "core thickness",
             Input::FaceDensity => "face density",
             Input::CoreDensity => "core density",
+            Input::SupportStiffness => "support stiffness",
+            Input::SupportDamping => "support damping",
         }
     }
 
@@ -82,6 +99,10 @@ pub struct ReducedDerivative {
     pub dk_core: Mat<f64>,
     /// ∂(Vᵀ M V)/∂ln θ.
     pub dmass: Mat<f64>,
+    /// ∂(Vᵀ K_s V)/∂ln θ (the supports' springs).
+    pub dk_supports: Mat<f64>,
+    /// ∂(Vᵀ C_s V)/∂ln θ (the supports' dashpots).
+    pub dc_supports: Mat<f64>,
 }
 
 /// The supports of a reduced pencil: Vᵀ K_s V, Vᵀ C_s V and the (complex) angular frequency
@@ -96,8 +117,8 @@ pub struct PencilSupports<'a> {
     pub omega: Complex64,
 }
 
-/// The reduced pencil (Z, B) = (e(K_e + ε dK_e) + s(K_c + ε dK_c) + K_s + iωC_s, I + ε dM),
-/// e = 1 + iη_e; B = None for the nominal model (Vᵀ M V = I).
+/// The reduced pencil (Z, B) = (e(K_e + ε dK_e) + s(K_c + ε dK_c) + K_s + ε dK_s +
+/// iω(C_s + ε dC_s), I + ε dM), e = 1 + iη_e; B = None for the nominal model (Vᵀ M V = I).
 fn pencil(
     k_elastic: &Mat<f64>,
     k_core: &Mat<f64>,
@@ -118,7 +139,14 @@ fn pencil(
         };
         let mut v = e * ke + core_scale * kc;
         if let Some(sup) = &supports {
-            v += sup.springs[(i, j)] + Complex64::new(0.0, 1.0) * sup.omega * sup.dashpots[(i, j)];
+            let (ks, cs) = match perturbation {
+                Some((d, eps)) => (
+                    sup.springs[(i, j)] + eps * d.dk_supports[(i, j)],
+                    sup.dashpots[(i, j)] + eps * d.dc_supports[(i, j)],
+                ),
+                None => (sup.springs[(i, j)], sup.dashpots[(i, j)]),
+            };
+            v += ks + Complex64::new(0.0, 1.0) * sup.omega * cs;
         }
         c64::new(v.re, v.im)
     });
@@ -132,7 +160,7 @@ fn pencil(
 }
 
 /// Complex eigenvalues of the reduced pencil (e(K_e + ε dK_e) + s(K_c + ε dK_c) + K_s +
-/// iωC_s) x = λ (I + ε dM) x, e = 1 + iη_e, increasing real part (ε = 0 or `d` = None: the
+/// ε dK_s + iω(C_s + ε dC_s)) x = λ (I + ε dM) x, e = 1 + iη_e, increasing real part (ε = 0 or `d` = None: the
 /// nominal model, Vᵀ M V = I; `supports` None: a free part).
 pub fn pencil_eigenvalues(
     k_elastic: &Mat<f64>,

@@ -376,6 +376,13 @@ pub struct UncertaintyOptions {
     /// Relative standard deviation of each layer's density.
     #[serde(default = "default_density_sd")]
     pub density_rel_sd: f64,
+    /// Relative standard deviation of the supports' stiffness (`[[inverse.supports]]`, all by
+    /// one factor): a prior of the layered route's joint law fit (no effect on a free part).
+    #[serde(default = "default_support_stiffness_sd")]
+    pub support_stiffness_rel_sd: f64,
+    /// Relative standard deviation of the supports' damping (all dashpots by one factor).
+    #[serde(default = "default_support_damping_sd")]
+    pub support_damping_rel_sd: f64,
     /// Draw the law's parameters from the fit's covariance.
     #[serde(default = "yes")]
     pub fit_covariance: bool,
@@ -396,6 +403,15 @@ fn default_thickness_sd() -> f64 {
 fn default_density_sd() -> f64 {
     0.005
 }
+/// A foam's or rubber's dynamic stiffness is known from a static test or a data sheet to
+/// tens of per cent (it rises with frequency and preload): 20 %.
+fn default_support_stiffness_sd() -> f64 {
+    0.2
+}
+/// Damping of a support is known more loosely still: 30 %.
+fn default_support_damping_sd() -> f64 {
+    0.3
+}
 
 impl Default for UncertaintyOptions {
     fn default() -> Self {
@@ -405,6 +421,8 @@ impl Default for UncertaintyOptions {
             face_modulus_rel_sd: default_modulus_sd(),
             thickness_sd_m: default_thickness_sd(),
             density_rel_sd: default_density_sd(),
+            support_stiffness_rel_sd: default_support_stiffness_sd(),
+            support_damping_rel_sd: default_support_damping_sd(),
             fit_covariance: true,
         }
     }
@@ -591,13 +609,15 @@ impl Job {
             sup.to_point().check(i).map_err(|e| err!("inverse.{e}"))?;
         }
         let u = &self.uncertainty;
-        for (name, v) in [
-            ("uncertainty.face_modulus_rel_sd", u.face_modulus_rel_sd),
-            ("uncertainty.density_rel_sd", u.density_rel_sd),
+        for (name, v, below) in [
+            ("face_modulus_rel_sd", u.face_modulus_rel_sd, 0.5),
+            ("density_rel_sd", u.density_rel_sd, 0.5),
+            ("support_stiffness_rel_sd", u.support_stiffness_rel_sd, 1.0),
+            ("support_damping_rel_sd", u.support_damping_rel_sd, 1.0),
         ] {
-            if !(v.is_finite() && (0.0..0.5).contains(&v)) {
+            if !(v.is_finite() && (0.0..below).contains(&v)) {
                 return Err(err!(
-                    "{name}: {v} must be a relative standard deviation in [0, 0.5) (0.02 is 2 %)"
+                    "uncertainty.{name}: {v} must be a relative standard deviation in [0, {below}) (0.02 is 2 %)"
                 ));
             }
         }

@@ -14,7 +14,7 @@
 //! and band [x e^−h, x e^h] (log-normal: the moduli are positive, and a band of tens of per
 //! cent is not symmetric about them):
 //! - the inputs known within a tolerance (`[uncertainty]`: the faces' modulus, the thicknesses,
-//!   the densities), each through its sensitivity dG*/d ln θ on the coarsest model at the
+//!   the densities, and on supports their stiffness and damping), each through its sensitivity dG*/d ln θ on the coarsest model at the
 //!   converged G* ([`lamdyn_layered::sensitivity`]), to first order: a sensitivity of −20
 //!   turns a 1 % face modulus into 20 % of G', so the bands of a stiff-core laminate are wide
 //!   and, at tens of per cent, only roughly normal;
@@ -108,7 +108,7 @@ fn cached_model(
     modes: usize,
     coarsest: bool,
 ) -> std::result::Result<(LayeredInverse, bool), LayeredError> {
-    let mut key = Key::new(concat!("layered basis v4 ", env!("CARGO_PKG_VERSION")))
+    let mut key = Key::new(concat!("layered basis v5 ", env!("CARGO_PKG_VERSION")))
         .f64(g_ref)
         .bytes(
             format!(
@@ -260,12 +260,9 @@ pub fn run(
         }
     };
     for (&(k, _), m) in with_pole.iter().zip(&out.modes) {
-        modal[k].layered = Some(
-            m.as_ref()
-                .map(|m| m.core_shear_pa)
-                .map_err(|e| e.to_string()),
-        );
-        modal[k].layered_convergence = m.as_ref().ok().copied();
+        let m = m.as_ref().map_err(|e| e.to_string()).and_then(physical);
+        modal[k].layered = Some(m.as_ref().map(|m| m.core_shear_pa).map_err(Clone::clone));
+        modal[k].layered_convergence = m.ok().copied();
     }
     // Each mode's band on its own (in parallel; sequential inside, so the same bits).
     let bands: Vec<_> = with_pole
@@ -307,6 +304,23 @@ pub fn run(
         if cached { ", cached" } else { "" }
     );
     Ok((Some(line), cached))
+}
+
+/// A converged mode whose core is passive (G' > 0, G'' > 0), else why not: a pole damped
+/// less than the faces and supports alone damp that mode (an EMA damping too low, dashpots
+/// too strong) gives G'' < 0, which no material has.
+fn physical(
+    m: &lamdyn_layered::convergence::ConvergedMode,
+) -> std::result::Result<&lamdyn_layered::convergence::ConvergedMode, String> {
+    let g = m.core_shear_pa;
+    if g.re > 0.0 && g.im > 0.0 {
+        Ok(m)
+    } else {
+        Err(format!(
+            "the pole gives a core G* = {:.4e} {:+.4e}i Pa, not a passive material (G' and G'' must be positive): its damping is below what the faces and the supports' dashpots give that mode, or the mode is a support's",
+            g.re, g.im
+        ))
+    }
 }
 
 /// The 95 % band of the layered result at one mode and the sources it is made of (module
@@ -401,6 +415,8 @@ fn band(
                 Input::FaceThickness => priors.thickness_sd_m / thickness(false),
                 Input::CoreThickness => priors.thickness_sd_m / thickness(true),
                 Input::FaceDensity | Input::CoreDensity => priors.density_rel_sd,
+                Input::SupportStiffness => priors.support_stiffness_rel_sd,
+                Input::SupportDamping => priors.support_damping_rel_sd,
             };
             (e.input.name().to_string(), rel_sd, log_parts(e.dg_dln, g0))
         })
@@ -582,10 +598,28 @@ mod tests {
         FractionalZener::new(0.8e6, 1.0e9, 3e-7, 0.4).unwrap()
     }
 
+    /// The same plate on four corner supports (5 x 5 cm patches, 2 kN/m in plane, 10 kN/m
+    /// vertical, dashpots 5 and 10 N s/m: the bounce near 15 Hz, below the first elastic
+    /// mode), the supports' stiffness and damping off nominal by `d[5]` and `d[6]`.
+    fn supported(d: [f64; 7]) -> LayeredPlate {
+        let mut p = plate([d[0], d[1], d[2], d[3], d[4]]);
+        let (k, c) = (d[5].exp(), d[6].exp());
+        p.supports = [[0.1, 0.1], [0.9, 0.1], [0.1, 0.9], [0.9, 0.9]]
+            .map(|xy_fraction| lamdyn_layered::supports::PointSupport {
+                xy_fraction,
+                stiffness_n_m: [5e2 * k, 5e2 * k, 2e3 * k],
+                damping_n_s_m: [2.0 * c, 2.0 * c, 4.0 * c],
+                patch_m: [0.05, 0.05],
+            })
+            .to_vec();
+        p
+    }
+
     /// The first `n` elastic eigenvalues λ = −p² of `model`'s poles p with the core's law:
     /// the fixed point ω* = √λ(G*(ω*)) at the complex frequency ω* = −ip, the law continued
-    /// there (what a free decay of the part feels; its FRF's pole).
-    fn poles(model: &LayeredInverse, n: usize) -> Vec<Complex64> {
+    /// there and the supports' dashpots acting there too (what a free decay of the part feels;
+    /// its FRF's pole). `free`: a part without supports (its rigid modes are not counted).
+    fn poles(model: &LayeredInverse, n: usize, free: bool) -> Vec<Complex64> {
         // Elastic: Re λ above 1e-6 of a 1 kHz mode's (above 1 Hz; the rigid modes lie near 0).
         let elastic = Complex64::new((2.0 * PI * 1000.0f64).powi(2), 0.0);
         (0..n)
@@ -593,8 +627,9 @@ mod tests {
                 let mut w = Complex64::new(2.0 * PI * 50.0, 0.0);
                 let mut l = Complex64::new(0.0, 0.0);
                 for _ in 0..40 {
+                    let at = if free || l.re <= 0.0 { elastic } else { l };
                     l = model
-                        .elastic_eigenvalue(law().modulus_at_complex(w), rank, elastic)
+                        .elastic_eigenvalue(law().modulus_at_complex(w), rank, at)
                         .unwrap();
                     w = l.sqrt();
                 }
@@ -603,21 +638,35 @@ mod tests {
             .collect()
     }
 
-    /// Issue 15.4's coverage test without the EMA and the mesh: 20 virtual tests of a plate
-    /// whose faces, core and densities are drawn from their priors (1 % on the face modulus,
-    /// 0.5 % on each thickness and density), its poles computed by a model built from the drawn
-    /// inputs (no derivatives: independent of the sensitivities under test), each the complex
-    /// fixed point of the core's law, and scattered by 0.02 % in frequency and 2e-4 in damping
-    /// ratio. Identified with the nominal inputs and moved to the real frequency
-    /// ([`to_real_frequency`]), the truth G*(f_k) lies inside the per-mode band and inside the
-    /// joint law's band at ≥ 90 % of the (mode, seed) pairs, in G' and in η. Truth and
-    /// identification share one mesh, so the bands hold no discretization part here
-    /// (`ConvergedMode` with zero bands).
-    #[test]
-    fn bands_cover_the_truth_with_inputs_drawn_from_their_priors() {
+    /// What a coverage run measured: per band (per-mode, joint) and part (G', η) the share of
+    /// (mode, seed) pairs whose truth it held and its median half-width of ln G' or ln η.
+    struct Coverage {
+        pairs: usize,
+        rate: [[f64; 2]; 2],
+        median_half_width: [[f64; 2]; 2],
+    }
+
+    /// Issue 15.4's coverage test without the EMA and the mesh: `seeds` virtual tests of the
+    /// part `make` builds from the inputs' relative changes, drawn from their priors `sd`
+    /// (order of [`Input::ALL`]), its poles computed by a model built from the drawn inputs
+    /// (no derivatives: independent of the sensitivities under test), each the complex fixed
+    /// point of the core's law, and scattered by 0.02 % in frequency and 2e-4 in damping
+    /// ratio; identified with the nominal inputs (`priors` the job's) and moved to the real
+    /// frequency ([`to_real_frequency`]); then where the truth G*(f_k) lies against the
+    /// per-mode band and the joint law's band. Truth and identification share one mesh, so the
+    /// bands hold no discretization part here (`ConvergedMode` with zero bands).
+    fn coverage(
+        make: &dyn Fn(&[f64]) -> LayeredPlate,
+        sd: &[f64],
+        priors: &crate::job::UncertaintyOptions,
+        seeds: usize,
+        min_hz: f64,
+    ) -> Coverage {
         let (elements, modes, g_ref) = ([6, 5], 20, 8e6);
+        let nominal_plate = make(&vec![0.0; sd.len()]);
+        let free = nominal_plate.supports.is_empty();
         let nominal = LayeredInverse::build_with_inputs(
-            &plate([0.0; 5]),
+            &nominal_plate,
             elements,
             g_ref,
             modes,
@@ -625,25 +674,20 @@ mod tests {
             &Input::ALL,
         )
         .unwrap();
-        let priors = crate::job::UncertaintyOptions {
-            face_modulus_rel_sd: 0.01,
-            thickness_sd_m: 5e-6,
-            density_rel_sd: 0.005,
-            ..Default::default()
-        };
         let (sd_f_rel, sd_zeta) = (2e-4, 2e-4);
-        const SEEDS: usize = 20;
         let mut rng = Normal::new(2026);
         let mut inside = [[0usize; 2]; 2];
         let mut total = 0;
-        let mut widths = [Vec::new(), Vec::new()];
-        for _seed in 0..SEEDS {
-            let sd = [0.01, 0.005, 0.005, 0.005, 0.005];
-            let d = sd.map(|s| s * rng.sample());
-            let truth = LayeredInverse::build(&plate(d), elements, g_ref, modes).unwrap();
+        let mut widths = [[Vec::new(), Vec::new()], [Vec::new(), Vec::new()]];
+        for _seed in 0..seeds {
+            let d: Vec<f64> = sd.iter().map(|s| s * rng.sample()).collect();
+            let truth = LayeredInverse::build(&make(&d), elements, g_ref, modes).unwrap();
             let mut modal = Vec::new();
-            for exact in poles(&truth, 4) {
+            for exact in poles(&truth, if free { 4 } else { 10 }, free) {
                 let f = exact.re.sqrt() / (2.0 * PI);
+                if f < min_hz {
+                    continue;
+                }
                 let eps_f = sd_f_rel * rng.sample();
                 let eps_z = sd_zeta * rng.sample();
                 let target =
@@ -651,7 +695,8 @@ mod tests {
                 let start = law().modulus(2.0 * PI * f) * 1.2;
                 let est = match nominal.invert(target, start) {
                     Ok(e) => e,
-                    // A mode the nominal model cannot match: left out, as the chain does.
+                    // A mode the nominal model cannot match (or a support's bounce, which the
+                    // core barely moves): left out, as the chain does.
                     Err(_) => continue,
                 };
                 let mode = ConvergedMode {
@@ -669,8 +714,8 @@ mod tests {
                 };
                 let b = band(
                     &nominal,
-                    &plate([0.0; 5]),
-                    &priors,
+                    &nominal_plate,
+                    priors,
                     &mode,
                     target,
                     Some([sd_f_rel * f, sd_zeta]),
@@ -707,14 +752,52 @@ mod tests {
                     let lo_hi = joint_band[c];
                     inside[1][c] +=
                         usize::from(lo_hi[0] <= truth_log[c] && truth_log[c] <= lo_hi[1]);
-                    widths[c].push((b.half_width[c], 0.5 * (lo_hi[1] - lo_hi[0])));
+                    widths[0][c].push(b.half_width[c]);
+                    widths[1][c].push(0.5 * (lo_hi[1] - lo_hi[0]));
                 }
             }
         }
-        // Measured over 60 seeds (240 pairs): per-mode 89.6 % (G') and 92.9 % (eta), the
-        // first order falling a little short at half-widths of 12-17 %; joint 98.3 % and
-        // 99.2 %, with median half-widths of 2.2 % and 2.5 % against the per-mode 12 % and 17 %.
-        let rate = inside.map(|r| r.map(|n| n as f64 / total as f64));
+        let median = |w: &mut Vec<f64>| {
+            w.sort_by(f64::total_cmp);
+            w[w.len() / 2]
+        };
+        let c = Coverage {
+            pairs: total,
+            rate: inside.map(|r| r.map(|n| n as f64 / total.max(1) as f64)),
+            median_half_width: widths.map(|mut w| [median(&mut w[0]), median(&mut w[1])]),
+        };
+        eprintln!(
+            "{total} pairs: coverage per mode {:?}, joint {:?}; median half-widths per mode {:?}, joint {:?}",
+            c.rate[0], c.rate[1], c.median_half_width[0], c.median_half_width[1]
+        );
+        c
+    }
+
+    /// The job's priors with the faces' as the coverage tests draw them (1 % on the face
+    /// modulus, 5 µm on each thickness, 0.5 % on each density), the supports' at their
+    /// defaults (20 % stiffness, 30 % damping).
+    fn faces_priors() -> crate::job::UncertaintyOptions {
+        crate::job::UncertaintyOptions {
+            face_modulus_rel_sd: 0.01,
+            thickness_sd_m: 5e-6,
+            density_rel_sd: 0.005,
+            ..Default::default()
+        }
+    }
+
+    /// A free plate whose faces, core and densities are drawn from their priors (1 % on the
+    /// face modulus, 0.5 % on each thickness and density), 20 seeds ([`coverage`]): the truth
+    /// lies inside the joint law's band at ≥ 90 % of the (mode, seed) pairs, in G' and in η,
+    /// and the shared inputs make that band narrower than the per-mode one.
+    #[test]
+    fn bands_cover_the_truth_with_inputs_drawn_from_their_priors() {
+        let priors = faces_priors();
+        let make = |d: &[f64]| plate([d[0], d[1], d[2], d[3], d[4]]);
+        let c = coverage(&make, &[0.01, 0.005, 0.005, 0.005, 0.005], &priors, 20, 0.0);
+        let (rate, total) = (c.rate, c.pairs);
+        // Measured (80 pairs): per mode 87.5 % (G') and 90 % (eta), the first order falling a
+        // little short at half-widths of 12-17 %; joint 100 % and 97.5 %, with median
+        // half-widths of 2.5 % and 3.0 % against the per-mode 12 % and 17 %.
         assert!(total >= 70, "{total} pairs identified");
         assert!(
             rate[1][0] >= 0.9 && rate[1][1] >= 0.9,
@@ -725,19 +808,43 @@ mod tests {
             rate[0][0] >= 0.8 && rate[0][1] >= 0.8,
             "per-mode coverage {rate:?}"
         );
-        let median = |c: usize, k: usize| {
-            let mut w: Vec<f64> = widths[c]
-                .iter()
-                .map(|x: &(f64, f64)| if k == 0 { x.0 } else { x.1 })
-                .collect();
-            w.sort_by(f64::total_cmp);
-            w[w.len() / 2]
-        };
-        for c in 0..2 {
+        for part in 0..2 {
             assert!(
-                median(c, 1) < 0.5 * median(c, 0),
+                c.median_half_width[1][part] < 0.5 * c.median_half_width[0][part],
                 "the shared inputs narrow the band"
             );
         }
+    }
+
+    /// The same on corner supports whose stiffness and damping are known to 20 % and 30 % (the
+    /// job's defaults) and drawn from those priors with the faces' inputs, the modes above the
+    /// supports' bounce and rocking (25 Hz): the supports' inputs enter the bands and the
+    /// joint fit like the faces' (issue 15.3's "support stiffness" under a prior), and the
+    /// per-mode band holds the truth at ≥ 90 % of the pairs.
+    #[test]
+    fn bands_cover_the_truth_on_supports_known_within_a_tolerance() {
+        let priors = faces_priors();
+        let make = |d: &[f64]| supported([d[0], d[1], d[2], d[3], d[4], d[5], d[6]]);
+        let sd = [0.01, 0.005, 0.005, 0.005, 0.005, 0.2, 0.3];
+        let c = coverage(&make, &sd, &priors, 20, 25.0);
+        assert!(c.pairs >= 70, "{} pairs identified", c.pairs);
+        // Measured (79 pairs): per mode 100 % (G') and 97 % (eta), against 67 % and 76 % with
+        // the supports taken as exact (their priors at 0).
+        assert!(
+            c.rate[0][0] >= 0.9 && c.rate[0][1] >= 0.9,
+            "per-mode coverage {:?}",
+            c.rate
+        );
+        // Known defect (issue 15, 2026-11-26), asserted so that a fix shows: the joint law's
+        // band holds the truth at only 67 % (G') and 77 % (eta) of the pairs. The modes pin the
+        // shared support stiffness to about ±1 %, but through sensitivities linearised at the
+        // nominal supports, which a 20 % draw leaves far behind (dG/d ln k of 2-6 G on stiffer
+        // supports): the fit needs re-linearising at the inputs it finds. When this fails, the
+        // defect is fixed: assert >= 0.9 instead.
+        assert!(
+            c.rate[1][0] < 0.9 || c.rate[1][1] < 0.9,
+            "the joint band now covers the truth on uncertain supports: {:?}",
+            c.rate
+        );
     }
 }

@@ -312,8 +312,8 @@ fn bad_job_files_name_the_field() {
         ),
         "inverse.layered_levels: 2 must lie in 3..=6",
     );
-    // Priors of the layered band and the Monte Carlo (issue 15.4): a negative standard
-    // deviation, each named.
+    // Priors of the layered band and the Monte Carlo (issue 15.4): a negative or non-finite
+    // standard deviation, each named.
     for (field, value, expect) in [
         (
             "face_modulus_rel_sd",
@@ -329,6 +329,16 @@ fn bad_job_files_name_the_field() {
             "thickness_sd_m",
             "-1e-5",
             "uncertainty.thickness_sd_m: -0.00001 must be in m",
+        ),
+        (
+            "support_stiffness_rel_sd",
+            "-0.2",
+            "uncertainty.support_stiffness_rel_sd: -0.2 must be a relative standard deviation",
+        ),
+        (
+            "support_damping_rel_sd",
+            "nan",
+            "uncertainty.support_damping_rel_sd: NaN must be a relative standard deviation",
         ),
     ] {
         check(
