@@ -99,6 +99,10 @@ pub struct InputPrior {
     pub name: String,
     /// Relative standard deviation s of the prior on ln θ (0.01: 1 %).
     pub rel_sd: f64,
+    /// The change δ₀ = ln(θ₀/θ_nominal) at which the points and their effects were taken (0:
+    /// nominal): the fit's δ is still the change from nominal, and a point moves by
+    /// e_k (δ − δ₀). Set when the fit is re-linearised at the inputs a first fit found.
+    pub at: f64,
 }
 
 /// One mode's core as found with the nominal inputs (module docs).
@@ -119,9 +123,17 @@ pub struct ModePoint {
 }
 
 impl ModePoint {
-    /// Σ_j e_kj δ_j: how far the inputs' changes `delta` move this mode's ln G' and ln η.
-    fn input_shift(&self, delta: &[f64]) -> [f64; 2] {
-        let part = |c: usize| self.effects.iter().zip(delta).map(|(e, d)| e[c] * d).sum();
+    /// Σ_j e_kj (δ_j − δ₀_j): how far the inputs' changes `delta` from nominal move this
+    /// mode's ln G' and ln η, its point taken at the priors' `at`.
+    fn input_shift(&self, delta: &[f64], priors: &[InputPrior]) -> [f64; 2] {
+        let part = |c: usize| {
+            self.effects
+                .iter()
+                .zip(delta)
+                .zip(priors)
+                .map(|((e, d), p)| e[c] * (d - p.at))
+                .sum()
+        };
         [part(0), part(1)]
     }
 }
@@ -229,10 +241,13 @@ pub struct CoreLawFit {
     /// The law at each mode.
     pub at_modes: Vec<LawPoint>,
     /// Each mode's point moved from the complex frequency it was found at to its real
-    /// `freq_hz` by the fitted law (module docs), with the nominal inputs, Pa: the per-mode
-    /// diagnostic to set beside the law.
+    /// `freq_hz` by the fitted law (module docs), with the inputs it was taken at (the priors'
+    /// `at`; nominal by default), Pa: the per-mode diagnostic to set beside the law.
     pub real_frequency_points: Vec<Complex64>,
-    /// Each real-frequency point moved by the fitted inputs as well: G*_k e^{e_k δ}, Pa.
+    /// Per point, the factor G*(f_k)/G*(ω*_k) that moved it from the complex frequency it was
+    /// found at to the real axis (`real_frequency_points` = point × factor).
+    pub real_frequency_factors: Vec<Complex64>,
+    /// Each real-frequency point moved by the fitted inputs as well: G*_k e^{e_k (δ − δ₀)}, Pa.
     pub corrected_points: Vec<Complex64>,
     #[serde(skip)]
     fit: Internal,
@@ -293,6 +308,12 @@ fn check(points: &[ModePoint], priors: &[InputPrior], law: CoreLaw) -> Result<()
         return bad("no mode with a core to fit".into());
     }
     for p in priors {
+        if !p.at.is_finite() {
+            return bad(format!(
+                "the {} was linearised at a non-finite change {}",
+                p.name, p.at
+            ));
+        }
         if !(p.rel_sd.is_finite() && p.rel_sd > 0.0) {
             return bad(format!(
                 "the prior of the {} has standard deviation {}: it must be positive",
@@ -397,7 +418,7 @@ fn residuals(
     for (k, p) in points.iter().enumerate() {
         let m = log_law_at_point(law, &u[..np], log_freqs, p, slope)?;
         let data = log_parts(p.core_shear_pa);
-        let shift = p.input_shift(delta);
+        let shift = p.input_shift(delta, priors);
         for c in 0..2 {
             r.push((m[c] - data[c] - shift[c]) / sd[k][c]);
         }
@@ -484,7 +505,7 @@ pub fn fit_core_law(
     let first: Vec<Vec<f64>> = starts(law, points, &log_freqs)
         .into_iter()
         .map(|mut u0| {
-            u0.extend(std::iter::repeat_n(0.0, priors.len()));
+            u0.extend(priors.iter().map(|p| p.at));
             u0
         })
         .collect();
@@ -561,7 +582,7 @@ pub fn fit_core_law(
         .iter()
         .zip(&real_frequency_points)
         .map(|(pt, g)| {
-            let shift = pt.input_shift(&best.x[np..]);
+            let shift = pt.input_shift(&best.x[np..], priors);
             let found = log_parts(*g);
             from_log_parts([found[0] + shift[0], found[1] + shift[1]])
         })
@@ -580,6 +601,7 @@ pub fn fit_core_law(
             .collect(),
         at_modes: Vec::new(),
         real_frequency_points,
+        real_frequency_factors: to_real,
         corrected_points,
         fit: Internal {
             u: best.x,
@@ -826,10 +848,12 @@ mod tests {
             InputPrior {
                 name: "face modulus".into(),
                 rel_sd: 0.01,
+                at: 0.0,
             },
             InputPrior {
                 name: "face thickness".into(),
                 rel_sd: 0.0025,
+                at: 0.0,
             },
         ]
     }
@@ -1040,6 +1064,45 @@ mod tests {
             "{:?}",
             fit.at_modes
         );
+    }
+
+    /// Points and effects taken at inputs δ₀ off nominal (`InputPrior::at`) describe the same
+    /// linear model as the nominal ones: the fit finds the same inputs (from nominal) and the
+    /// same law, to the optimiser's tolerance.
+    #[test]
+    fn the_linearisation_point_moves_nothing_in_a_linear_model() {
+        let mut rng = Normal::new(9);
+        let delta = [0.012, -0.003];
+        let nominal = points(&delta, 0.02, &mut rng);
+        let at = [0.008, -0.002];
+        let moved: Vec<ModePoint> = nominal
+            .iter()
+            .map(|p| {
+                let shift = p.input_shift(&at, &priors());
+                let g = log_parts(p.core_shear_pa);
+                ModePoint {
+                    core_shear_pa: from_log_parts([g[0] + shift[0], g[1] + shift[1]]),
+                    ..p.clone()
+                }
+            })
+            .collect();
+        let moved_priors: Vec<InputPrior> = priors()
+            .into_iter()
+            .zip(at)
+            .map(|(p, a)| InputPrior { at: a, ..p })
+            .collect();
+        let a = fit_core_law(&nominal, &priors(), CoreLaw::FractionalZener).unwrap();
+        let b = fit_core_law(&moved, &moved_priors, CoreLaw::FractionalZener).unwrap();
+        for (x, y) in a.inputs().iter().zip(b.inputs()) {
+            assert!((x.value - y.value).abs() < 1e-6, "{x:?} vs {y:?}");
+        }
+        for (x, y) in a.curve(10).iter().zip(b.curve(10)) {
+            assert!((x.storage_pa / y.storage_pa - 1.0).abs() < 1e-6);
+            assert!((x.loss_factor / y.loss_factor - 1.0).abs() < 1e-6);
+        }
+        for (x, y) in a.corrected_points.iter().zip(&b.corrected_points) {
+            assert!((x / y - 1.0).norm() < 1e-6, "{x} vs {y}");
+        }
     }
 
     #[test]

@@ -316,6 +316,27 @@ impl LayeredInverse {
         })
     }
 
+    /// The model with its inputs moved from nominal by the relative changes `changes`
+    /// ([`ReducedEigen::moved`]: exact for the moduli, densities and supports, first order for
+    /// the thicknesses), keeping its derivatives (at the moved inputs) for
+    /// [`Self::sensitivity`]: the joint law fit re-linearises there.
+    ///
+    /// # Errors
+    /// As [`ReducedEigen::moved`].
+    pub fn with_inputs_moved(&self, changes: &[(Input, f64)]) -> Result<Self, LayeredError> {
+        Ok(Self {
+            model: self.model.moved(changes)?,
+            g_assembled_pa: self.g_assembled_pa,
+            dofs: self.dofs,
+            basis_top_hz: self.basis_top_hz,
+        })
+    }
+
+    /// The inputs this model has derivatives for ([`Self::build_with_inputs`]).
+    pub fn inputs(&self) -> Vec<Input> {
+        self.model.derivatives.iter().map(|d| d.input).collect()
+    }
+
     /// The highest real mode of the reduced basis at its softest reference modulus, Hz: the
     /// basis holds the modes below it ([`BASIS_COVER`]).
     pub fn basis_top_hz(&self) -> f64 {
@@ -785,34 +806,37 @@ mod tests {
         }
     }
 
+    /// `plate` on a 4 x 4 mesh, G_ref 5 MPa, 12 modes per reference modulus, with the
+    /// derivatives for every input.
+    fn with_every_input(plate: &LayeredPlate) -> LayeredInverse {
+        LayeredInverse::build_with_inputs(plate, [4, 4], 5e6, 12, &BASIS_RATIOS, &Input::ALL)
+            .unwrap()
+    }
+
+    /// The small test plate on four corner springs (20 kN/m in plane, 200 kN/m vertical, times
+    /// `k`) and dashpots (5 and 20 N s/m, times `c`): the bounce among the first elastic modes.
+    fn corner_supported(k: f64, c: f64) -> LayeredPlate {
+        let mut plate = small_test_plate();
+        plate.supports = [[0.1, 0.1], [0.9, 0.1], [0.1, 0.9], [0.9, 0.9]]
+            .map(|xy_fraction| PointSupport {
+                xy_fraction,
+                stiffness_n_m: [2e4 * k, 2e4 * k, 2e5 * k],
+                damping_n_s_m: [5.0 * c, 5.0 * c, 20.0 * c],
+                patch_m: [0.0, 0.0],
+            })
+            .to_vec();
+        plate
+    }
+
     /// The supports' stiffness and damping as inputs: their effects on G* against whole new
     /// models with every support's springs (dashpots) scaled by 1 ± 1e-3, the same targets (the
     /// supported model's complex fixed points, dashpots at the pole's frequency) inverted on
     /// each; and a free plate has no support input.
     #[test]
     fn support_sensitivities_follow_rebuilt_models() {
-        let supported = |k: f64, c: f64| {
-            let mut plate = small_test_plate();
-            plate.supports = [[0.1, 0.1], [0.9, 0.1], [0.1, 0.9], [0.9, 0.9]]
-                .map(|xy_fraction| PointSupport {
-                    xy_fraction,
-                    stiffness_n_m: [2e4 * k, 2e4 * k, 2e5 * k],
-                    damping_n_s_m: [5.0 * c, 5.0 * c, 20.0 * c],
-                    patch_m: [0.0, 0.0],
-                })
-                .to_vec();
-            plate
-        };
+        let supported = corner_supported;
         let (n, modes, g_ref) = ([4, 4], 12, 5e6);
-        let inv = LayeredInverse::build_with_inputs(
-            &supported(1.0, 1.0),
-            n,
-            g_ref,
-            modes,
-            &BASIS_RATIOS,
-            &Input::ALL,
-        )
-        .unwrap();
+        let inv = with_every_input(&supported(1.0, 1.0));
         let truth = Complex64::new(3e6, 1.5e6);
         let s = truth / inv.g_assembled_pa;
         let start = Complex64::new(4e6, 1e6);
@@ -864,15 +888,7 @@ mod tests {
         assert_eq!(checked, 3);
         // The supports matter to these modes (else the check above proves nothing).
         assert!(largest > 1e-2, "{largest}");
-        let free = LayeredInverse::build_with_inputs(
-            &small_test_plate(),
-            n,
-            g_ref,
-            modes,
-            &BASIS_RATIOS,
-            &Input::ALL,
-        )
-        .unwrap();
+        let free = with_every_input(&small_test_plate());
         assert!(
             free.model
                 .derivatives
@@ -881,6 +897,68 @@ mod tests {
         );
         let back = LayeredInverse::from_bytes(&inv.to_bytes()).unwrap();
         assert_eq!(back.model, inv.model);
+    }
+
+    /// A model moved to other inputs ([`LayeredInverse::with_inputs_moved`]) against the
+    /// scaling laws (face modulus by e^δ with the core: λ by e^δ; both densities by e^δ: λ by
+    /// e^−δ; to 1e-9, nothing but rounding) and against models rebuilt with the supports' springs
+    /// and dashpots 20 % and 30 % stiffer (the same poles inverted on each: the nominal basis
+    /// holds the moved supports to second order). An input without a derivative is refused.
+    #[test]
+    fn moved_models_follow_scaling_laws_and_rebuilt_supports() {
+        let (n, modes, g_ref) = ([4, 4], 12, 5e6);
+        let free = with_every_input(&small_test_plate());
+        let g = Complex64::new(3e6, 1.5e6);
+        let delta: f64 = 0.05;
+        let nominal: Vec<Complex64> = free.eigenvalues(g);
+        let stiffer = free
+            .with_inputs_moved(&[(Input::FaceModulus, delta)])
+            .unwrap()
+            .eigenvalues(g * delta.exp());
+        let heavier = free
+            .with_inputs_moved(&[(Input::FaceDensity, delta), (Input::CoreDensity, delta)])
+            .unwrap()
+            .eigenvalues(g);
+        for ((a, b), c) in nominal.iter().zip(&stiffer).zip(&heavier).skip(6).take(6) {
+            assert!((b / (a * delta.exp()) - 1.0).norm() < 1e-9, "{a} {b}");
+            assert!((c / (a * (-delta).exp()) - 1.0).norm() < 1e-9, "{a} {c}");
+        }
+        let supported = corner_supported;
+        let nominal = with_every_input(&supported(1.0, 1.0));
+        let (dk, dc) = (1.2f64.ln(), 1.3f64.ln());
+        let moved = nominal
+            .with_inputs_moved(&[(Input::SupportStiffness, dk), (Input::SupportDamping, dc)])
+            .unwrap();
+        let rebuilt = LayeredInverse::build(&supported(1.2, 1.3), n, g_ref, modes).unwrap();
+        let s = g / rebuilt.g_assembled_pa;
+        let mut worst: f64 = 0.0;
+        let mut checked = 0;
+        for first in rebuilt.eigenvalues(g).into_iter().filter(|l| l.re > 1.0) {
+            let mut target = first;
+            for _ in 0..50 {
+                target = rebuilt
+                    .model
+                    .eigenvalue_near(s, target.sqrt(), target)
+                    .unwrap();
+            }
+            let (Ok(a), Ok(b)) = (rebuilt.invert(target, g), moved.invert(target, g)) else {
+                continue;
+            };
+            worst = worst.max((b.core_shear_pa / a.core_shear_pa - 1.0).norm());
+            checked += 1;
+            if checked == 4 {
+                break;
+            }
+        }
+        eprintln!("supports moved by 20 % / 30 %: G* within {worst:.1e} of rebuilt models");
+        assert_eq!(checked, 4);
+        assert!(worst < 1e-3, "{worst:e}");
+        let e = free
+            .with_inputs_moved(&[(Input::SupportStiffness, 0.1)])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("no derivative for the support stiffness"), "{e}");
     }
 
     /// The sensitivities against two routes that share nothing with them: the scaling laws

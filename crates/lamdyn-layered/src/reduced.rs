@@ -430,6 +430,98 @@ impl ReducedEigen {
             .map(|d| (d, eps))
     }
 
+    /// The model with its inputs moved from nominal by the relative changes `changes`
+    /// (δ = ln θ/θ_nominal): each matrix A becomes A + c Σ ∂A/∂ln θ with c = e^δ − 1 for an
+    /// input whose matrices scale with it (exact) and c = δ for a thickness (first order,
+    /// [`Input::scales_exactly`]), the mass Vᵀ M V = I + c ∂M/∂ln θ likewise; the derivatives
+    /// of the exact inputs are scaled by e^δ (they are the moved parts themselves). The pencil
+    /// is then brought back to a unit mass by the congruence A ← M^{−1/2} A M^{−1/2} (M^{−1/2}
+    /// from the symmetric eigendecomposition of the small mass matrix), which keeps every
+    /// eigenvalue [Golub & Van Loan 2013, §8.7.1].
+    ///
+    /// # Errors
+    /// [`LayeredError::Invalid`] for an input the model has no derivative for, a non-finite
+    /// change, or a moved mass that is not positive definite (a change far beyond first
+    /// order).
+    pub fn moved(&self, changes: &[(Input, f64)]) -> Result<Self, LayeredError> {
+        let m = self.k_elastic.nrows();
+        let mut moved = self.clone();
+        let mut mass = Mat::<f64>::identity(m, m);
+        for &(input, delta) in changes {
+            let Some(d) = self.derivatives.iter().find(|d| d.input == input) else {
+                return Err(LayeredError::Invalid(format!(
+                    "the reduced model has no derivative for the {}",
+                    input.name()
+                )));
+            };
+            if !delta.is_finite() {
+                return Err(LayeredError::Invalid(format!(
+                    "change of the {}: {delta} is not finite",
+                    input.name()
+                )));
+            }
+            let c = if input.scales_exactly() {
+                delta.exp_m1()
+            } else {
+                delta
+            };
+            moved.k_elastic += &d.dk_elastic * c;
+            moved.k_core += &d.dk_core * c;
+            moved.k_supports += &d.dk_supports * c;
+            moved.c_supports += &d.dc_supports * c;
+            mass += &d.dmass * c;
+            if input.scales_exactly() {
+                let scale = delta.exp();
+                for dd in moved.derivatives.iter_mut().filter(|dd| dd.input == input) {
+                    for a in [
+                        &mut dd.dk_elastic,
+                        &mut dd.dk_core,
+                        &mut dd.dmass,
+                        &mut dd.dk_supports,
+                        &mut dd.dc_supports,
+                    ] {
+                        *a *= scale;
+                    }
+                }
+            }
+        }
+        let evd = mass
+            .self_adjoint_eigen(faer::Side::Lower)
+            .map_err(|_| LayeredError::Invalid("the moved mass's eigensolver failed".into()))?;
+        let (q, lam) = (evd.U(), evd.S().column_vector());
+        if (0..m).any(|k| lam[k].is_nan() || lam[k] <= 0.0) {
+            return Err(LayeredError::Invalid(
+                "the moved mass is not positive definite: the inputs' changes are far beyond first order".into(),
+            ));
+        }
+        let root = Mat::from_fn(m, m, |i, k| q[(i, k)] / lam[k].sqrt());
+        let inv_sqrt = seq::mul(root.as_ref(), q.transpose());
+        let congruence = |a: &mut Mat<f64>| {
+            let left = seq::mul(inv_sqrt.as_ref(), a.as_ref());
+            *a = seq::mul(left.as_ref(), inv_sqrt.as_ref());
+        };
+        for a in [
+            &mut moved.k_elastic,
+            &mut moved.k_core,
+            &mut moved.k_supports,
+            &mut moved.c_supports,
+        ] {
+            congruence(a);
+        }
+        for d in &mut moved.derivatives {
+            for a in [
+                &mut d.dk_elastic,
+                &mut d.dk_core,
+                &mut d.dmass,
+                &mut d.dk_supports,
+                &mut d.dc_supports,
+            ] {
+                congruence(a);
+            }
+        }
+        Ok(moved)
+    }
+
     /// Every eigenvalue of the pencil, nominal or perturbed ([`pencil_eigenvalues`]).
     fn all(
         &self,

@@ -68,6 +68,13 @@ impl Input {
         matches!(self, Input::SupportStiffness | Input::SupportDamping)
     }
 
+    /// Whether the matrices it changes scale with it exactly (a modulus, a density, the
+    /// supports' springs or dashpots: ∂A/∂ln θ = A_part, so A(θ e^δ) = A + (e^δ − 1) ∂A/∂ln θ),
+    /// rather than to first order (a thickness: A + δ ∂A/∂ln θ).
+    pub fn scales_exactly(self) -> bool {
+        !matches!(self, Input::FaceThickness | Input::CoreThickness)
+    }
+
     /// A short name for tables ("face modulus", ...).
     pub fn name(self) -> &'static str {
         match self {

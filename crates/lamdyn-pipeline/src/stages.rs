@@ -286,13 +286,35 @@ pub fn run_job(
         Ok(((modal, curve, kk), false))
     })?;
     let mut modal = modal;
-    let mut layered_line = None;
+    let (mut layered_line, mut coarsest) = (None, None);
     if job.inverse.layered {
-        layered_line = stage("layered inverse", spinner, &mut timings, || {
-            layered::run(&job, &base, &ema, &mut modal, &cache, spinner)
+        (layered_line, coarsest) = stage("layered inverse", spinner, &mut timings, || {
+            layered::run(&job, &base, &ema, &mut modal, &cache, spinner, [0.0; 2])
         })?;
     }
-    let core_law = layered::fit_law(&job, &modal);
+    let mut core_law = stage("core law", spinner, &mut timings, || {
+        Ok((layered::fit_law(&job, &modal, coarsest.as_ref()), false))
+    })?;
+    // Supports the law finds far from the job's: the ladder again at those.
+    if let Some((moved, at)) = layered::supports_found(&job, core_law.as_ref()) {
+        let stage_name = "layered inverse at the supports found";
+        let (line, again) = stage(stage_name, spinner, &mut timings, || {
+            layered::run(&moved, &base, &ema, &mut modal, &cache, spinner, at)
+        })?;
+        layered_line = line.map(|l| {
+            format!(
+                "{l}; run again at the supports the law found, stiffness x {:.3} and damping x {:.3} of the job's",
+                at[0].exp(),
+                at[1].exp()
+            )
+        });
+        core_law = stage(
+            "core law at the supports found",
+            spinner,
+            &mut timings,
+            || Ok((layered::fit_law(&moved, &modal, again.as_ref()), false)),
+        )?;
+    }
     layered::to_real_frequency(&mut modal, core_law.as_ref());
     let mc = if job.uncertainty.samples > 0 {
         Some(stage("uncertainty", spinner, &mut timings, || {
