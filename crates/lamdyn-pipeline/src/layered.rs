@@ -14,8 +14,8 @@
 //! and band [x e^−h, x e^h] (log-normal: the moduli are positive, and a band of tens of per
 //! cent is not symmetric about them):
 //! - the inputs known within a tolerance (`[uncertainty]`: the faces' modulus, the thicknesses,
-//!   the densities, and on supports their stiffness and damping), each through its sensitivity dG*/d ln θ on the coarsest model at the
-//!   converged G* ([`lamdyn_layered::sensitivity`]), to first order: a sensitivity of −20
+//!   the densities, and on supports their stiffness and damping), each through its
+//!   sensitivity dG*/d ln θ on the coarsest model at the converged G* ([`lamdyn_layered::sensitivity`]), to first order: a sensitivity of −20
 //!   turns a 1 % face modulus into 20 % of G', so the bands of a stiff-core laminate are wide
 //!   and, at tens of per cent, only roughly normal;
 //! - the pole's scatter over the stabilization diagram: the sample standard deviation of the
@@ -503,11 +503,12 @@ fn core_law(choice: crate::job::CoreLawChoice) -> Option<CoreLaw> {
 /// has a band.
 ///
 /// With the `coarsest` model and an input with a wide prior ([`WIDE_PRIOR`]: the supports')
-/// the fit is re-linearised (Gauss–Newton on the inputs): the sensitivities are first order at the nominal inputs, and an
-/// input the modes pin far from nominal (a support's stiffness known to 20 % moves G' by 2–6
-/// times its own change on a mode mixed with the bounce) leaves that linearisation behind. So
-/// the coarsest model is moved to the inputs the fit found ([`LayeredInverse::with_inputs_moved`]), each mode's
-/// coarse eigenvalue is inverted there and its sensitivities taken there; the mode's point
+/// the fit is re-linearised (Gauss–Newton on the inputs): the sensitivities are first order
+/// at the nominal inputs, and an input the modes pin far from nominal (a support's stiffness
+/// known to 20 % moves G' by 2–6 times its own change on a mode mixed with the bounce) leaves
+/// that linearisation behind. So the coarsest model is moved to the inputs the fit found
+/// ([`LayeredInverse::with_inputs_moved`]), each mode's coarse eigenvalue is inverted there
+/// and its sensitivities taken there; the mode's point
 /// moves by the ratio of the two coarse solutions, and the fit runs again with the priors
 /// still about nominal ([`InputPrior::at`]), until the inputs move by less than 5 % of their
 /// prior sd (at most [`RELINEARISATIONS`] times; a mode the moved model cannot match ends
