@@ -772,11 +772,19 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
         law.parameters
             .iter()
             .map(|p| {
+                // A parameter the data do not determine has no interval (lamdyn_fit::joint).
+                let bound = |b: f64| {
+                    if p.sd.is_finite() {
+                        format!("{b:.5e}")
+                    } else {
+                        "not determined".to_string()
+                    }
+                };
                 vec![
                     p.name.clone(),
                     format!("{:.5e}", p.value),
-                    format!("{:.5e}", p.ci95[0]),
-                    format!("{:.5e}", p.ci95[1]),
+                    bound(p.ci95[0]),
+                    bound(p.ci95[1]),
                 ]
             })
             .collect(),
