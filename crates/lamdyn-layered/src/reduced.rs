@@ -473,13 +473,7 @@ impl ReducedEigen {
             if input.scales_exactly() {
                 let scale = delta.exp();
                 for dd in moved.derivatives.iter_mut().filter(|dd| dd.input == input) {
-                    for a in [
-                        &mut dd.dk_elastic,
-                        &mut dd.dk_core,
-                        &mut dd.dmass,
-                        &mut dd.dk_supports,
-                        &mut dd.dc_supports,
-                    ] {
+                    for a in dd.matrices_mut() {
                         *a *= scale;
                     }
                 }
@@ -509,13 +503,7 @@ impl ReducedEigen {
             congruence(a);
         }
         for d in &mut moved.derivatives {
-            for a in [
-                &mut d.dk_elastic,
-                &mut d.dk_core,
-                &mut d.dmass,
-                &mut d.dk_supports,
-                &mut d.dc_supports,
-            ] {
+            for a in d.matrices_mut() {
                 congruence(a);
             }
         }
@@ -634,13 +622,7 @@ impl ReducedEigen {
         out.extend_from_slice(&(self.derivatives.len() as u64).to_le_bytes());
         for d in &self.derivatives {
             out.extend_from_slice(&(d.input.index() as u64).to_le_bytes());
-            for a in [
-                &d.dk_elastic,
-                &d.dk_core,
-                &d.dmass,
-                &d.dk_supports,
-                &d.dc_supports,
-            ] {
+            for a in d.matrices() {
                 put(a, &mut out);
             }
         }

@@ -88,6 +88,11 @@ impl Input {
         }
     }
 
+    /// The input of that [`Input::name`], if any.
+    pub fn named(name: &str) -> Option<Input> {
+        Input::ALL.into_iter().find(|i| i.name() == name)
+    }
+
     /// Position in [`Input::ALL`] (the tag of the cached form).
     pub fn index(self) -> usize {
         Input::ALL.iter().position(|&i| i == self).unwrap_or(0)
@@ -110,6 +115,30 @@ pub struct ReducedDerivative {
     pub dk_supports: Mat<f64>,
     /// ∂(Vᵀ C_s V)/∂ln θ (the supports' dashpots).
     pub dc_supports: Mat<f64>,
+}
+
+impl ReducedDerivative {
+    /// The five derivative matrices in their stored order: dK_e, dK_c, dM, dK_s, dC_s.
+    pub fn matrices(&self) -> [&Mat<f64>; 5] {
+        [
+            &self.dk_elastic,
+            &self.dk_core,
+            &self.dmass,
+            &self.dk_supports,
+            &self.dc_supports,
+        ]
+    }
+
+    /// [`Self::matrices`], mutable.
+    pub fn matrices_mut(&mut self) -> [&mut Mat<f64>; 5] {
+        [
+            &mut self.dk_elastic,
+            &mut self.dk_core,
+            &mut self.dmass,
+            &mut self.dk_supports,
+            &mut self.dc_supports,
+        ]
+    }
 }
 
 /// The supports of a reduced pencil: Vᵀ K_s V, Vᵀ C_s V and the (complex) angular frequency

@@ -572,6 +572,10 @@ pub const SUPPORTS_RERUN: f64 = 0.05;
 /// supported coverage test's joint η band at 87 % (all inputs: 92 %).
 pub const WIDE_PRIOR: f64 = 0.05;
 
+/// The re-linearisation stops when no input moved by more than this fraction of its prior's
+/// standard deviation since the last ([`fit_law`]).
+pub const SETTLED: f64 = 0.05;
+
 /// Most re-linearisations of the joint fit ([`fit_law`]).
 pub const RELINEARISATIONS: usize = 4;
 
@@ -592,14 +596,14 @@ fn fit_law_with(
     let Some(coarsest) = coarsest else {
         return Some(Ok(fit));
     };
-    let bands: Vec<&LayeredBand> = index
-        .iter()
-        .filter_map(|&k| modal[k].layered_band.as_ref()?.as_ref().ok())
-        .collect();
     // Only where some input has a wide prior (the faces' first order holds over theirs).
     if priors.iter().all(|p| p.rel_sd < WIDE_PRIOR) {
         return Some(Ok(fit));
     }
+    let bands: Vec<&LayeredBand> = index
+        .iter()
+        .filter_map(|&k| modal[k].layered_band.as_ref()?.as_ref().ok())
+        .collect();
     // Where the points were taken (the model's own inputs), and where the fit stands now.
     let base: Vec<f64> = priors.iter().map(|p| p.at).collect();
     let mut at = base.clone();
@@ -609,7 +613,7 @@ fn fit_law_with(
             .iter()
             .zip(&at)
             .zip(&priors)
-            .all(|((d, a), p)| (d - a).abs() < 0.05 * p.rel_sd);
+            .all(|((d, a), p)| (d - a).abs() < SETTLED * p.rel_sd);
         if settled {
             break;
         }
@@ -639,7 +643,7 @@ fn relinearised(
 ) -> Option<(Vec<ModePoint>, Vec<InputPrior>)> {
     let inputs: Vec<Input> = priors
         .iter()
-        .map(|p| Input::ALL.into_iter().find(|i| i.name() == p.name))
+        .map(|p| Input::named(&p.name))
         .collect::<Option<_>>()?;
     let changes: Vec<(Input, f64)> = inputs
         .iter()

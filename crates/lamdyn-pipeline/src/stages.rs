@@ -297,10 +297,12 @@ pub fn run_job(
     })?;
     // Supports the law finds far from the job's: the ladder again at those.
     if let Some((moved, at)) = layered::supports_found(&job, core_law.as_ref()) {
-        let stage_name = "layered inverse at the supports found";
-        let (line, again) = stage(stage_name, spinner, &mut timings, || {
-            layered::run(&moved, &base, &ema, &mut modal, &cache, spinner, at)
-        })?;
+        let (line, again) = stage(
+            "layered inverse at the supports found",
+            spinner,
+            &mut timings,
+            || layered::run(&moved, &base, &ema, &mut modal, &cache, spinner, at),
+        )?;
         layered_line = line.map(|l| {
             format!(
                 "{l}; run again at the supports the law found, stiffness x {:.3} and damping x {:.3} of the job's",
