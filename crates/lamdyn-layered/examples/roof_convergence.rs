@@ -51,7 +51,7 @@ fn main() {
         let mut load = vec![0.0; sys.n_dofs];
         load[3 * mesh.top[0].0 + 2] = 1.0;
         let model =
-            ReducedModel::new(&sys, 1, &[1.0], modes, &[load], -(2.0 * PI).powi(2)).unwrap();
+            ReducedModel::new(&sys, &[1], &[1.0], modes, &[load], -(2.0 * PI).powi(2)).unwrap();
         let lambda = model.complex_eigenvalues(Complex64::new(1.0, eta));
         let line: Vec<String> = lambda
             .iter()

@@ -1,7 +1,7 @@
 //! FRFs of the layered model with a frequency-dependent core, by projection onto a reduced
 //! basis, and the direct complex solve that checks them.
 //!
-//! With the core layer's stiffness assembled at a modulus G_a, the dynamic stiffness at ω is
+//! With the core layers' stiffness assembled at a modulus G_a, the dynamic stiffness at ω is
 //!
 //!   Z(ω) = (1 + iη_e) K_e + s(ω) K_c + K_s + iω C_s − ω² M,  s(ω) = G*(ω)/G_a,
 //!
@@ -54,41 +54,88 @@ pub struct ReducedModel {
     pub top_eigenvalue: f64,
 }
 
-/// Stiffness scale per layer: 1 everywhere, `core` on layer `core_layer`.
-fn scales(n_layers: usize, core_layer: usize, core: f64) -> Vec<f64> {
+/// Stiffness scale per layer: 1 everywhere, `core` on the layers `core_layers`.
+fn scales(n_layers: usize, core_layers: &[usize], core: f64) -> Vec<f64> {
     (0..n_layers)
-        .map(|l| if l == core_layer { core } else { 1.0 })
+        .map(|l| if core_layers.contains(&l) { core } else { 1.0 })
         .collect()
 }
 
-/// Elastic-layer and core stiffness of `sys` (the core's alone, and everything else).
+/// K_c = Σ_j K_core,j: the stiffness of the viscoelastic layers `core_layers` of `sys`, which
+/// share one law (one scale s(ω)), at their assembled modulus.
+pub fn core_stiffness(sys: &LayeredSystem, core_layers: &[usize]) -> SparseColMat<usize, f64> {
+    sum_of(&sys.k_layers, core_layers)
+}
+
+/// M_c = Σ_j M_core,j: the mass of the viscoelastic layers `core_layers` of `sys`.
+pub fn core_mass(sys: &LayeredSystem, core_layers: &[usize]) -> SparseColMat<usize, f64> {
+    sum_of(&sys.m_layers, core_layers)
+}
+
+/// Σ of `parts[j]` over `layers` (each index once; the layers are checked by the callers).
+fn sum_of(parts: &[SparseColMat<usize, f64>], layers: &[usize]) -> SparseColMat<usize, f64> {
+    let mut at = layers.iter().map(|&l| &parts[l]);
+    let first = at.next().cloned().unwrap_or_else(|| {
+        let n = parts.first().map_or(0, |p| p.nrows());
+        SparseColMat::try_new_from_triplets(n, n, &[]).expect("an empty matrix")
+    });
+    at.fold(first, |acc, p| &acc + p)
+}
+
+/// Whether `core_layers` names at least one layer of `n_layers`, each once; else why not.
+pub fn check_core_layers(n_layers: usize, core_layers: &[usize]) -> Result<(), LayeredError> {
+    if core_layers.is_empty() {
+        return Err(LayeredError::Invalid(
+            "the model needs at least one viscoelastic (core) layer".into(),
+        ));
+    }
+    for (k, &l) in core_layers.iter().enumerate() {
+        if l >= n_layers {
+            return Err(LayeredError::Invalid(format!(
+                "core layer {} of {n_layers} layers",
+                l + 1
+            )));
+        }
+        if core_layers[..k].contains(&l) {
+            return Err(LayeredError::Invalid(format!(
+                "core layer {} named twice",
+                l + 1
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Elastic-layer and core stiffness of `sys` (the cores' alone, and everything else).
 fn split_stiffness(
     sys: &LayeredSystem,
-    core_layer: usize,
+    core_layers: &[usize],
 ) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
     let n = sys.k_layers.len();
     (
-        sys.stiffness(&scales(n, core_layer, 0.0)),
-        sys.k_layers[core_layer].clone(),
+        sys.stiffness(&scales(n, core_layers, 0.0)),
+        core_stiffness(sys, core_layers),
     )
 }
 
 impl ReducedModel {
     /// Builds the basis (module docs): `modes` real modes at each of the core-modulus ratios
     /// `ratios` (G_j/G_a), plus the residual vectors of `loads`, with shift `shift` (rad²/s²).
+    /// `core_layers` are the viscoelastic layers, all scaled by the one s(ω) (one material: a
+    /// five-layer glass/PVB/glass/PVB/glass laminate has two).
     ///
     /// # Errors
-    /// [`LayeredError::Invalid`] for a core layer out of range or no load; [`LayeredError::Solver`]
-    /// from the eigen or static solves.
+    /// [`LayeredError::Invalid`] for no core layer, one out of range or named twice, or no load;
+    /// [`LayeredError::Solver`] from the eigen or static solves.
     pub fn new(
         sys: &LayeredSystem,
-        core_layer: usize,
+        core_layers: &[usize],
         ratios: &[f64],
         modes: usize,
         loads: &[Vec<f64>],
         shift: f64,
     ) -> Result<Self, LayeredError> {
-        Self::with_orders(sys, core_layer, ratios, modes, loads, shift, 1)
+        Self::with_orders(sys, core_layers, ratios, modes, loads, shift, 1)
     }
 
     /// [`Self::new`] with the modes' core sensitivities continued to `krylov_orders` terms of
@@ -104,7 +151,7 @@ impl ReducedModel {
     /// As [`Self::new`], and [`LayeredError::Invalid`] for zero orders.
     pub fn with_orders(
         sys: &LayeredSystem,
-        core_layer: usize,
+        core_layers: &[usize],
         ratios: &[f64],
         modes: usize,
         loads: &[Vec<f64>],
@@ -117,12 +164,8 @@ impl ReducedModel {
             ));
         }
         let n_layers = sys.k_layers.len();
-        if core_layer >= n_layers {
-            return Err(LayeredError::Invalid(format!(
-                "core layer {} of {n_layers} layers",
-                core_layer + 1
-            )));
-        }
+        check_core_layers(n_layers, core_layers)?;
+        let k_core = core_stiffness(sys, core_layers);
         if loads.is_empty() || ratios.is_empty() {
             return Err(LayeredError::Invalid(
                 "the basis needs at least one load and one reference core modulus".into(),
@@ -132,7 +175,7 @@ impl ReducedModel {
         let mut cols: Vec<Mat<f64>> = Vec::new();
         let mut top_eigenvalue = f64::INFINITY;
         for &r in ratios {
-            let scale = scales(n_layers, core_layer, r);
+            let scale = scales(n_layers, core_layers, r);
             // One factor of K_j − σM for the modes and the static solves.
             let llt = sys.shifted_cholesky(&scale, shift)?;
             let (lambda, phi) = sys.modes_with(&llt, modes, shift)?;
@@ -142,11 +185,11 @@ impl ReducedModel {
             cols.push(f);
             // How the modes change with the core modulus: (K_j − σM)⁻¹ K_c φ, and the higher
             // orders of the same Krylov sequence.
-            let mut sens = seq::sparse_mul(&sys.k_layers[core_layer], phi.as_ref());
+            let mut sens = seq::sparse_mul(&k_core, phi.as_ref());
             llt.solve_in_place(sens.as_mut());
             cols.push(phi);
             for _ in 1..krylov_orders {
-                let mut next = seq::sparse_mul(&sys.k_layers[core_layer], sens.as_ref());
+                let mut next = seq::sparse_mul(&k_core, sens.as_ref());
                 llt.solve_in_place(next.as_mut());
                 cols.push(sens);
                 sens = next;
@@ -164,7 +207,7 @@ impl ReducedModel {
         let project = |a: &SparseColMat<usize, f64>| project_on(&basis, a);
         let mut k_elastic = Mat::<f64>::zeros(basis.ncols(), basis.ncols());
         for (l, k) in sys.k_layers.iter().enumerate() {
-            if l != core_layer {
+            if !core_layers.contains(&l) {
                 k_elastic += project(k);
             }
         }
@@ -177,7 +220,7 @@ impl ReducedModel {
             c_dampers: Mat::zeros(k_springs.nrows(), k_springs.ncols()),
             k_springs,
             elastic_loss: 0.0,
-            k_core: project(&sys.k_layers[core_layer]),
+            k_core: project(&k_core),
             mass: project(&sys.m),
             basis,
             derivatives: Vec::new(),
@@ -205,9 +248,10 @@ impl ReducedModel {
         &mut self,
         input: Input,
         sys: &LayeredSystem,
-        core_layer: usize,
+        core_layers: &[usize],
         thickness: Option<(&LayeredSystem, &LayeredSystem, f64)>,
     ) -> Result<(), LayeredError> {
+        check_core_layers(sys.k_layers.len(), core_layers)?;
         let m = self.size();
         let zero = || Mat::<f64>::zeros(m, m);
         let (mut dk_supports, mut dc_supports) = (zero(), zero());
@@ -225,9 +269,9 @@ impl ReducedModel {
             Input::FaceDensity => (
                 zero(),
                 zero(),
-                &self.mass - self.project(&sys.m_layers[core_layer]),
+                &self.mass - self.project(&core_mass(sys, core_layers)),
             ),
-            Input::CoreDensity => (zero(), zero(), self.project(&sys.m_layers[core_layer])),
+            Input::CoreDensity => (zero(), zero(), self.project(&core_mass(sys, core_layers))),
             Input::FaceThickness | Input::CoreThickness => {
                 let Some((plus, minus, h)) = thickness else {
                     return Err(LayeredError::Invalid(format!(
@@ -242,15 +286,15 @@ impl ReducedModel {
                     ));
                 }
                 let n_layers = sys.k_layers.len();
-                let no_core = scales(n_layers, core_layer, 0.0);
+                let no_core = scales(n_layers, core_layers, 0.0);
                 let diff = |a: SparseColMat<usize, f64>, b: SparseColMat<usize, f64>| {
                     self.project(&(&a - &b)) * (1.0 / (2.0 * h))
                 };
                 (
                     diff(plus.stiffness(&no_core), minus.stiffness(&no_core)),
                     diff(
-                        plus.k_layers[core_layer].clone(),
-                        minus.k_layers[core_layer].clone(),
+                        core_stiffness(plus, core_layers),
+                        core_stiffness(minus, core_layers),
                     ),
                     diff(plus.m.clone(), minus.m.clone()),
                 )
@@ -724,12 +768,14 @@ pub struct DirectSolver {
 }
 
 impl DirectSolver {
-    /// The solver of `sys` with the core on layer `core_layer`.
+    /// The solver of `sys` with the viscoelastic layers `core_layers` (one law).
     ///
     /// # Errors
+    /// [`LayeredError::Invalid`] for bad core layers ([`check_core_layers`]);
     /// [`LayeredError::Solver`] if the pattern or its symbolic LU cannot be built.
-    pub fn new(sys: &LayeredSystem, core_layer: usize) -> Result<Self, LayeredError> {
-        let (ke, kc) = split_stiffness(sys, core_layer);
+    pub fn new(sys: &LayeredSystem, core_layers: &[usize]) -> Result<Self, LayeredError> {
+        check_core_layers(sys.k_layers.len(), core_layers)?;
+        let (ke, kc) = split_stiffness(sys, core_layers);
         let parts = [&ke, &kc, &sys.m];
         let n = sys.n_dofs;
         // Every matrix gets every coordinate of the three (zeros where it has none).

@@ -632,15 +632,22 @@ impl Job {
     }
 
     /// The stack's layers in SI units ([`lamdyn_material::units`], the checks every command
-    /// shares): catches mm for m, GPa for Pa, g/cm³ for kg/m³.
+    /// shares): catches mm for m, GPa for Pa, g/cm³ for kg/m³. A three-layer stack is the
+    /// paper's sandwich (face, core, face); any other (five layers of glass and PVB, say) is
+    /// for the layered route alone, its core the layers without `young_pa`
+    /// ([`lamdyn_material::laminate::StackSpec::layered_cores`]).
     fn check_stack(&self) -> Result<()> {
-        if self.stack.layers.len() != 3 {
+        if self.stack.layers.len() == 3 {
+            self.stack.to_sandwich().map_err(|e| err!("stack.{e}"))?;
+            return Ok(());
+        }
+        if !self.inverse.layered {
             return Err(err!(
-                "stack.layers: the inverse needs three layers (face, core, face), got {}",
+                "stack.layers: {} layers: the paper's route needs three (face, core, face); set inverse.layered = true for the layered route, which takes any stack",
                 self.stack.layers.len()
             ));
         }
-        self.stack.to_sandwich().map_err(|e| err!("stack.{e}"))?;
+        self.stack.layered_cores().map_err(|e| err!("stack.{e}"))?;
         Ok(())
     }
 

@@ -145,8 +145,9 @@ pub struct ChainResult {
     pub fitted_rms: Vec<f64>,
     /// Table 3: peaks of the RMS curves.
     pub table3: Vec<PeakComparison>,
-    /// The stack of the inverse.
-    pub stack: SandwichStack,
+    /// The sandwich of the paper's route; `None` for a stack of other than three layers,
+    /// which only the layered route takes.
+    pub stack: Option<SandwichStack>,
     /// The inverse's kinematics.
     pub kinematics: Kinematics,
     /// The paper inverse's options.
@@ -255,11 +256,14 @@ pub fn run_job(
     let (fit_lines, measured_rms, fitted_rms, table3) = objective_parts;
     warnings.extend(fit_result.warnings.iter().map(|w| format!("fit: {w}")));
     let (stack, kinematics, paper_options) = stage("inverse setup", spinner, &mut timings, || {
-        let stack = job.stack.to_sandwich().context("the job's [stack]")?;
+        let stack = match job.stack.layers.len() {
+            3 => Some(job.stack.to_sandwich().context("the job's [stack]")?),
+            _ => None,
+        };
         let kin = match job.inverse.kinematics {
             KinematicsChoice::Beam => Kinematics::Beam,
             KinematicsChoice::Plate => Kinematics::Plate {
-                poisson: stack.bottom().poisson,
+                poisson: job.stack.layers[0].poisson,
             },
         };
         let opts = PaperInverseOptions::new(
@@ -275,7 +279,7 @@ pub fn run_job(
     let (modal, curve, causality) = stage("inverse", spinner, &mut timings, || {
         let at = |f: &[f64]| {
             f.iter()
-                .map(|&f| core_point(&stack, &paper_options, &fit_result, f))
+                .map(|&f| core_point(stack.as_ref(), &paper_options, &fit_result, f))
                 .collect::<Vec<_>>()
         };
         let (modal, curve) = (at(&modal_hz), at(&curve_hz));
@@ -318,7 +322,13 @@ pub fn run_job(
         )?;
     }
     layered::to_real_frequency(&mut modal, core_law.as_ref());
-    let mc = if job.uncertainty.samples > 0 {
+    if stack.is_none() && job.uncertainty.samples > 0 {
+        warnings.push(format!(
+            "uncertainty: the Monte Carlo of the paper's route skipped: the stack has {} layers, the paper's sandwich three; the layered route's bands hold the uncertainty",
+            job.stack.layers.len()
+        ));
+    }
+    let mc = if job.uncertainty.samples > 0 && stack.is_some() {
         Some(stage("uncertainty", spinner, &mut timings, || {
             let input = uncertainty::McInput {
                 stack: &job.stack,
@@ -617,8 +627,9 @@ fn curve_grid(job: &Job, r: &FitResult, set: &FrfSet) -> Vec<f64> {
 }
 
 /// Both inverses at `f` Hz for the fitted law.
+/// The paper's and the exact inverse at `f` on `stack` (`None`: not a sandwich, both say so).
 fn core_point(
-    stack: &SandwichStack,
+    stack: Option<&SandwichStack>,
     options: &PaperInverseOptions,
     r: &FitResult,
     f: f64,
@@ -626,12 +637,20 @@ fn core_point(
     let w = 2.0 * PI * f;
     let e = r.modulus(w);
     let (_, _, sd) = r.modulus_uncertainty(w);
+    let no_sandwich =
+        || "the stack is not a three-layer sandwich: only the layered route".to_string();
     CorePoint {
         freq_hz: f,
         e_eff_pa: e,
         e_sd: sd,
-        paper: paper_inverse(stack, w, e, options).map_err(|e| e.to_string()),
-        exact: exact_inverse(stack, w, e, options.kinematics).map_err(|e| e.to_string()),
+        paper: stack.map_or_else(
+            || Err(no_sandwich()),
+            |s| paper_inverse(s, w, e, options).map_err(|e| e.to_string()),
+        ),
+        exact: stack.map_or_else(
+            || Err(no_sandwich()),
+            |s| exact_inverse(s, w, e, options.kinematics).map_err(|e| e.to_string()),
+        ),
         layered: None,
         layered_convergence: None,
         layered_band: None,

@@ -45,6 +45,48 @@ fn demo(dir: &Path, samples: usize) -> (ChainResult, PathBuf) {
     (result, job)
 }
 
+/// The demo's modal points (at least three) with their layered bands, after checking that the
+/// layered G* lies within issue 15's 2 % (G') and 3 % (eta) of the truth and inside its band.
+fn layered_recovers_the_truth(
+    result: &ChainResult,
+) -> Vec<(
+    &lamdyn_pipeline::CorePoint,
+    &lamdyn_pipeline::layered::LayeredBand,
+)> {
+    let truth = result
+        .truth
+        .as_ref()
+        .expect("the demo's job names its truth");
+    assert!(
+        result.modal.len() >= 3,
+        "{} modal points",
+        result.modal.len()
+    );
+    let mut out = Vec::new();
+    for p in &result.modal {
+        let (g, t) = (
+            p.layered_g().expect("a layered G*"),
+            truth.at(p.freq_hz).unwrap(),
+        );
+        let (eg, ee) = (g.re / t.re - 1.0, (g.im / g.re) / (t.im / t.re) - 1.0);
+        eprintln!("{:.2} Hz: G' {eg:+.4}, eta {ee:+.4}", p.freq_hz);
+        assert!(
+            eg.abs() < 0.02 && ee.abs() < 0.03,
+            "layered inverse off at {:.2} Hz: G' {eg:+.3}, eta {ee:+.3}",
+            p.freq_hz
+        );
+        let band = p.layered_band.as_ref().expect("a band").as_ref().unwrap();
+        assert!(
+            eg.ln_1p().abs() < band.half_width[0] && ee.ln_1p().abs() < band.half_width[1],
+            "truth outside the band at {:.2} Hz: {eg:+.3} / {ee:+.3} against {:?}",
+            p.freq_hz,
+            band.half_width
+        );
+        out.push((p, band));
+    }
+    out
+}
+
 /// Every `href`/`src` of the HTML that names a file.
 fn linked_files(html: &str) -> BTreeSet<String> {
     let mut out = BTreeSet::new();
@@ -129,27 +171,11 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         .truth
         .as_ref()
         .expect("the demo's job names its truth");
-    assert!(
-        result.modal.len() >= 3,
-        "{} modal points",
-        result.modal.len()
-    );
-    for p in &result.modal {
-        let (g, t) = (
-            p.layered_g().expect("a layered G*"),
-            truth.at(p.freq_hz).unwrap(),
-        );
-        let (eg, ee) = (g.re / t.re - 1.0, (g.im / g.re) / (t.im / t.re) - 1.0);
-        assert!(
-            eg.abs() < 0.02 && ee.abs() < 0.03,
-            "layered inverse off at {:.2} Hz: G' {eg:+.3}, eta {ee:+.3}",
-            p.freq_hz
-        );
+    for (p, band) in layered_recovers_the_truth(&result) {
         assert!(p.paper_g().is_some() && p.exact_g().is_some());
-        // Its band holds every source it names and the truth: the faces' priors (1 % modulus,
-        // 0.01 mm, 0.5 % density), the pole's scatter and the discretization. The face
-        // modulus and thickness dominate a stiff core (sensitivities of -10 to -60).
-        let band = p.layered_band.as_ref().expect("a band").as_ref().unwrap();
+        // Its band holds every source it names: the faces' priors (1 % modulus, 0.01 mm,
+        // 0.5 % density), the pole's scatter and the discretization. The face modulus and
+        // thickness dominate a stiff core (sensitivities of -10 to -60).
         let names: Vec<&str> = band.sources.iter().map(|s| s.0.as_str()).collect();
         for n in [
             "face modulus",
@@ -159,12 +185,6 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         ] {
             assert!(names.contains(&n), "{names:?}");
         }
-        assert!(
-            eg.ln_1p().abs() < band.half_width[0] && ee.ln_1p().abs() < band.half_width[1],
-            "truth outside the band at {:.2} Hz: {eg:+.3} / {ee:+.3} against {:?}",
-            p.freq_hz,
-            band.half_width
-        );
         assert!(band.dominant(0).starts_with("face"), "{band:?}");
     }
     // Issue 15.3: the fractional Zener law fitted to all modes at once with the inputs shared.
@@ -213,6 +233,63 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
     let csv = std::fs::read_to_string(report.join("core_modal.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains("within_phi_limit"));
     assert_eq!(csv.lines().count(), result.modal.len() + 1);
+}
+
+/// The small laminate as five layers, glass 2 mm / PVB 0.5 mm / glass 2 mm / PVB 0.5 mm /
+/// glass 2 mm, the two interlayers of one material (the law of [`small`]).
+fn five_layers() -> Description {
+    let mut d = small();
+    let (glass, pvb) = (d.layers[0].clone(), d.layers[1].clone());
+    let glass = lamdyn_material::laminate::LayerSpec {
+        thickness_m: 2e-3,
+        ..glass
+    };
+    let pvb = lamdyn_material::laminate::LayerSpec {
+        thickness_m: 0.5e-3,
+        ..pvb
+    };
+    d.layers = vec![glass.clone(), pvb.clone(), glass.clone(), pvb, glass];
+    d
+}
+
+/// Issue 15.1: a stack of five layers, two of them viscoelastic with one law, goes the layered
+/// route alone: the paper's and the exact inverse say why they have no answer, the Monte
+/// Carlo of the paper's route is skipped with a warning, and the layered inverse recovers the
+/// core at every mode within 2 % (G') and 3 % (eta) of the truth (a finer graded mesh),
+/// inside its band. Measured at five modes, 79–216 Hz: G' −1.2 … +0.1 %, eta +0.6 … +1.3 %;
+/// before the start from the homogenized stack, a fixed 10 MPa start matched the 156 Hz pole
+/// to the wrong mode (G' −80 %, inside a 7 % band).
+#[test]
+fn a_five_layer_laminate_goes_the_layered_route_alone() {
+    let dir = TempDir::new("pipeline-five-layers");
+    let input = OutputDir::prepare(&dir.join("input"), &[], false).unwrap();
+    let options = RunOptions {
+        cache_dir: Some(dir.join("input/.lamdyn-cache")),
+    };
+    let sampling = DemoSampling {
+        samples: 50,
+        seed: 1,
+        temperature_k: None,
+    };
+    let (result, _, _) = run_demo(&five_layers(), &input, sampling, &options, &Silent).unwrap();
+    let out = OutputDir::prepare(&dir.join("report"), &[], false).unwrap();
+    out.write(&report::build(&result).unwrap()).unwrap();
+    assert!(result.stack.is_none() && result.uncertainty.is_none());
+    assert!(
+        result
+            .warnings
+            .iter()
+            .any(|w| w.contains("Monte Carlo of the paper's route skipped")),
+        "{:?}",
+        result.warnings
+    );
+    for (p, _) in layered_recovers_the_truth(&result) {
+        let why = p.paper.as_ref().expect_err("no paper inverse");
+        assert!(why.contains("not a three-layer sandwich"), "{why}");
+        assert!(p.exact_g().is_none());
+    }
+    let html = std::fs::read_to_string(dir.join("report/report.html")).unwrap();
+    assert!(html.contains("The core&#39;s law over all modes"));
 }
 
 #[test]
@@ -288,6 +365,28 @@ fn bad_job_files_name_the_field() {
         "gpa.toml",
         good.replacen("young_pa = 70000000000.0", "young_pa = 70.0", 1),
         "young_pa = 70 is outside [1e8, 2e12]: moduli are in Pa",
+    );
+    // A five-layer stack (issue 15.1): the layered route takes it, the paper's route alone
+    // does not; a stack whose every layer has young_pa has no core.
+    let layers_at = good.find("[[stack.layers]]").unwrap();
+    let layers = &good[layers_at..];
+    let pvb_at = layers[16..].find("[[stack.layers]]").unwrap() + 16;
+    let glass_at = layers[pvb_at + 16..].find("[[stack.layers]]").unwrap() + pvb_at + 16;
+    let (glass, pvb) = (&layers[..pvb_at], &layers[pvb_at..glass_at]);
+    let five = format!(
+        "{}{glass}\n{pvb}\n{glass}\n{pvb}\n{glass}\n",
+        &good[..layers_at]
+    );
+    read("five.toml", five.clone()).expect("a five-layer job");
+    check(
+        "five_paper.toml",
+        five.replace("[inverse]\n", "[inverse]\nlayered = false\n"),
+        "stack.layers: 5 layers: the paper's route needs three (face, core, face); set inverse.layered = true",
+    );
+    check(
+        "four_faces.toml",
+        format!("{}{glass}\n{glass}\n{glass}\n{glass}\n", &good[..layers_at]),
+        "at least one core (without): 4 layers, 0 without young_pa",
     );
     // A support of the layered model outside the plate (issue 15's error list).
     check(

@@ -38,7 +38,7 @@ fn bench(c: &mut Criterion) {
     });
     group.bench_function("frfs", |b| b.iter(|| bench.frfs().expect("FRFs")));
     group.bench_function("hits", |b| b.iter(|| bench.hit_records().expect("hits")));
-    let direct = DirectSolver::new(&bench.system, bench.core_layer).expect("direct solver");
+    let direct = DirectSolver::new(&bench.system, &bench.core_layers).expect("direct solver");
     let load = hammer_load(&bench.mesh, &bench.test).expect("load");
     let w = 2.0 * PI * 40.0;
     group.bench_function("direct_line", |b| {

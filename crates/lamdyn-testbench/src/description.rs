@@ -1,8 +1,9 @@
 //! The TOML description of a virtual test (`lamdyn simulate`), and the bench it builds.
 //!
 //! A description names the part (`[plate]`: footprint and radii of curvature), its mesh
-//! (`[mesh]`), the layer stack (`[[layers]]`, the material crate's layer format: exactly one
-//! layer has a frequency-dependent `shear_law` or `young_law`, the core; the others are elastic
+//! (`[mesh]`), the layer stack (`[[layers]]`, the material crate's layer format: the layers
+//! with a frequency-dependent `shear_law` or `young_law` are the core — one or several, all with
+//! the same law, as the two PVB interlayers of a five-layer laminate; the others are elastic
 //! with `young_pa` or `shear_pa` and one common optional `loss_factor`), optional elastic
 //! supports (`[supports]`), the measurement (`[test]`: sensor grid or explicit sensors, hammer,
 //! band, noise on the FRFs), optional hammer hits as time signals (`[hits]`), and the reduced
@@ -241,8 +242,8 @@ pub struct Bench {
     pub system: LayeredSystem,
     /// The reduced model.
     pub model: ReducedModel,
-    /// Index of the core layer.
-    pub core_layer: usize,
+    /// Indices of the core layers (one law), bottom to top.
+    pub core_layers: Vec<usize>,
     /// The core's law (shear or Young's modulus, as described).
     pub core_law: Box<dyn ViscoelasticLaw>,
     /// Whether the law is of the shear modulus (else Young's).
@@ -262,8 +263,8 @@ impl Bench {
     pub fn truth_table(&self, freqs_hz: &[f64]) -> String {
         let which = if self.core_law_is_shear { "G" } else { "E" };
         let mut s = format!(
-            "# the core's law ({which}*), layer {}: {}\nf_hz,storage_pa,loss_pa,loss_factor\n",
-            self.core_layer,
+            "# the core's law ({which}*), layers {:?}: {}\nf_hz,storage_pa,loss_pa,loss_factor\n",
+            self.core_layers,
             self.core_law.describe()
         );
         for f in freqs_hz {
@@ -424,15 +425,10 @@ impl Description {
     /// eigen and static solves.
     pub fn build(&self, progress: &mut dyn FnMut(&str)) -> Result<Bench, BenchError> {
         let (materials, core) = self.materials()?;
-        let (core_layer, law, shear, poisson, density) = core;
+        let (core_layers, law, shear, core_materials) = core;
         let f_a = self.check_basis()?;
         let m_a = law.modulus(2.0 * PI * f_a).re;
         positive("the core's storage modulus at basis.reference_hz[0]", m_a)?;
-        let young_a = if shear {
-            2.0 * m_a * (1.0 + poisson)
-        } else {
-            m_a
-        };
         let eta_e = materials.first().map_or(0.0, |m| m.1);
         if materials.iter().any(|m| m.1 != eta_e) {
             return Err(invalid(
@@ -441,16 +437,23 @@ impl Description {
                     .into(),
             ));
         }
-        // Every layer's material, bottom to top: the core assembled at its reference modulus.
+        // Every layer's material, bottom to top: the cores assembled at the reference modulus.
         let mut elastic: Vec<Elastic> = materials.iter().map(|m| m.0).collect();
-        elastic.insert(
-            core_layer,
-            Elastic {
-                young_pa: young_a,
-                poisson,
-                density_kg_m3: density,
-            },
-        );
+        for (&at, &(poisson, density)) in core_layers.iter().zip(&core_materials) {
+            let young_a = if shear {
+                2.0 * m_a * (1.0 + poisson)
+            } else {
+                m_a
+            };
+            elastic.insert(
+                at,
+                Elastic {
+                    young_pa: young_a,
+                    poisson,
+                    density_kg_m3: density,
+                },
+            );
+        }
         progress("mesh");
         let mesh = self.mesh_spec()?.build()?;
         progress("assembly");
@@ -488,7 +491,7 @@ impl Description {
         let shift = -(2.0 * PI).powi(2);
         let mut model = ReducedModel::new(
             &system,
-            core_layer,
+            &core_layers,
             &ratios,
             self.basis.modes,
             &[load],
@@ -500,7 +503,7 @@ impl Description {
             mesh,
             system,
             model,
-            core_layer,
+            core_layers,
             core_law: law,
             core_law_is_shear: shear,
             assembled_modulus_pa: m_a,
@@ -509,15 +512,15 @@ impl Description {
         })
     }
 
-    /// The elastic layers (material, loss) in order without the core, and the core's
-    /// (index, law, is-shear, Poisson, density).
+    /// The elastic layers (material, loss) in order without the cores, and the cores'
+    /// (indices, law, is-shear, (Poisson, density) per core layer).
     #[allow(clippy::type_complexity)]
     fn materials(
         &self,
     ) -> Result<
         (
             Vec<(Elastic, f64)>,
-            (usize, Box<dyn ViscoelasticLaw>, bool, f64, f64),
+            (Vec<usize>, Box<dyn ViscoelasticLaw>, bool, Vec<(f64, f64)>),
         ),
         BenchError,
     > {
@@ -531,20 +534,29 @@ impl Description {
             ));
         }
         let mut elastic = Vec::new();
-        let mut core = None;
+        let mut core: Option<(Vec<usize>, Box<dyn ViscoelasticLaw>, bool, Vec<(f64, f64)>)> = None;
         for (i, l) in self.layers.iter().enumerate() {
             match layer_material(l, i)? {
                 LayerMaterial::Elastic(e, eta) => elastic.push((e, eta)),
-                LayerMaterial::Core(law, shear, nu, rho) => {
-                    if core.is_some() {
-                        return Err(invalid(
-                            &layer_name(l, i),
-                            "a second layer with a law: the bench has one frequency-dependent core"
-                                .into(),
-                        ));
+                LayerMaterial::Core(law, shear, nu, rho) => match &mut core {
+                    None => core = Some((vec![i], law, shear, vec![(nu, rho)])),
+                    Some((at, _, _, own)) => {
+                        let first = &self.layers[at[0]];
+                        if (l.shear_law.as_ref(), l.young_law.as_ref())
+                            != (first.shear_law.as_ref(), first.young_law.as_ref())
+                        {
+                            return Err(invalid(
+                                &layer_name(l, i),
+                                format!(
+                                    "its law differs from {}'s: the core layers share one law (one material)",
+                                    layer_name(first, at[0])
+                                ),
+                            ));
+                        }
+                        at.push(i);
+                        own.push((nu, rho));
                     }
-                    core = Some((i, law, shear, nu, rho));
-                }
+                },
             }
         }
         let core = core.ok_or_else(|| {
@@ -553,6 +565,12 @@ impl Description {
                 "no layer has a shear_law or young_law: the core must have one".into(),
             )
         })?;
+        if elastic.is_empty() {
+            return Err(invalid(
+                "layers",
+                "every layer has a law: a laminate needs an elastic face".into(),
+            ));
+        }
         Ok((elastic, core))
     }
 

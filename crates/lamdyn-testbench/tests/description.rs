@@ -209,6 +209,52 @@ fn bad_descriptions_name_the_field() {
     assert!(e.contains("no layer has a shear_law or young_law"), "{e}");
 }
 
+/// Several core layers of one law (a five-layer laminate) build one bench whose core is
+/// both, assembled at the law's modulus; a second law, or no face, is refused, named.
+#[test]
+fn core_layers_share_one_law() {
+    let base = small("[test]\ngrid = [2, 2]\n");
+    let layers_at = base.find("[[layers]]").unwrap();
+    let basis_at = base.find("[basis]").unwrap();
+    let stack = &base[layers_at..basis_at];
+    let glass_end = stack[10..].find("[[layers]]").unwrap() + 10;
+    let (glass, rest) = stack.split_at(glass_end);
+    let pvb = &rest[..rest[10..].find("[[layers]]").unwrap() + 10];
+    let with = |layers: &[&str]| {
+        format!(
+            "{}{}\n{}",
+            &base[..layers_at],
+            layers.concat(),
+            &base[basis_at..]
+        )
+    };
+    let five = with(&[glass, pvb, glass, pvb, glass]);
+    let bench = Description::parse("five.toml", &five)
+        .unwrap()
+        .build(&mut |_| {})
+        .unwrap();
+    assert_eq!(bench.core_layers, vec![1, 3]);
+    assert!(bench.truth_table(&[10.0]).contains("layers [1, 3]"));
+    // The two interlayers are assembled alike: the same stiffness per unit thickness.
+    let k = |l: usize| {
+        bench.system.k_layers[l]
+            .val()
+            .iter()
+            .map(|v| v.abs())
+            .sum::<f64>()
+    };
+    let ratio = k(1) / k(3);
+    assert!((ratio - 1.0).abs() < 1e-9, "{ratio}");
+    let other = pvb.replace("alpha = 0.55", "alpha = 0.5");
+    let e = build_error(&with(&[glass, pvb, glass, &other, glass]));
+    assert!(
+        e.contains("layers[3] ('PVB'): its law differs from layers[1] ('PVB')'s"),
+        "{e}"
+    );
+    let e = build_error(&with(&[pvb, pvb]));
+    assert!(e.contains("a laminate needs an elastic face"), "{e}");
+}
+
 /// The built-in roof parses, and its description states the paper's Table 1 numbers.
 #[test]
 fn built_in_roof_is_the_papers_part() {

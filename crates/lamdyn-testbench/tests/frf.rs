@@ -35,9 +35,10 @@ fn reduced_basis_matches_direct_solves() {
     let mid = (lo * hi).sqrt();
     let ratios = [lo, mid, hi].map(|w| law.modulus(w).norm() / g_a);
     let shift = -(2.0 * PI).powi(2);
-    let rb = ReducedModel::new(&sys, 1, &ratios, 30, std::slice::from_ref(&load), shift).unwrap();
+    let rb =
+        ReducedModel::new(&sys, &[1], &ratios, 30, std::slice::from_ref(&load), shift).unwrap();
     let load_r = rb.project_load(&load);
-    let direct = DirectSolver::new(&sys, 1).unwrap();
+    let direct = DirectSolver::new(&sys, &[1]).unwrap();
     let mut worst: f64 = 0.0;
     for k in 0..20 {
         let omega = lo + (hi - lo) * k as f64 / 19.0;

@@ -35,7 +35,7 @@ fn bench(hammers: &[[f64; 2]]) -> (Bench, Vec<ImpactTest>) {
         .map(|t| hammer_load(&mesh, t).unwrap())
         .collect();
     let ratios = [1.0, 80.0].map(|f: f64| law.modulus(2.0 * PI * f).norm() / g_a);
-    let model = ReducedModel::new(&sys, 1, &ratios, 30, &loads, -(2.0 * PI).powi(2)).unwrap();
+    let model = ReducedModel::new(&sys, &[1], &ratios, 30, &loads, -(2.0 * PI).powi(2)).unwrap();
     (
         Bench {
             mesh,

@@ -25,7 +25,7 @@
 //! may be left out.
 
 use super::{CoreGeometry, Face, Layer, LayerStack, ModulusKind, SandwichStack};
-use crate::error::MaterialError;
+use crate::error::{MaterialError, check};
 use crate::law::{ConstantModulus, LawSpec, ViscoelasticLaw};
 use crate::units::Quantity;
 use serde::{Deserialize, Serialize};
@@ -263,6 +263,54 @@ impl StackSpec {
             }
             e => e,
         })
+    }
+}
+
+impl StackSpec {
+    /// The viscoelastic (core) layers of a stack for the layered inverse, which finds one law
+    /// shared by all of them: in a three-layer stack the middle one (its modulus, if given, is
+    /// ignored, as in [`Self::to_sandwich`]); in any other stack the layers without `young_pa`
+    /// (a five-layer glass/PVB/glass/PVB/glass laminate has two). Every other layer is an
+    /// elastic face with `young_pa`, checked as the sandwich's faces are; every layer's
+    /// thickness, density and Poisson's ratio are checked for SI units.
+    ///
+    /// # Errors
+    /// [`MaterialError`] naming the layer and the field; a stack of fewer than two layers, or
+    /// without a core or a face.
+    pub fn layered_cores(&self) -> Result<Vec<usize>, MaterialError> {
+        let n = self.layers.len();
+        let cores: Vec<usize> = if n == 3 {
+            vec![1]
+        } else {
+            (0..n)
+                .filter(|&i| self.layers[i].young_pa.is_none())
+                .collect()
+        };
+        if n < 2 || cores.is_empty() || cores.len() == n {
+            return Err(unsupported(
+                "stack",
+                format!(
+                    "the layered inverse needs elastic faces (with young_pa) and at least one core (without): {n} layers, {} without young_pa",
+                    cores.len()
+                ),
+            ));
+        }
+        for (i, layer) in self.layers.iter().enumerate() {
+            if cores.contains(&i) {
+                let loc = layer.location(i);
+                check::si(&loc, "thickness_m", layer.thickness_m, Quantity::Thickness)?;
+                check::si(
+                    &loc,
+                    "density_kg_m3",
+                    layer.density_kg_m3,
+                    Quantity::Density,
+                )?;
+                check::poisson(&loc, "poisson", layer.poisson)?;
+            } else {
+                face(layer, i)?;
+            }
+        }
+        Ok(cores)
     }
 }
 

@@ -159,3 +159,35 @@ fn units_other_than_si_are_refused() {
     assert!(err_of(&gpa).contains("70 GPa is 70e9"), "{}", err_of(&gpa));
     assert!(parse(&gpa).to_sandwich().is_err());
 }
+
+/// The layered inverse's core layers: the middle of three (its modulus ignored), else the
+/// layers without `young_pa`; faces and cores checked for SI units with the layer named.
+#[test]
+fn layered_cores_of_three_and_five_layers() {
+    assert_eq!(parse(ROOF).layered_cores().unwrap(), vec![1]);
+    let glass =
+        "[[layers]]\nthickness_m = 2e-3\ndensity_kg_m3 = 2500.0\npoisson = 0.22\nyoung_pa = 70e9\n";
+    let pvb = "[[layers]]\nname = \"PVB\"\nthickness_m = 0.38e-3\ndensity_kg_m3 = 1070.0\npoisson = 0.49\n";
+    let five = [glass, pvb, glass, pvb, glass].concat();
+    assert_eq!(parse(&five).layered_cores().unwrap(), vec![1, 3]);
+    // No core, or no face.
+    let faces = [glass, glass, glass, glass].concat();
+    let e = parse(&faces).layered_cores().unwrap_err().to_string();
+    assert!(
+        e.contains("at least one core") && e.contains("4 layers, 0"),
+        "{e}"
+    );
+    let cores = [pvb, pvb].concat();
+    let e = parse(&cores).layered_cores().unwrap_err().to_string();
+    assert!(e.contains("2 layers, 2 without"), "{e}");
+    // A core's thickness in mm, a face's modulus in GPa: the layer and the field named.
+    let mm = five.replacen("thickness_m = 0.38e-3", "thickness_m = 0.38", 1);
+    let e = parse(&mm).layered_cores().unwrap_err().to_string();
+    assert!(
+        e.contains("layers[1] ('PVB')") && e.contains("thickness_m"),
+        "{e}"
+    );
+    let gpa = five.replacen("young_pa = 70e9", "young_pa = 70", 1);
+    let e = parse(&gpa).layered_cores().unwrap_err().to_string();
+    assert!(e.contains("layers[0]") && e.contains("young_pa"), "{e}");
+}

@@ -112,8 +112,8 @@ fn build_report(
     report.input(
         "core",
         format!(
-            "layer {} ({} law): {}; assembled at {:.4e} Pa",
-            bench.core_layer,
+            "layers {:?} ({} law): {}; assembled at {:.4e} Pa",
+            bench.core_layers,
             if bench.core_law_is_shear {
                 "shear"
             } else {
