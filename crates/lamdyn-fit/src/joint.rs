@@ -72,6 +72,55 @@ pub enum CoreLaw {
     /// One free G' and η per mode (2K parameters), log-linear in frequency between the modes:
     /// the inputs stay at their priors, and each mode's band is its own.
     PerMode,
+    /// Generalized Maxwell (Prony series), G* = G_e + Σ_k g_k iωτ_k/(1 + iωτ_k) [Ferry 1980,
+    /// ch. 3]: causal and passive for any G_e, g_k > 0. The relaxation times are fixed
+    /// ([`prony_relaxation_times`]: one per mode, 2 to 10, log-spaced from a decade below the
+    /// first mode to a decade above the last) and G_e, g_k searched on their logarithms: 1 +
+    /// n parameters. It follows a core whose loss factor is not the smooth arc of a fractional
+    /// Zener law (a Prony series with one term per decade, as published PVB master curves
+    /// are, puts bumps of several per cent in η that a fractional Zener law misses by 3–8 %).
+    GeneralizedMaxwell,
+}
+
+/// The fixed relaxation times τ_k = 1/(2π f_k), s, of the [`CoreLaw::GeneralizedMaxwell`] fit
+/// to modes at `log_freqs` (ln Hz, increasing): n = clamp(K, 2, 10) for K modes, f_k spaced
+/// evenly in ln f from a decade below the first mode to a decade above the last. A term whose
+/// relaxation frequency lies below the band acts as a spring (it joins G_e), one above it as a
+/// loss growing with f, so the decade either side lets the series follow the slopes at the
+/// band's ends; one term per mode keeps the law's parameters (n + 1) at most 2K − K + 1.
+pub fn prony_relaxation_times(log_freqs: &[f64]) -> Vec<f64> {
+    let n = prony_terms(log_freqs.len());
+    let (first, last) = match (log_freqs.first(), log_freqs.last()) {
+        (Some(&a), Some(&b)) => (a, b),
+        _ => return Vec::new(),
+    };
+    let (lo, hi) = (first - 10f64.ln(), last + 10f64.ln());
+    (0..n)
+        .map(|k| {
+            let lf = lo + (hi - lo) * k as f64 / (n - 1) as f64;
+            1.0 / (2.0 * PI * lf.exp())
+        })
+        .collect()
+}
+
+/// Terms of the [`CoreLaw::GeneralizedMaxwell`] fit to `modes` modes.
+fn prony_terms(modes: usize) -> usize {
+    modes.clamp(2, 10)
+}
+
+/// G* of a Prony series G_e = e^{u[0]}, g_k = e^{u[1 + k]} with relaxation times `taus`, at
+/// the complex angular frequency ω (rad/s; the law continued above the real axis is the same
+/// rational function).
+fn prony_modulus(u: &[f64], taus: &[f64], omega: Complex64) -> Option<Complex64> {
+    let i = Complex64::new(0.0, 1.0);
+    let g = taus
+        .iter()
+        .zip(&u[1..])
+        .fold(Complex64::new(u[0].exp(), 0.0), |acc, (&tau, &lg)| {
+            let x = i * omega * tau;
+            acc + lg.exp() * x / (1.0 + x)
+        });
+    g.is_finite().then_some(g)
 }
 
 impl CoreLaw {
@@ -80,6 +129,7 @@ impl CoreLaw {
         match self {
             Self::FractionalZener => 4,
             Self::PerMode => 2 * modes,
+            Self::GeneralizedMaxwell => 1 + prony_terms(modes),
         }
     }
 
@@ -88,6 +138,7 @@ impl CoreLaw {
         match self {
             Self::FractionalZener => "fractional_zener",
             Self::PerMode => "per_mode",
+            Self::GeneralizedMaxwell => "generalized_maxwell",
         }
     }
 }
@@ -238,6 +289,8 @@ pub struct CoreLawFit {
     pub z: f64,
     /// Parameter combinations the data and priors do not determine.
     pub undetermined: Vec<String>,
+    /// Why this law was chosen, where a caller chose it among several ([`Self::akaike`]).
+    pub selection: Option<String>,
     /// The law at each mode.
     pub at_modes: Vec<LawPoint>,
     /// Each mode's point moved from the complex frequency it was found at to its real
@@ -269,6 +322,11 @@ fn log_law(law: CoreLaw, u: &[f64], log_freqs: &[f64], f_hz: f64) -> Option<[f64
     match law {
         CoreLaw::FractionalZener => {
             let g = law_of(u)?.modulus(2.0 * PI * f_hz);
+            (g.re > 0.0 && g.im > 0.0).then(|| log_parts(g))
+        }
+        CoreLaw::GeneralizedMaxwell => {
+            let taus = prony_relaxation_times(log_freqs);
+            let g = prony_modulus(u, &taus, Complex64::new(2.0 * PI * f_hz, 0.0))?;
             (g.re > 0.0 && g.im > 0.0).then(|| log_parts(g))
         }
         CoreLaw::PerMode => {
@@ -395,6 +453,11 @@ fn log_law_at_point(
 ) -> Option<[f64; 2]> {
     let g = match law {
         CoreLaw::FractionalZener => law_of(u)?.modulus_at_complex(2.0 * PI * p.found_at_hz),
+        CoreLaw::GeneralizedMaxwell => prony_modulus(
+            u,
+            &prony_relaxation_times(log_freqs),
+            2.0 * PI * p.found_at_hz,
+        )?,
         CoreLaw::PerMode => {
             from_log_parts(log_law(law, u, log_freqs, p.freq_hz)?) * (slope * log_offset(p)).exp()
         }
@@ -472,7 +535,61 @@ fn starts(law: CoreLaw, points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>
             scored.sort_by(|a, b| a.0.total_cmp(&b.0));
             scored.into_iter().take(6).map(|(_, u)| u).collect()
         }
+        CoreLaw::GeneralizedMaxwell => prony_starts(points, log_freqs),
     }
+}
+
+/// Starts of the Prony fit: G* is linear in (G_e, g_k), so the least-squares solution on the
+/// points' G' and G'' (each row divided by |G*_k|), its negative or tiny strengths raised to
+/// 1e-3 of the largest (the search is on their logarithms), and the same from a flat spectrum
+/// (every g_k alike, G_e the lowest G').
+fn prony_starts(points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>> {
+    let taus = prony_relaxation_times(log_freqs);
+    let n = taus.len() + 1;
+    let i = Complex64::new(0.0, 1.0);
+    let mut a = Mat::<f64>::zeros(2 * points.len(), n);
+    let mut b = Mat::<f64>::zeros(2 * points.len(), 1);
+    for (k, p) in points.iter().enumerate() {
+        let w = 1.0 / p.core_shear_pa.norm();
+        let omega = 2.0 * PI * p.freq_hz;
+        let column = |j: usize| {
+            if j == 0 {
+                Complex64::new(1.0, 0.0)
+            } else {
+                let x = i * omega * taus[j - 1];
+                x / (1.0 + x)
+            }
+        };
+        for j in 0..n {
+            a[(2 * k, j)] = w * column(j).re;
+            a[(2 * k + 1, j)] = w * column(j).im;
+        }
+        b[(2 * k, 0)] = w * p.core_shear_pa.re;
+        b[(2 * k + 1, 0)] = w * p.core_shear_pa.im;
+    }
+    let gmin = points
+        .iter()
+        .map(|p| p.core_shear_pa.re)
+        .fold(f64::MAX, f64::min);
+    let gmax = points
+        .iter()
+        .map(|p| p.core_shear_pa.norm())
+        .fold(0.0, f64::max);
+    let mut out = Vec::new();
+    let ata = a.transpose() * &a;
+    let atb = a.transpose() * &b;
+    if let Ok((inv, _)) = pseudo_inverse(&ata, CONTEXT) {
+        let x = &inv * &atb;
+        let largest = (0..n).map(|j| x[(j, 0)]).fold(0.0, f64::max);
+        if largest > 0.0 {
+            out.push((0..n).map(|j| x[(j, 0)].max(1e-3 * largest).ln()).collect());
+        }
+    }
+    let flat = ((gmax - gmin).max(1e-3 * gmax) / (n - 1) as f64).ln();
+    let mut u = vec![flat; n];
+    u[0] = (0.5 * gmin).ln();
+    out.push(u);
+    out
 }
 
 /// Fits `law` to the modes' cores jointly with the inputs under `priors` (module docs).
@@ -541,7 +658,7 @@ pub fn fit_core_law(
     } else {
         1.959_963_985
     };
-    let names = parameter_names(law, points.len(), priors);
+    let names = parameter_names(law, points.len(), &log_freqs, priors);
     let jtj = best.jacobian.transpose() * &best.jacobian;
     let (inv, null) = pseudo_inverse(&jtj, CONTEXT)?;
     let gain = &inv * best.jacobian.transpose();
@@ -572,6 +689,25 @@ pub fn fit_core_law(
                 })
                 .collect()
         }
+        CoreLaw::GeneralizedMaxwell => {
+            let taus = prony_relaxation_times(&log_freqs);
+            points
+                .iter()
+                .map(|p| {
+                    let at = |w: Complex64| prony_modulus(&best.x[..np], &taus, w);
+                    match (
+                        at(Complex64::new(2.0 * PI * p.freq_hz, 0.0)),
+                        at(2.0 * PI * p.found_at_hz),
+                    ) {
+                        (Some(real), Some(found)) => Ok(real / found),
+                        _ => Err(inconsistent(
+                            CONTEXT,
+                            "the fitted law left its domain".to_string(),
+                        )),
+                    }
+                })
+                .collect::<Result<_, _>>()?
+        }
     };
     let real_frequency_points: Vec<Complex64> = points
         .iter()
@@ -599,6 +735,7 @@ pub fn fit_core_law(
             .iter()
             .map(|v| describe_direction(&name_refs, v))
             .collect(),
+        selection: None,
         at_modes: Vec::new(),
         real_frequency_points,
         real_frequency_factors: to_real,
@@ -614,13 +751,26 @@ pub fn fit_core_law(
     Ok(out)
 }
 
-fn parameter_names(law: CoreLaw, modes: usize, priors: &[InputPrior]) -> Vec<String> {
+fn parameter_names(
+    law: CoreLaw,
+    modes: usize,
+    log_freqs: &[f64],
+    priors: &[InputPrior],
+) -> Vec<String> {
     let mut names: Vec<String> = match law {
         CoreLaw::FractionalZener => ["g0_pa", "g_inf_pa", "tau_s", "alpha"]
             .map(String::from)
             .to_vec(),
         CoreLaw::PerMode => (1..=modes)
             .flat_map(|k| [format!("storage_pa_{k}"), format!("loss_factor_{k}")])
+            .collect(),
+        CoreLaw::GeneralizedMaxwell => std::iter::once("g_e_pa".to_string())
+            .chain(
+                prony_relaxation_times(log_freqs)
+                    .iter()
+                    .enumerate()
+                    .map(|(k, tau)| format!("g{}_pa (tau {tau:.3e} s)", k + 1)),
+            )
             .collect(),
     };
     names.extend(priors.iter().map(|p| p.name.clone()));
@@ -784,6 +934,24 @@ impl CoreLawFit {
             loss_factor_ci95: [loss * (-half[1]).exp(), loss * half[1].exp()],
             dominant,
         })
+    }
+
+    /// Akaike's information criterion of the law with the small-sample correction, AICc =
+    /// χ² + 2P + 2P(P + 1)/(N − P − 1) [Akaike 1974; Hurvich & Tsai 1989]: χ² of the data rows
+    /// on their stated noise (the inputs' priors and their parameters are the same for every
+    /// law fitted to the same points), P the law's own parameters, N = 2K the data rows
+    /// (infinite when N ≤ P + 1). Of two laws fitted to the same points the one with the lower
+    /// value is the better trade of fit against parameters. The correction matters here: with
+    /// four modes a Prony series of four terms (P = 5 for N = 8) matched the points to χ² = 0.1
+    /// and its η wandered by up to 12 % between them; plain AIC preferred it to the fractional
+    /// Zener law (10.1 against 10.5), AICc does not (40.1 against 23.9).
+    pub fn akaike(&self) -> f64 {
+        let p = self.law_parameters() as f64;
+        let n = 2.0 * self.fit.log_freqs.len() as f64;
+        if n <= p + 1.0 {
+            return f64::INFINITY;
+        }
+        self.chi2 + 2.0 * p + 2.0 * p * (p + 1.0) / (n - p - 1.0)
     }
 
     /// The law at `n` frequencies spaced evenly in ln f from the first mode to the last.
@@ -1127,5 +1295,75 @@ mod tests {
         below[1].found_at_hz = Complex64::new(below[1].freq_hz, -0.1);
         let e = fit_core_law(&below, &priors(), CoreLaw::PerMode).unwrap_err();
         assert!(e.to_string().contains("mode 2 was found"), "{e}");
+    }
+
+    /// A Prony core with one term per decade (τ from 100 s to 1 ns, g ∝ τ^−0.25, as published
+    /// PVB master curves are written), G* at ω by the closed form, complex ω included.
+    fn prony_truth(omega: Complex64) -> Complex64 {
+        let i = Complex64::new(0.0, 1.0);
+        (0..12).fold(Complex64::new(0.5e6, 0.0), |acc, k| {
+            let tau = 10f64.powi(2 - k);
+            let x = i * omega * tau;
+            acc + 4e6 * tau.powf(-0.25) * x / (1.0 + x)
+        })
+    }
+
+    /// Eight modes 20–200 Hz of the Prony core, each found at its pole's complex frequency
+    /// (ζ = 1 %), 0.5 % stated noise, no inputs: the generalized Maxwell law follows it within
+    /// 1 % in G' and η between the first mode and the last (measured 0.88 % and 0.71 %), the
+    /// fractional Zener law misses by more than 2 % in G' or 3 % in η (measured 2.2 % and
+    /// 4.4 %), and the small-sample Akaike criterion prefers the series; on the fractional
+    /// Zener truth of the other tests it prefers the fractional Zener law. The points moved
+    /// to the real axis by the series match the truth there within 0.3 %.
+    #[test]
+    fn generalized_maxwell_follows_a_prony_core_the_fractional_zener_misses() {
+        let freqs: Vec<f64> = (0..8).map(|k| 20.0 * 10f64.powf(k as f64 / 7.0)).collect();
+        let pts: Vec<ModePoint> = freqs
+            .iter()
+            .map(|&f| {
+                let at = Complex64::new(f, 0.01 * f);
+                ModePoint {
+                    freq_hz: f,
+                    found_at_hz: at,
+                    core_shear_pa: prony_truth(2.0 * PI * at),
+                    effects: Vec::new(),
+                    noise: vec![("EMA pole".into(), [0.005, 0.005])],
+                }
+            })
+            .collect();
+        let worst = |fit: &CoreLawFit| {
+            fit.curve(40).iter().fold([0.0f64; 2], |w, p| {
+                let t = prony_truth(Complex64::new(2.0 * PI * p.freq_hz, 0.0));
+                [
+                    w[0].max((p.storage_pa / t.re - 1.0).abs()),
+                    w[1].max((p.loss_factor / (t.im / t.re) - 1.0).abs()),
+                ]
+            })
+        };
+        let gm = fit_core_law(&pts, &[], CoreLaw::GeneralizedMaxwell).unwrap();
+        let fz = fit_core_law(&pts, &[], CoreLaw::FractionalZener).unwrap();
+        let (w_gm, w_fz) = (worst(&gm), worst(&fz));
+        assert!(w_gm[0] < 0.01 && w_gm[1] < 0.01, "{w_gm:?}");
+        assert!(w_fz[0] > 0.02 || w_fz[1] > 0.03, "{w_fz:?}");
+        assert!(
+            gm.akaike() < fz.akaike(),
+            "{} vs {}",
+            gm.akaike(),
+            fz.akaike()
+        );
+        assert_eq!(gm.parameters.len(), 1 + 8);
+        for (p, g) in pts.iter().zip(&gm.real_frequency_points) {
+            let t = prony_truth(Complex64::new(2.0 * PI * p.freq_hz, 0.0));
+            assert!((g / t - 1.0).norm() < 3e-3, "{g} vs {t}");
+        }
+        let pts = points(&[0.0, 0.0], 0.001, &mut Normal::new(3));
+        let gm = fit_core_law(&pts, &priors(), CoreLaw::GeneralizedMaxwell).unwrap();
+        let fz = fit_core_law(&pts, &priors(), CoreLaw::FractionalZener).unwrap();
+        assert!(
+            fz.akaike() < gm.akaike(),
+            "{} vs {}",
+            fz.akaike(),
+            gm.akaike()
+        );
     }
 }

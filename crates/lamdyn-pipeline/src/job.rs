@@ -271,7 +271,9 @@ pub struct InverseOptions {
     #[serde(default)]
     pub layered_edge_grading: f64,
     /// The core's law fitted to all layered modes at once with the faces' inputs shared
-    /// (lamdyn_fit::joint): `fractional_zener` (default), `per_mode` or `none`.
+    /// (lamdyn_fit::joint): `auto` (default: `fractional_zener` or `generalized_maxwell`, whichever
+    /// the modes favour by Akaike's criterion), `fractional_zener`, `generalized_maxwell`,
+    /// `per_mode` or `none`.
     #[serde(default)]
     pub core_law: CoreLawChoice,
     /// The supports the part rested on in the test, in the layered model
@@ -314,9 +316,14 @@ impl SupportSpec {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CoreLawChoice {
-    /// Fractional Zener: four parameters, needs two modes or more.
+    /// The fractional Zener and the generalized Maxwell law both fitted, the one with the
+    /// lower Akaike criterion kept (lamdyn_fit::joint::CoreLawFit::akaike).
     #[default]
+    Auto,
+    /// Fractional Zener: four parameters, needs two modes or more.
     FractionalZener,
+    /// Generalized Maxwell (Prony series) on fixed relaxation times: one term per mode.
+    GeneralizedMaxwell,
     /// One G' and η per mode, the inputs shared.
     PerMode,
     /// No law: the per-mode results only.

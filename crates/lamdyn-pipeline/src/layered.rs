@@ -582,12 +582,47 @@ fn band(
 }
 
 /// The job's core law for the joint fit (`inverse.core_law`), if any.
-fn core_law(choice: crate::job::CoreLawChoice) -> Option<CoreLaw> {
+fn core_laws(choice: crate::job::CoreLawChoice) -> Vec<CoreLaw> {
+    use crate::job::CoreLawChoice as C;
     match choice {
-        crate::job::CoreLawChoice::FractionalZener => Some(CoreLaw::FractionalZener),
-        crate::job::CoreLawChoice::PerMode => Some(CoreLaw::PerMode),
-        crate::job::CoreLawChoice::None => None,
+        C::Auto => vec![CoreLaw::FractionalZener, CoreLaw::GeneralizedMaxwell],
+        C::FractionalZener => vec![CoreLaw::FractionalZener],
+        C::GeneralizedMaxwell => vec![CoreLaw::GeneralizedMaxwell],
+        C::PerMode => vec![CoreLaw::PerMode],
+        C::None => Vec::new(),
     }
+}
+
+/// Of the laws fitted to the same modes, the one with the lowest Akaike criterion
+/// ([`CoreLawFit::akaike`]), with why it was chosen; the first failure when none fitted.
+fn lowest_akaike(
+    fits: Vec<(CoreLaw, std::result::Result<CoreLawFit, String>)>,
+) -> Option<std::result::Result<CoreLawFit, String>> {
+    let first_error = fits.iter().find_map(|f| f.1.clone().err());
+    let mut ok: Vec<CoreLawFit> = fits.into_iter().filter_map(|f| f.1.ok()).collect();
+    ok.sort_by(|a, b| a.akaike().total_cmp(&b.akaike()));
+    let mut iter = ok.into_iter();
+    let Some(mut best) = iter.next() else {
+        return first_error.map(Err);
+    };
+    let describe = |f: &CoreLawFit| {
+        format!(
+            "{} (chi2 {:.2}, {} parameters: AICc {:.2})",
+            f.law.name(),
+            f.chi2,
+            f.parameters.len() - f.inputs().len(),
+            f.akaike()
+        )
+    };
+    let others: Vec<String> = iter.map(|o| describe(&o)).collect();
+    if !others.is_empty() {
+        best.selection = Some(format!(
+            "chosen by Akaike's criterion with the small-sample correction: {} over {}",
+            describe(&best),
+            others.join(", ")
+        ));
+    }
+    Some(Ok(best))
 }
 
 /// The core's law fitted to every mode with a layered result and a band, jointly with the
@@ -612,7 +647,11 @@ pub fn fit_law(
     modal: &[CorePoint],
     coarsest: Option<&LayeredInverse>,
 ) -> Option<std::result::Result<CoreLawFit, String>> {
-    fit_law_with(core_law(job.inverse.core_law)?, modal, coarsest)
+    let fits: Vec<_> = core_laws(job.inverse.core_law)
+        .into_iter()
+        .filter_map(|law| Some((law, fit_law_with(law, modal, coarsest)?)))
+        .collect();
+    lowest_akaike(fits)
 }
 
 /// The job with its supports moved to those the joint law found, and how far (ln stiffness,
