@@ -108,7 +108,7 @@ fn prony_terms(modes: usize) -> usize {
     modes.clamp(2, 10)
 }
 
-/// G* of a Prony series G_e = e^{u[0]}, g_k = e^{u[1 + k]} with relaxation times `taus`, at
+/// G* of a Prony series G_e = e^`u[0]`, g_k = e^`u[1 + k]` with relaxation times `taus`, at
 /// the complex angular frequency ω (rad/s; the law continued above the real axis is the same
 /// rational function).
 fn prony_modulus(u: &[f64], taus: &[f64], omega: Complex64) -> Option<Complex64> {
@@ -980,10 +980,17 @@ impl CoreLawFit {
         let law: Vec<String> = self.parameters[..self.law_parameters()]
             .iter()
             .map(|p| {
-                format!(
-                    "{} = {:.4e} [{:.3e}, {:.3e}]",
-                    p.name, p.value, p.ci95[0], p.ci95[1]
-                )
+                if p.sd.is_finite() {
+                    format!(
+                        "{} = {:.4e} [{:.3e}, {:.3e}]",
+                        p.name, p.value, p.ci95[0], p.ci95[1]
+                    )
+                } else {
+                    format!(
+                        "{} not determined (search stopped at {:.1e})",
+                        p.name, p.value
+                    )
+                }
             })
             .collect();
         format!("{}: {}", self.law.name(), law.join(", "))

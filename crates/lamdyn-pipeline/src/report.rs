@@ -783,9 +783,16 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
                         "not determined".to_string()
                     }
                 };
+                // Its value is where the search stopped along a direction that changes nothing
+                // (G0 -> 0, G_inf and tau trading off): shown as such, not as a result.
+                let value = if p.sd.is_finite() {
+                    format!("{:.5e}", p.value)
+                } else {
+                    format!("(search stopped at {:.1e})", p.value)
+                };
                 vec![
                     p.name.clone(),
-                    format!("{:.5e}", p.value),
+                    value,
                     bound(p.ci95[0]),
                     bound(p.ci95[1]),
                 ]
