@@ -571,6 +571,21 @@ mod tests {
         FrfSet::new(vec![1.0, 2.0, 3.5], r, f, Quantity::Accelerance, data).unwrap()
     }
 
+    /// A subset of the responses keeps their curves, in the order asked; an index out of
+    /// range or none at all is refused.
+    #[test]
+    fn a_subset_of_responses_keeps_their_curves() {
+        let set = sample();
+        let one = set.with_responses(&[1]).unwrap();
+        assert_eq!(one.responses()[0].name, "p2+X");
+        assert_eq!(one.curve(0, 0), set.curve(1, 0));
+        let both = set.with_responses(&[1, 0]).unwrap();
+        assert_eq!(both.curve(1, 0), set.curve(0, 0));
+        let e = set.with_responses(&[2]).unwrap_err().to_string();
+        assert!(e.contains("response 2 of 2"), "{e}");
+        assert!(set.with_responses(&[]).is_err());
+    }
+
     #[test]
     fn round_trip() {
         let set = sample();

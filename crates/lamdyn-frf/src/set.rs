@@ -213,6 +213,33 @@ impl FrfSet {
         })
     }
 
+    /// The set restricted to the responses `keep` (indices, in that order), every reference
+    /// and line kept.
+    ///
+    /// # Errors
+    /// [`FrfError::Inconsistent`] for no response or an index out of range.
+    pub fn with_responses(&self, keep: &[usize]) -> Result<Self, FrfError> {
+        let n = self.responses.len();
+        if let Some(&bad) = keep.iter().find(|&&i| i >= n) {
+            return Err(inconsistent(
+                "FRF set",
+                format!("response {bad} of {n} responses"),
+            ));
+        }
+        let per = self.references.len() * self.freqs_hz.len();
+        let data = keep
+            .iter()
+            .flat_map(|&i| self.data[i * per..(i + 1) * per].iter().copied())
+            .collect();
+        Self::new(
+            self.freqs_hz.clone(),
+            keep.iter().map(|&i| self.responses[i].clone()).collect(),
+            self.references.clone(),
+            self.quantity,
+            data,
+        )
+    }
+
     /// Frequency lines, Hz.
     pub fn freqs_hz(&self) -> &[f64] {
         &self.freqs_hz

@@ -162,7 +162,7 @@ pub type LayeredOutcome = (Option<String>, Option<LayeredInverse>);
 pub fn run(
     job: &Job,
     base: &Path,
-    ema: &EmaResult,
+    (ema, ema_groups): (&EmaResult, &[EmaResult]),
     modal: &mut [CorePoint],
     cache: &Cache,
     spinner: &dyn Reporter,
@@ -290,7 +290,7 @@ pub fn run(
         .zip(&out.modes)
         .map(|(&(k, target), m)| {
             let m = m.as_ref().ok()?;
-            let scatter = pole_scatter(ema, modal[k].freq_hz);
+            let scatter = pole_scatter(ema, ema_groups, modal[k].freq_hz);
             Some(band(
                 &coarsest,
                 &plate,
@@ -468,11 +468,50 @@ impl LayeredBand {
     }
 }
 
-/// Standard deviations (Hz, damping ratio) of the stable poles of the stabilization diagram
-/// within 1 % of the EMA mode nearest `f` and nearer it than any other mode (a close pair's
-/// poles are not pooled), at least three; else `None`.
-fn pole_scatter(ema: &EmaResult, f: f64) -> Option<[f64; 2]> {
+/// Standard deviations (Hz, damping ratio) of the pole of the EMA mode nearest `f`: the larger,
+/// per part, of the scatter of its stable poles in the stabilization diagram
+/// ([`stabilization_scatter`]) and of the spread of the poles the response groups' own
+/// identifications find for it ([`group_spread`]); `None` when neither is known.
+fn pole_scatter(ema: &EmaResult, groups: &[EmaResult], f: f64) -> Option<[f64; 2]> {
     let mode = crate::stages::nearest_within(ema, f, 0.02)?;
+    let m = &ema.modes[mode];
+    // Each group's pole nearest this mode, within 1 % and nearer it than any other mode.
+    let found: Vec<[f64; 2]> = groups
+        .iter()
+        .filter_map(|g| {
+            let k = crate::stages::nearest_within(g, m.freq_hz, 0.01)?;
+            let p = &g.modes[k];
+            (crate::stages::nearest_within(ema, p.freq_hz, 0.02) == Some(mode))
+                .then_some([p.freq_hz, p.damping_ratio])
+        })
+        .collect();
+    match (stabilization_scatter(ema, mode), group_spread(&found)) {
+        (Some(a), Some(b)) => Some([a[0].max(b[0]), a[1].max(b[1])]),
+        (a, b) => a.or(b),
+    }
+}
+
+/// The standard error of the mean of the response groups' estimates (Hz, damping ratio) of
+/// one pole: their sample standard deviation over √n, n ≥ 2 groups. The whole set reads the
+/// pole from all n groups' responses at once, so its estimate is about as uncertain as their
+/// mean [a delete-a-group jackknife; Efron & Tibshirani 1993, ch. 11].
+fn group_spread(found: &[[f64; 2]]) -> Option<[f64; 2]> {
+    let n = found.len();
+    if n < 2 {
+        return None;
+    }
+    let sd = |k: usize| {
+        let mean = found.iter().map(|p| p[k]).sum::<f64>() / n as f64;
+        let var = found.iter().map(|p| (p[k] - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        (var / n as f64).sqrt()
+    };
+    Some([sd(0), sd(1)])
+}
+
+/// Standard deviations (Hz, damping ratio) of the stable poles of the stabilization diagram
+/// within 1 % of EMA mode `mode` and nearer it than any other mode (a close pair's poles are
+/// not pooled), at least three; else `None`.
+fn stabilization_scatter(ema: &EmaResult, mode: usize) -> Option<[f64; 2]> {
     let near: Vec<[f64; 2]> = ema
         .diagram
         .iter()
@@ -1126,6 +1165,75 @@ mod tests {
     /// than the job says (effects of −3 to −1 on ln G', noise 0.1 %) give the job with every
     /// spring times e^0.15 (to the fit's accuracy) and the dashpots as they were; at 1 % they
     /// give none, and a free part never.
+    /// The groups' spread is the standard error of their mean: four estimates 1, 2, 3, 4 have
+    /// a sample sd of √(5/3) and a standard error of √(5/3)/2; one group alone gives none.
+    #[test]
+    fn group_spread_is_the_standard_error_of_the_groups_mean() {
+        let found = [[1.0, 0.01], [2.0, 0.02], [3.0, 0.03], [4.0, 0.04]];
+        let s = group_spread(&found).unwrap();
+        assert!((s[0] - (5.0f64 / 3.0).sqrt() / 2.0).abs() < 1e-15, "{s:?}");
+        assert!(
+            (s[1] - 0.01 * (5.0f64 / 3.0).sqrt() / 2.0).abs() < 1e-17,
+            "{s:?}"
+        );
+        assert!(group_spread(&found[..1]).is_none());
+    }
+
+    /// `auto` keeps the law with the lower small-sample Akaike criterion and says why: the
+    /// fractional Zener law on points of a fractional Zener core, the Prony series on points
+    /// of a Prony core with one term per decade (which the fractional Zener law misses); a
+    /// failed candidate gives way to the other, and with none fitted the first error is kept.
+    #[test]
+    fn auto_keeps_the_law_the_modes_favour() {
+        let prony = |f: f64| -> Complex64 {
+            let i = Complex64::new(0.0, 1.0);
+            (0..12).fold(Complex64::new(0.5e6, 0.0), |acc, k| {
+                let tau = 10f64.powi(2 - k);
+                let x = i * 2.0 * PI * f * tau;
+                acc + 4e6 * tau.powf(-0.25) * x / (1.0 + x)
+            })
+        };
+        let points = |g: &dyn Fn(f64) -> Complex64| -> Vec<ModePoint> {
+            (0..8)
+                .map(|k| {
+                    let f = 20.0 * 10f64.powf(k as f64 / 7.0);
+                    ModePoint {
+                        freq_hz: f,
+                        found_at_hz: Complex64::new(f, 0.0),
+                        core_shear_pa: g(f),
+                        effects: Vec::new(),
+                        noise: vec![("EMA pole".into(), [0.005, 0.005])],
+                    }
+                })
+                .collect()
+        };
+        let fits = |pts: &[ModePoint]| -> Vec<(CoreLaw, std::result::Result<CoreLawFit, String>)> {
+            core_laws(crate::job::CoreLawChoice::Auto)
+                .into_iter()
+                .map(|law| (law, fit_core_law(pts, &[], law).map_err(|e| e.to_string())))
+                .collect()
+        };
+        let zener = points(&|f| law().modulus(2.0 * PI * f));
+        let chosen = lowest_akaike(fits(&zener)).unwrap().unwrap();
+        assert_eq!(chosen.law, CoreLaw::FractionalZener);
+        let why = chosen.selection.as_deref().unwrap();
+        assert!(why.contains("over generalized_maxwell (chi2"), "{why}");
+        let chosen = lowest_akaike(fits(&points(&prony))).unwrap().unwrap();
+        assert_eq!(chosen.law, CoreLaw::GeneralizedMaxwell);
+        // One candidate failed: the other, with nothing to choose between.
+        let mut one = fits(&zener);
+        one[0].1 = Err("no start".into());
+        let chosen = lowest_akaike(one).unwrap().unwrap();
+        assert!(chosen.law == CoreLaw::GeneralizedMaxwell && chosen.selection.is_none());
+        let none = vec![
+            (CoreLaw::FractionalZener, Err("first".to_string())),
+            (CoreLaw::GeneralizedMaxwell, Err("second".to_string())),
+        ];
+        assert_eq!(lowest_akaike(none).unwrap().unwrap_err(), "first");
+        assert!(lowest_akaike(Vec::new()).is_none());
+        assert!(core_laws(crate::job::CoreLawChoice::None).is_empty());
+    }
+
     #[test]
     fn the_ladder_reruns_at_supports_found_far_off() {
         let priors = vec![

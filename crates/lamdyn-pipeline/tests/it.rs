@@ -300,7 +300,7 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
         cache_dir: Some(dir.join("input/.lamdyn-cache")),
     };
     // The demo filled the cache beside its job: a run of the same job takes the model, the EMA
-    // and the layered model from it.
+    // (of all responses and of each response group) and the layered model from it.
     let job = Job::read(&job_path).unwrap();
     let r = run_job(job, &job_path, &options, &Silent).unwrap();
     let cached: Vec<&str> = r
@@ -309,7 +309,10 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
         .filter(|t| t.cached)
         .map(|t| t.name)
         .collect();
-    assert_eq!(cached, ["ema", "model", "layered inverse"]);
+    assert_eq!(
+        cached,
+        ["ema", "ema by response group", "model", "layered inverse"]
+    );
     let report = dir.join("report/report.html");
     let before = std::fs::read(&report).unwrap();
     // A job whose model cannot hold the channels: the model stage fails, named, and nothing
