@@ -401,7 +401,7 @@ fn homogenized_start(
         if !slope.is_finite() || slope.norm() == 0.0 {
             return None;
         }
-        // Steps of at most a factor e in |G*| and 0.5 rad in phase.
+        // Steps of at most 1 in |Δ ln G*|: a factor e in |G*|, 1 rad in phase.
         let mut step = -r1 / slope;
         if step.norm() > 1.0 {
             step /= step.norm();
