@@ -496,16 +496,21 @@ fn pole_scatter(ema: &EmaResult, groups: &[EmaResult], f: f64) -> Option<[f64; 2
 /// pole from all n groups' responses at once, so its estimate is about as uncertain as their
 /// mean [a delete-a-group jackknife; Efron & Tibshirani 1993, ch. 11].
 fn group_spread(found: &[[f64; 2]]) -> Option<[f64; 2]> {
-    let n = found.len();
-    if n < 2 {
+    if found.len() < 2 {
         return None;
     }
+    let root_n = (found.len() as f64).sqrt();
+    Some(sample_sd(found).map(|sd| sd / root_n))
+}
+
+/// Sample standard deviation (n − 1) of each part of `points` (n ≥ 2).
+fn sample_sd(points: &[[f64; 2]]) -> [f64; 2] {
+    let n = points.len() as f64;
     let sd = |k: usize| {
-        let mean = found.iter().map(|p| p[k]).sum::<f64>() / n as f64;
-        let var = found.iter().map(|p| (p[k] - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-        (var / n as f64).sqrt()
+        let mean = points.iter().map(|p| p[k]).sum::<f64>() / n;
+        (points.iter().map(|p| (p[k] - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
     };
-    Some([sd(0), sd(1)])
+    [sd(0), sd(1)]
 }
 
 /// Standard deviations (Hz, damping ratio) of the stable poles of the stabilization diagram
@@ -520,15 +525,7 @@ fn stabilization_scatter(ema: &EmaResult, mode: usize) -> Option<[f64; 2]> {
         })
         .map(|p| [p.freq_hz, p.damping])
         .collect();
-    if near.len() < 3 {
-        return None;
-    }
-    let n = near.len() as f64;
-    let sd = |k: usize| {
-        let mean = near.iter().map(|p| p[k]).sum::<f64>() / n;
-        (near.iter().map(|p| (p[k] - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-    };
-    Some([sd(0), sd(1)])
+    (near.len() >= 3).then(|| sample_sd(&near))
 }
 
 /// The band of one converged mode (module docs).
