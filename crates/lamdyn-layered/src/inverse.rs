@@ -21,7 +21,8 @@
 
 use crate::error::LayeredError;
 use crate::hex20::Elastic;
-use crate::mesh::{HexMesh, LayerMesh, LayeredPlateSpec};
+use crate::mesh::{HexMesh, LayerMesh};
+use crate::plan::Plan;
 use crate::reduced::{ReducedEigen, ReducedModel};
 use crate::sensitivity::{Input, InputEffect, ModeSensitivity};
 use crate::supports::{PointSupport, support_terms};
@@ -43,16 +44,13 @@ pub struct InverseLayer {
     pub loss_factor: f64,
 }
 
-/// The part the layered inverse models: a rectangle in plan, flat or a shallow dome, meshed
-/// with [`crate::mesh::LayeredPlateSpec`] (one element per layer through the thickness).
+/// The part the layered inverse models: its plan ([`Plan`]: a rectangle, flat or a shallow
+/// dome, or a quadrilateral mesh of the mid-surface), extruded through the stack with one
+/// element per layer through the thickness.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LayeredPlate {
-    /// Plan lengths along x and y, m.
-    pub plan_m: [f64; 2],
-    /// Radii of curvature along x and y, m (infinite: straight).
-    pub radii_m: [f64; 2],
-    /// Edge grading of the in-plane mesh ([`crate::mesh`]; 0: uniform).
-    pub edge_grading: f64,
+    /// The plan ([`crate::plan`]).
+    pub plan: Plan,
     /// The stack, bottom to top: the layers without a Young's modulus are viscoelastic and share
     /// the one law the inverse finds (at least one; a five-layer glass/PVB/glass/PVB/glass
     /// laminate has two).
@@ -148,24 +146,15 @@ fn assemble(
             density_kg_m3: l.density_kg_m3,
         })
         .collect();
-    let mesh = LayeredPlateSpec {
-        length_m: plate.plan_m[0],
-        width_m: plate.plan_m[1],
-        nx: elements[0],
-        ny: elements[1],
-        radius_x_m: plate.radii_m[0],
-        radius_y_m: plate.radii_m[1],
-        edge_grading: plate.edge_grading,
-        layers: plate
-            .layers
-            .iter()
-            .map(|l| LayerMesh {
-                thickness_m: l.thickness_m,
-                elements: 1,
-            })
-            .collect(),
-    }
-    .build()?;
+    let layers: Vec<LayerMesh> = plate
+        .layers
+        .iter()
+        .map(|l| LayerMesh {
+            thickness_m: l.thickness_m,
+            elements: 1,
+        })
+        .collect();
+    let mesh = plate.plan.mesh(elements, &layers)?;
     let system = LayeredSystem::assemble(&mesh, &materials)?;
     Ok((mesh, system))
 }
@@ -604,9 +593,11 @@ pub(crate) fn small_test_plate() -> LayeredPlate {
         loss_factor: 0.0,
     };
     LayeredPlate {
-        plan_m: [0.5, 0.4],
-        radii_m: [f64::INFINITY, f64::INFINITY],
-        edge_grading: 0.0,
+        plan: Plan::Rectangle {
+            plan_m: [0.5, 0.4],
+            radii_m: [f64::INFINITY, f64::INFINITY],
+            edge_grading: 0.0,
+        },
         layers: vec![face, core, face],
         supports: Vec::new(),
     }
@@ -615,6 +606,7 @@ pub(crate) fn small_test_plate() -> LayeredPlate {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::LayeredPlateSpec;
 
     /// The forward model's eigenvalue at a known G* is inverted back to that G*.
     #[test]
@@ -830,6 +822,63 @@ mod tests {
             })
             .to_vec();
         plate
+    }
+
+    /// The same supported plate with its plan as a structured rectangle and as a surface
+    /// mesh (a shell mesh of the same 4 × 4 grid, [`crate::plan::Plan::Surface`]): the same
+    /// hexahedra numbered differently, the supports found by the same search, so the modes the
+    /// reduced models hold agree to the Lanczos tolerance (measured 8e-9; the modes above
+    /// [`BASIS_COVER`] differ by up to 3e-6, as two bases' top modes do); a surface split 2 × 2
+    /// is the 8 × 8 rectangle.
+    #[test]
+    fn a_surface_plan_with_supports_is_the_structured_model() {
+        let rect = corner_supported(1.0, 1.0);
+        let mut surface = rect.clone();
+        let shell = lamdyn_fem::mesh::structured::RectangleSpec::flat(0.5, 0.4, 4, 4)
+            .build()
+            .unwrap();
+        surface.plan = Plan::Surface(Box::new(shell));
+        let g = Complex64::new(3e6, 1.5e6);
+        for (m, n) in [(1, 4), (2, 8)] {
+            let a = LayeredInverse::build(&rect, [n, n], 5e6, 12).unwrap();
+            let b = LayeredInverse::build(&surface, [m, m], 5e6, 12).unwrap();
+            assert_eq!(a.size().0, b.size().0);
+            let sorted = |l: &LayeredInverse| {
+                let mut v = l.eigenvalues(g);
+                v.sort_by(|x, y| x.re.total_cmp(&y.re));
+                v
+            };
+            let worst = sorted(&a)
+                .iter()
+                .zip(sorted(&b))
+                .filter(|(x, _)| x.re > 1.0 && a.check_held(**x).is_ok())
+                .map(|(x, y)| ((x - y) / x).norm())
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-7, "split {m}: {worst:e}");
+        }
+    }
+
+    /// A support inside the plan's bounding box but off an L-shaped plate is refused, named.
+    #[test]
+    fn a_support_off_an_l_shaped_plan_is_refused() {
+        let nodes: Vec<[f64; 3]> = (0..9)
+            .map(|k| [0.2 * (k % 3) as f64, 0.2 * (k / 3) as f64, 0.0])
+            .filter(|p| !(p[0] > 0.3 && p[1] > 0.3))
+            .collect();
+        // Nodes 0 1 2 / 3 4 5 / 6 7 (the corner at (0.4, 0.4) left out).
+        let l_shape =
+            lamdyn_fem::mesh::Mesh::new(nodes, vec![[0, 1, 4, 3], [1, 2, 5, 4], [3, 4, 7, 6]])
+                .unwrap();
+        let mut plate = corner_supported(1.0, 1.0);
+        plate.plan = Plan::Surface(Box::new(l_shape));
+        let e = LayeredInverse::build(&plate, [1, 1], 5e6, 12)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("supports[3]") && e.contains("no bottom face"),
+            "{e}"
+        );
     }
 
     /// The supports' stiffness and damping as inputs: their effects on G* against whole new

@@ -17,6 +17,7 @@
 //! |---|---|
 //! | [`hex20`] | the C3D20 element: shape functions, stiffness, consistent mass |
 //! | [`mesh`] | layered plates and shallow shells of hexahedra, graded towards the edges |
+//! | [`plan`] | the part's plan: a rectangle, or any quadrilateral mesh of the mid-surface (Gmsh) |
 //! | [`system`] | sparse K and M per layer, supports; lowest modes by shift-invert Lanczos |
 //! | [`reduced`] | reduced basis over a range of core moduli; FRFs and complex eigenvalues |
 //! | [`inverse`] | the core's G* per measured mode through the reduced model |
@@ -35,6 +36,7 @@ mod error;
 pub mod hex20;
 pub mod inverse;
 pub mod mesh;
+pub mod plan;
 pub mod reduced;
 pub mod sensitivity;
 pub mod seq;

@@ -82,6 +82,48 @@ pub struct HexMesh {
     pub bottom: Vec<(usize, [f64; 3])>,
 }
 
+/// Checks a stack's layers: at least one, each with a positive thickness and an element.
+///
+/// # Errors
+/// [`LayeredError::Invalid`] naming the layer (from 1).
+pub(crate) fn check_layers(layers: &[LayerMesh]) -> Result<(), LayeredError> {
+    let bad = |field: &str, why: String| Err(LayeredError::Invalid(format!("{field}: {why}")));
+    if layers.is_empty() {
+        return bad("layers", "no layer".into());
+    }
+    for (i, l) in layers.iter().enumerate() {
+        if !(l.thickness_m.is_finite() && l.thickness_m > 0.0) {
+            return bad(
+                &format!("layer {}", i + 1),
+                format!("thickness {} m must be positive", l.thickness_m),
+            );
+        }
+        if l.elements == 0 {
+            return bad(
+                &format!("layer {}", i + 1),
+                "needs at least one element".into(),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The heights s of the fine grid through the thickness (2 n_z + 1 of them, bottom to top,
+/// the mid-thickness at s = 0) and the layer of each element through the thickness.
+pub(crate) fn heights(layers: &[LayerMesh]) -> (Vec<f64>, Vec<usize>) {
+    let total: f64 = layers.iter().map(|l| l.thickness_m).sum();
+    let mut s = vec![-0.5 * total];
+    let mut fine_layer = Vec::new();
+    for (li, l) in layers.iter().enumerate() {
+        let h = l.thickness_m / (2 * l.elements) as f64;
+        for _ in 0..2 * l.elements {
+            s.push(s[s.len() - 1] + h);
+        }
+        fine_layer.extend(std::iter::repeat_n(li, l.elements));
+    }
+    (s, fine_layer)
+}
+
 impl LayeredPlateSpec {
     /// Checks the numbers (positive sizes and counts, radii positive or infinite).
     fn validate(&self) -> Result<(), LayeredError> {
@@ -108,24 +150,7 @@ impl LayeredPlateSpec {
         if self.nx == 0 || self.ny == 0 {
             return bad("elements", format!("{} x {} in plane", self.nx, self.ny));
         }
-        if self.layers.is_empty() {
-            return bad("layers", "no layer".into());
-        }
-        for (i, l) in self.layers.iter().enumerate() {
-            if !(l.thickness_m.is_finite() && l.thickness_m > 0.0) {
-                return bad(
-                    &format!("layer {}", i + 1),
-                    format!("thickness {} m must be positive", l.thickness_m),
-                );
-            }
-            if l.elements == 0 {
-                return bad(
-                    &format!("layer {}", i + 1),
-                    "needs at least one element".into(),
-                );
-            }
-        }
-        Ok(())
+        check_layers(&self.layers)
     }
 
     /// Mid-surface height and unit normal at (x, y).
@@ -142,17 +167,7 @@ impl LayeredPlateSpec {
     /// [`LayeredError::Invalid`] naming the field for non-positive sizes, thicknesses or counts.
     pub fn build(&self) -> Result<HexMesh, LayeredError> {
         self.validate()?;
-        // Heights s of the fine grid through the thickness (2 n_z + 1), mid-thickness at 0.
-        let total: f64 = self.layers.iter().map(|l| l.thickness_m).sum();
-        let mut s = vec![-0.5 * total];
-        let mut fine_layer = Vec::new();
-        for (li, l) in self.layers.iter().enumerate() {
-            let h = l.thickness_m / (2 * l.elements) as f64;
-            for _ in 0..2 * l.elements {
-                s.push(s[s.len() - 1] + h);
-            }
-            fine_layer.extend(std::iter::repeat_n(li, l.elements));
-        }
+        let (s, fine_layer) = heights(&self.layers);
         let (fx, fy, fz) = (2 * self.nx + 1, 2 * self.ny + 1, s.len());
         let mut id = vec![usize::MAX; fx * fy * fz];
         let mut nodes = Vec::new();

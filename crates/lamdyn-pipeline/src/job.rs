@@ -248,14 +248,19 @@ pub struct InverseOptions {
     /// Lines of the G*(f) curves, Hz [default: 40 lines over the fit band].
     #[serde(default)]
     pub freq_hz: Option<Vec<f64>>,
-    /// The layered inverse (G* per mode through a layered solid model of the part; needs a
-    /// rectangle model): on by default.
+    /// The layered inverse (G* per mode through a layered solid model of the part, its plan
+    /// the model's rectangle or Gmsh mid-surface mesh): on by default.
     #[serde(default = "yes")]
     pub layered: bool,
-    /// In-plane elements of the layered model's coarsest mesh (20-node hexahedra, one per
-    /// layer through the thickness); the convergence ladder refines it by 4/3 per level.
+    /// In-plane elements of the layered model's coarsest mesh of a rectangle model (20-node
+    /// hexahedra, one per layer through the thickness); the convergence ladder refines it by
+    /// 4/3 per level.
     #[serde(default = "default_layered_elements")]
     pub layered_elements: [usize; 2],
+    /// On a Gmsh model: each quadrilateral of the mid-surface mesh split m × m on the layered
+    /// model's coarsest level (1..=8); the convergence ladder splits it m + 1, m + 2, … times.
+    #[serde(default = "default_layered_subdivisions")]
+    pub layered_subdivisions: usize,
     /// Modes per reference modulus in the layered model's reduced basis.
     #[serde(default = "default_layered_modes")]
     pub layered_modes: usize,
@@ -333,6 +338,9 @@ pub enum CoreLawChoice {
 fn default_layered_elements() -> [usize; 2] {
     [12, 12]
 }
+fn default_layered_subdivisions() -> usize {
+    1
+}
 fn default_layered_modes() -> usize {
     30
 }
@@ -354,6 +362,7 @@ impl Default for InverseOptions {
             freq_hz: None,
             layered: true,
             layered_elements: default_layered_elements(),
+            layered_subdivisions: default_layered_subdivisions(),
             layered_modes: default_layered_modes(),
             tolerance: default_ladder_tolerance(),
             layered_levels: default_layered_levels(),
@@ -586,6 +595,12 @@ impl Job {
             return Err(err!(
                 "inverse.layered_elements: {:?} must lie in 2..=60 per side",
                 inv.layered_elements
+            ));
+        }
+        if !(1..=8).contains(&inv.layered_subdivisions) {
+            return Err(err!(
+                "inverse.layered_subdivisions: {} must lie in 1..=8 (each of the Gmsh model's quadrilaterals split m x m on the coarsest level)",
+                inv.layered_subdivisions
             ));
         }
         if !(6..=200).contains(&inv.layered_modes) {

@@ -1,13 +1,17 @@
 //! The chain's layered inverse ([`lamdyn_layered::inverse`]), converged over a ladder of meshes
 //! ([`lamdyn_layered::convergence`]): for each modal frequency of the fit, the identified pole
 //! p of the EMA within 2 % of it gives the target eigenvalue λ = −p² = ω_n²(1 + iη), and the
-//! core's G* is solved through a layered solid model of the part built from the job's
-//! rectangle model (plan, dome radii) and its stack, corrected by the Richardson extrapolation
-//! of each mode's eigenvalue over meshes refined by 4/3 from `inverse.layered_elements` until
-//! the estimated frequency error is below `inverse.tolerance`. The start is the exact
+//! core's G* is solved through a layered solid model of the part built from the job's model
+//! ([`lamdyn_layered::plan::Plan`]: a rectangle model's plan and dome radii, or a Gmsh model's
+//! mid-surface mesh) and its stack, corrected by the Richardson extrapolation of each mode's
+//! eigenvalue over meshes refined from the coarsest (a rectangle: by 4/3 from
+//! `inverse.layered_elements`; a Gmsh plan: every element split m × m, m from
+//! `inverse.layered_subdivisions` up by one per level) until the estimated frequency error is
+//! below `inverse.tolerance`. The start is the exact
 //! inverse's G* at that frequency (else the paper's, else 10 MPa (1 + 0.5i)), which also picks
 //! the mode branch. Every level's reduced eigenproblem is cached like the shell model (key:
-//! plan, radii, grading, mesh, modes, basis moduli, layers and G_ref snapped to a power of two).
+//! the plan (a Gmsh plan's every node), mesh, modes, basis moduli, layers and G_ref snapped to a
+//! power of two).
 //!
 //! Each mode's result gets a 95 % band ([`LayeredBand`]) from three kinds of source, combined
 //! in quadrature as independent normal errors of ln G' and ln η, half-width h = 1.96 √(Σ σ²)
@@ -27,38 +31,44 @@ use super::CorePoint;
 use super::cache::{Cache, Key};
 use super::job::Job;
 use crate::Reporter;
-use crate::bail;
 use crate::error::{Context, Result};
 use lamdyn_ema::identify::EmaResult;
-use lamdyn_fem::model::{MeshSpec, ModelSpec};
+use lamdyn_fem::model::MeshSpec;
 use lamdyn_fit::joint::{CoreLaw, CoreLawFit, InputPrior, ModePoint, fit_core_law};
 use lamdyn_layered::LayeredError;
 use lamdyn_layered::convergence::{LadderSettings, build_level, converge, level_mesh};
 use lamdyn_layered::inverse::{BASIS_RATIOS, InverseLayer, LayeredInverse, LayeredPlate};
+use lamdyn_layered::plan::Plan;
 use lamdyn_layered::sensitivity::{Input, ModeSensitivity, log_parts, relative_parts};
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::path::Path;
 
-/// The rectangle's plan and radii of the job's model.
-fn plate(job: &Job, base: &Path) -> Result<([f64; 2], [f64; 2])> {
-    let spec: ModelSpec = match (&job.model.file, &job.model.spec) {
-        (Some(f), _) => {
-            let p = if f.is_absolute() {
-                f.clone()
-            } else {
-                base.join(f)
-            };
-            crate::io::read_toml(&p)?
+/// The plan of the job's model for the layered model: a rectangle model's plan, radii and
+/// `inverse.layered_edge_grading`, or a Gmsh model's mid-surface mesh (read with its unit).
+fn plan(job: &Job, base: &Path) -> Result<Plan> {
+    let (spec, dir, label) = crate::stages::model_spec(job, base)?;
+    Ok(match &spec.mesh {
+        MeshSpec::Rectangle(r) => Plan::Rectangle {
+            plan_m: [r.length_x_m, r.length_y_m],
+            radii_m: [r.radius_x_m, r.radius_y_m],
+            edge_grading: job.inverse.layered_edge_grading,
+        },
+        MeshSpec::Gmsh { .. } => {
+            let (mesh, _) = spec
+                .build(&dir)
+                .with_context(|| format!("invalid model {label}"))?;
+            Plan::Surface(Box::new(mesh))
         }
-        (None, Some(s)) => s.clone(),
-        (None, None) => bail!("model: give file or spec"),
-    };
-    match spec.mesh {
-        MeshSpec::Rectangle(r) => Ok(([r.length_x_m, r.length_y_m], [r.radius_x_m, r.radius_y_m])),
-        _ => bail!(
-            "the layered inverse needs a rectangle model (plan and dome radii); set inverse.layered = false for a Gmsh mesh"
-        ),
+    })
+}
+
+/// The coarsest level of the ladder: `inverse.layered_elements` on a rectangle, each element
+/// of a Gmsh plan split `inverse.layered_subdivisions` times along each side.
+fn start_level(job: &Job, plan: &Plan) -> [usize; 2] {
+    match plan {
+        Plan::Rectangle { .. } => job.inverse.layered_elements,
+        Plan::Surface(_) => [job.inverse.layered_subdivisions; 2],
     }
 }
 
@@ -71,7 +81,7 @@ fn target(ema: &EmaResult, f: f64) -> Option<Complex64> {
 
 /// The job's plate for the layered model.
 fn layered_plate(job: &Job, base: &Path) -> Result<LayeredPlate> {
-    let (plan_m, radii_m) = plate(job, base)?;
+    let plan = plan(job, base)?;
     let cores = job.stack.layered_cores().context("stack")?;
     let layers = job
         .stack
@@ -94,9 +104,7 @@ fn layered_plate(job: &Job, base: &Path) -> Result<LayeredPlate> {
         })
         .collect();
     Ok(LayeredPlate {
-        plan_m,
-        radii_m,
-        edge_grading: job.inverse.layered_edge_grading,
+        plan,
         layers,
         supports: job.inverse.supports.iter().map(|s| s.to_point()).collect(),
     })
@@ -112,12 +120,12 @@ fn cached_model(
     modes: usize,
     coarsest: bool,
 ) -> std::result::Result<(LayeredInverse, bool), LayeredError> {
-    let mut key = Key::new(concat!("layered basis v5 ", env!("CARGO_PKG_VERSION")))
+    let mut key = Key::new(concat!("layered basis v6 ", env!("CARGO_PKG_VERSION")))
         .f64(g_ref)
         .bytes(
             format!(
-                "{:?} {:?} {} {elements:?} {modes} {coarsest} {:?}",
-                plate.plan_m, plate.radii_m, plate.edge_grading, plate.supports
+                "{:?} {elements:?} {modes} {coarsest} {:?}",
+                plate.plan, plate.supports
             )
             .as_bytes(),
         );
@@ -188,7 +196,7 @@ pub fn run(
     // G_ref/4 .. 4 G_ref): a re-run with another law finds the same model in the cache.
     let g_ref = 2f64.powf(g.get(g.len() / 2).copied().unwrap_or(10e6).log2().round());
     let t = std::time::Instant::now();
-    let start = job.inverse.layered_elements;
+    let start = start_level(job, &plate.plan);
     let modes = job.inverse.layered_modes;
     let settings = LadderSettings {
         max_levels: job.inverse.layered_levels,
@@ -216,7 +224,7 @@ pub fn run(
         "stage 'layered inverse': coarsest layered model and its reduced basis, levels {} built alongside",
         ahead
             .iter()
-            .map(|m| format!("{} x {}", m[0], m[1]))
+            .map(|&m| plate.plan.level_label(m))
             .collect::<Vec<_>>()
             .join(", ")
     ));
@@ -311,13 +319,13 @@ pub fn run(
         .meshes
         .iter()
         .zip(&out.dofs)
-        .map(|(m, d)| format!("{} x {} ({d} dofs)", m[0], m[1]))
+        .map(|(&m, d)| format!("{} ({d} dofs)", plate.plan.level_label(m)))
         .collect();
     let cached = all_cached.load(std::sync::atomic::Ordering::Relaxed);
     let met = out.modes.iter().filter(|m| m.is_ok()).count();
     let line = format!(
-        "C3D20, one per layer through the thickness, edge grading {}; meshes {} extrapolated to a frequency error below {:.1e} at {met} of {} modes; coarsest basis at G_ref {:.4e} Pa ({build_s:.1} s{}); targets: the EMA poles",
-        plate.edge_grading,
+        "C3D20, one per layer through the thickness, plan: {}; meshes {} extrapolated to a frequency error below {:.1e} at {met} of {} modes; coarsest basis at G_ref {:.4e} Pa ({build_s:.1} s{}); targets: the EMA poles",
+        plate.plan.describe(),
         meshes.join(", "),
         settings.tolerance,
         out.modes.len(),
@@ -957,9 +965,11 @@ mod tests {
             loss_factor: 0.0,
         };
         LayeredPlate {
-            plan_m: [0.5, 0.4],
-            radii_m: [3.0, 4.0],
-            edge_grading: 0.0,
+            plan: Plan::Rectangle {
+                plan_m: [0.5, 0.4],
+                radii_m: [3.0, 4.0],
+                edge_grading: 0.0,
+            },
             layers: vec![face, core, face],
             supports: Vec::new(),
         }

@@ -516,15 +516,10 @@ fn run_ema(
     Ok((r, false))
 }
 
-/// The modal model of the FE model on the measured channels, cached.
-fn build_model(
-    job: &Job,
-    base: &Path,
-    set: &FrfSet,
-    cache: &Cache,
-    spinner: &dyn Reporter,
-) -> Result<((ModalModel, String), bool)> {
-    let (spec, spec_dir, label) = match (&job.model.file, &job.model.spec) {
+/// The job's model: its spec, the folder its paths are relative to (a Gmsh file's), and a
+/// label naming where it came from (`model.file`'s path or `[model.spec]`).
+pub(crate) fn model_spec(job: &Job, base: &Path) -> Result<(ModelSpec, PathBuf, String)> {
+    Ok(match (&job.model.file, &job.model.spec) {
         (Some(f), None) => {
             let p = relative(base, f);
             let spec: ModelSpec = crate::io::read_toml(&p).context("model.file")?;
@@ -535,7 +530,18 @@ fn build_model(
         }
         (None, Some(s)) => (s.clone(), base.to_path_buf(), "[model.spec]".to_string()),
         _ => bail!("model: give file or spec"),
-    };
+    })
+}
+
+/// The modal model of the FE model on the measured channels, cached.
+fn build_model(
+    job: &Job,
+    base: &Path,
+    set: &FrfSet,
+    cache: &Cache,
+    spinner: &dyn Reporter,
+) -> Result<((ModalModel, String), bool)> {
+    let (spec, spec_dir, label) = model_spec(job, base)?;
     if !spec.supports.is_empty() {
         bail!(
             "model: {label} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and keep the support resonances out of the fit band",
@@ -842,6 +848,7 @@ fn collect_warnings(
             }
         }
     }
+    out.extend(shared_layered_modes(modal));
     for (name, v) in ["paper", "exact"].iter().zip(causality) {
         let bad = v
             .iter()
@@ -856,10 +863,81 @@ fn collect_warnings(
     }
 }
 
+/// Two poles more than 2 % apart that the layered inverse matched to the same elastic mode of
+/// the model (its rank at each pole's own G*): one of them sits on a neighbour's branch (a
+/// close pair, a start far off), or the core's G* changes so fast between them that two modes
+/// swap order. Either way the per-mode points there are not to be trusted without a look.
+fn shared_layered_modes(modal: &[CorePoint]) -> Vec<String> {
+    let ranked: Vec<(f64, usize)> = modal
+        .iter()
+        .filter_map(|p| Some((p.freq_hz, p.layered_convergence.as_ref()?.rank)))
+        .collect();
+    let mut out = Vec::new();
+    for (i, &(fa, ra)) in ranked.iter().enumerate() {
+        for &(fb, rb) in &ranked[i + 1..] {
+            if ra == rb && (fb / fa - 1.0).abs() > 0.02 {
+                out.push(format!(
+                    "layered inverse: the poles at {fa:.2} Hz and {fb:.2} Hz both matched the model's elastic mode {} (at their own G*): one of them may sit on a neighbouring mode's branch (a close pair); check the mode shapes, or the law's residuals at those two modes",
+                    ra + 1
+                ));
+            }
+        }
+    }
+    out
+}
+
 /// A helpful error when a job path is missing.
 pub fn check_job_path(p: &Path) -> Result<()> {
     if !p.exists() {
         return Err(err!("job file '{}' does not exist", p.display()));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lamdyn_layered::convergence::ConvergedMode;
+
+    fn point(freq_hz: f64, rank: usize) -> CorePoint {
+        let g = Complex64::new(5e6, 2e6);
+        CorePoint {
+            freq_hz,
+            e_eff_pa: Complex64::new(0.0, 0.0),
+            e_sd: None,
+            paper: Err("not used".into()),
+            exact: Err("not used".into()),
+            layered: Some(Ok(g)),
+            layered_convergence: Some(ConvergedMode {
+                core_shear_pa: g,
+                coarsest_pa: g,
+                freq_error: 0.0,
+                loss_error: 0.0,
+                residual_freq_error: 0.0,
+                storage_band: 0.0,
+                loss_band: 0.0,
+                order: 2.0,
+                loss_order: 2.0,
+                monotone: true,
+                rank,
+            }),
+            layered_band: None,
+        }
+    }
+
+    /// Two poles 3 % apart on one model mode are named; distinct modes, and two fit peaks
+    /// on one pole (within 2 %: the same target), are not.
+    #[test]
+    fn poles_sharing_one_layered_mode_are_named() {
+        let w = shared_layered_modes(&[point(100.0, 2), point(103.0, 2), point(140.0, 3)]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("100.00 Hz and 103.00 Hz") && w[0].contains("elastic mode 3"),
+            "{}",
+            w[0]
+        );
+        assert!(
+            shared_layered_modes(&[point(100.0, 2), point(101.0, 2), point(140.0, 3)]).is_empty()
+        );
+    }
 }

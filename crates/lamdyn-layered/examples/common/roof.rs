@@ -2,6 +2,7 @@
 //! 0.8632 m, radii 3 m and 5 m, free; the demo's core law at 20 °C (fractional Zener).
 
 use lamdyn_layered::inverse::{InverseLayer, LayeredPlate};
+use lamdyn_layered::plan::Plan;
 use lamdyn_layered::supports::PointSupport;
 use lamdyn_material::law::FractionalZener;
 
@@ -22,9 +23,11 @@ pub fn plate(grading: f64) -> LayeredPlate {
         loss_factor: 0.0,
     };
     LayeredPlate {
-        plan_m: [0.923, 0.8632],
-        radii_m: [3.0, 5.0],
-        edge_grading: grading,
+        plan: Plan::Rectangle {
+            plan_m: [0.923, 0.8632],
+            radii_m: [3.0, 5.0],
+            edge_grading: grading,
+        },
         layers: vec![glass, pvb, glass],
         supports: Vec::new(),
     }
