@@ -174,18 +174,25 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
     for (p, band) in layered_recovers_the_truth(&result) {
         assert!(p.paper_g().is_some() && p.exact_g().is_some());
         // Its band holds every source it names: the faces' priors (1 % modulus, 0.01 mm,
-        // 0.5 % density), the pole's scatter and the discretization. The face modulus and
-        // thickness dominate a stiff core (sensitivities of -10 to -60).
+        // 0.5 % density), their second order, the pole's scatter and the discretization. The
+        // faces dominate a stiff core (sensitivities of -10 to -60), to first order or, where
+        // the mode's G' is far from linear in them (the 103 Hz mode: -5.4 to first order, a
+        // second difference of 11 % at 1 sd of the face modulus), beyond it.
         let names: Vec<&str> = band.sources.iter().map(|s| s.0.as_str()).collect();
         for n in [
             "face modulus",
             "face thickness",
             "core thickness",
+            "inputs beyond first order",
             "discretization",
         ] {
             assert!(names.contains(&n), "{names:?}");
         }
-        assert!(band.dominant(0).starts_with("face"), "{band:?}");
+        let dominant = band.dominant(0);
+        assert!(
+            dominant.starts_with("face") || dominant == "inputs beyond first order",
+            "{band:?}"
+        );
     }
     // Issue 15.3: the fractional Zener law fitted to all modes at once with the inputs shared.
     // Against the truth (a finer, graded mesh) between the first and the last mode: G' within

@@ -1,0 +1,203 @@
+//! Coverage of the layered route's 95 % bands through the whole chain (issue 15.4): the test
+//! bench's small laminate (0.6 × 0.5 m, glass 3 / PVB-like 0.76 / glass 3 mm, free, 5 × 5
+//! sensors, FRFs to 240 Hz with noise at `snr_db`, a new noise seed each time, truth on an
+//! 18 × 18 graded mesh), its faces' modulus, thicknesses and densities drawn from the job's
+//! priors (1 % on the faces' modulus, 0.01 mm on each thickness, 0.5 % on each density; faces
+//! by one factor, the core by its own), identified with the nominal values in the job. Per
+//! (mode, seed) pair it counts whether the truth lies inside the per-mode band and inside the
+//! law's band, and prints the median half-widths.
+//!
+//! Unlike the coverage tests of `lamdyn_pipeline::layered` (reduced model, no EMA, no ladder),
+//! every stage runs: simulation, EMA, shell fit, ladder, joint law.
+//!
+//! `cargo run --release -p lamdyn-pipeline --example chain_coverage -- [seeds = 20] [snr_db = 40]`
+
+use lamdyn_fit::synthetic::Normal;
+use lamdyn_pipeline::demo::{DemoSampling, write_virtual_test};
+use lamdyn_pipeline::{Job, OutputDir, RunOptions, Silent, run_job};
+use lamdyn_testbench::description::Description;
+
+/// The small laminate's description with `snr_db` noise on the FRFs, seed `seed`.
+fn small(snr_db: f64, seed: u64) -> Description {
+    let laminate = include_str!("../../lamdyn-testbench/tests/data/small_laminate.toml").replace(
+        "elements = [6, 6]",
+        "elements = [18, 18]\nedge_grading = 0.2",
+    );
+    let text = format!(
+        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\nfrf_snr_db = {snr_db}\nseed = {seed}\n"
+    );
+    Description::parse("small.toml", &text).expect("the small laminate parses")
+}
+
+/// Median of `v` (NaN when empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let seeds: u64 = args.get(1).map_or(Ok(20), |s| s.parse())?;
+    let snr_db: f64 = args.get(2).map_or(Ok(40.0), |s| s.parse())?;
+    let root = std::env::temp_dir().join(format!("lamdyn-chain-coverage-{}", std::process::id()));
+    let (mut pairs, mut in_mode, mut in_law) = (0, [0, 0], [0, 0]);
+    let (mut half_mode, mut half_law) = (vec![Vec::new(); 2], vec![Vec::new(); 2]);
+    let started = std::time::Instant::now();
+    for seed in 1..=seeds {
+        let nominal = small(snr_db, seed);
+        let mut truth = nominal.clone();
+        // The drawn inputs: faces' modulus, faces' and core's thickness and density.
+        let mut draw = Normal::new(1000 + seed);
+        let (e, tf, tc, rf, rc) = (
+            1.0 + 0.01 * draw.sample(),
+            1e-5 * draw.sample(),
+            1e-5 * draw.sample(),
+            1.0 + 0.005 * draw.sample(),
+            1.0 + 0.005 * draw.sample(),
+        );
+        for l in &mut truth.layers {
+            if let Some(y) = l.young_pa.as_mut() {
+                *y *= e;
+                l.thickness_m += tf;
+                l.density_kg_m3 *= rf;
+            } else {
+                l.thickness_m += tc;
+                l.density_kg_m3 *= rc;
+            }
+        }
+        let dir = root.join(format!("seed{seed}"));
+        let input = OutputDir::prepare(&dir, &[], false)?;
+        let sampling = DemoSampling {
+            samples: 0,
+            seed,
+            temperature_k: None,
+        };
+        let path = write_virtual_test(&truth, &input, sampling, &Silent)?;
+        // The job knows the nominal laminate only.
+        let mut job = Job::read(&path)?;
+        for (spec, l) in job.stack.layers.iter_mut().zip(&nominal.layers) {
+            spec.thickness_m = l.thickness_m;
+            spec.density_kg_m3 = l.density_kg_m3;
+            if spec.young_pa.is_some() {
+                spec.young_pa = l.young_pa;
+            }
+        }
+        let options = RunOptions {
+            cache_dir: Some(dir.join(".lamdyn-cache")),
+        };
+        let result = run_job(job, &path, &options, &Silent)?;
+        let truth_g = result.truth.as_ref().ok_or("the job names its truth")?;
+        let law = result.core_law.as_ref().and_then(|l| l.as_ref().ok());
+        let mut line = format!(
+            "seed {seed:2}: E x{e:.4}, t_f {:+.1} um, t_c {:+.1} um, rho x{rf:.4} / x{rc:.4}:",
+            tf * 1e6,
+            tc * 1e6
+        );
+        for p in &result.modal {
+            let (Some(g), Some(t)) = (p.layered_g(), truth_g.at(p.freq_hz)) else {
+                continue;
+            };
+            let Some(Ok(band)) = p.layered_band.as_ref() else {
+                continue;
+            };
+            pairs += 1;
+            if std::env::var_os("CHAIN_COVERAGE_VERBOSE").is_some() {
+                let s: Vec<String> = band
+                    .sources
+                    .iter()
+                    .map(|(n, v)| format!("{n} {:.2}/{:.2} %", 100.0 * v[0], 100.0 * v[1]))
+                    .collect();
+                println!("  {:.0} Hz sources: {}", p.freq_hz, s.join(", "));
+                let delta = |name: &str| match name {
+                    "face modulus" => e.ln(),
+                    "face thickness" => (1.0 + tf / 3e-3).ln(),
+                    "core thickness" => (1.0 + tc / 0.76e-3).ln(),
+                    "face density" => rf.ln(),
+                    "core density" => rc.ln(),
+                    _ => 0.0,
+                };
+                let shift: [f64; 2] = [0, 1].map(|c| {
+                    band.inputs
+                        .iter()
+                        .map(|(n, _, sens)| sens[c] * delta(n))
+                        .sum::<f64>()
+                });
+                let err = [(g.re / t.re).ln(), ((g.im / g.re) / (t.im / t.re)).ln()];
+                println!(
+                    "  at the true inputs, first order {:+.2}/{:+.2} % -> left {:+.2}/{:+.2} %",
+                    100.0 * shift[0],
+                    100.0 * shift[1],
+                    100.0 * (err[0] + shift[0]),
+                    100.0 * (err[1] + shift[1])
+                );
+            }
+            let err = [(g.re / t.re).ln(), ((g.im / g.re) / (t.im / t.re)).ln()];
+            for c in 0..2 {
+                in_mode[c] += usize::from(err[c].abs() <= band.half_width[c]);
+                half_mode[c].push(band.half_width[c]);
+            }
+            let mut mark = String::new();
+            if let Some(l) = law.and_then(|l| l.at(p.freq_hz)) {
+                let inside = [
+                    (l.storage_ci95[0]..=l.storage_ci95[1]).contains(&t.re),
+                    (l.loss_factor_ci95[0]..=l.loss_factor_ci95[1]).contains(&(t.im / t.re)),
+                ];
+                for c in 0..2 {
+                    in_law[c] += usize::from(inside[c]);
+                }
+                half_law[0].push(0.5 * (l.storage_ci95[1] / l.storage_ci95[0]).ln());
+                half_law[1].push(0.5 * (l.loss_factor_ci95[1] / l.loss_factor_ci95[0]).ln());
+                mark = format!(
+                    " law {:+.2}/{:+.2} % {}{}",
+                    100.0 * (l.storage_pa / t.re).ln(),
+                    100.0 * (l.loss_factor / (t.im / t.re)).ln(),
+                    if inside[0] { "+" } else { "-" },
+                    if inside[1] { "+" } else { "-" }
+                );
+            }
+            line += &format!(
+                " [{:.0} Hz {:+.2}/{:+.2} % in {:.1}/{:.1} %{mark}]",
+                p.freq_hz,
+                100.0 * err[0],
+                100.0 * err[1],
+                100.0 * band.half_width[0],
+                100.0 * band.half_width[1]
+            );
+        }
+        println!("{line}");
+        if std::env::var_os("CHAIN_COVERAGE_VERBOSE").is_some() {
+            if let Some(l) = law {
+                println!("  {}", l.describe());
+                for i in l.inputs() {
+                    println!(
+                        "  input {}: {:+.4} [{:+.4}, {:+.4}]",
+                        i.name, i.value, i.ci95[0], i.ci95[1]
+                    );
+                }
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+    let pct = |n: usize| 100.0 * n as f64 / pairs.max(1) as f64;
+    println!(
+        "{pairs} (mode, seed) pairs, {:.0} s on {} threads",
+        started.elapsed().as_secs_f64(),
+        rayon::current_num_threads()
+    );
+    println!(
+        "per-mode band holds the truth: G' {:.1} %, eta {:.1} %; median half-width {:.2} % / {:.2} %",
+        pct(in_mode[0]),
+        pct(in_mode[1]),
+        100.0 * median(half_mode[0].clone()),
+        100.0 * median(half_mode[1].clone())
+    );
+    println!(
+        "law band holds the truth: G' {:.1} %, eta {:.1} %; median half-width {:.2} % / {:.2} %",
+        pct(in_law[0]),
+        pct(in_law[1]),
+        100.0 * median(half_law[0].clone()),
+        100.0 * median(half_law[1].clone())
+    );
+    std::fs::remove_dir_all(&root).ok();
+    Ok(())
+}
