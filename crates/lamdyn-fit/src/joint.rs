@@ -7,7 +7,12 @@
 //! as relative quantities. With the inputs off nominal by δ_j = ln(θ_j/θ_j,nominal) the mode's
 //! true core is, to first order,
 //!
-//! ln G'_true,k = ln G'_k + Σ_j e'_kj δ_j,   ln η_true,k = ln η_k + Σ_j e''_kj δ_j.
+//! ln G'_true,k = ln G'_k + Σ_j e'_kj δ_j,   ln η_true,k = ln η_k + Σ_j e''_kj δ_j,
+//!
+//! and, where the point gives its second order c_kj = ∂²(ln G'_k, ln η_k)/∂(ln θ_j)²
+//! ([`ModePoint::second_order`]), each term e_kj δ_j becomes e_kj δ_j + ½ c_kj δ_j² (the core
+//! found on a glass laminate is far from linear in the faces: a 1 % face modulus can move a
+//! mode's G' by 11 % to first order and 4 % more to second).
 //!
 //! The fit minimises over the law's parameters u and the shared δ
 //!
@@ -168,21 +173,30 @@ pub struct ModePoint {
     pub core_shear_pa: Complex64,
     /// Per input (in the order of the priors): ∂ln G'/∂ln θ and ∂ln η/∂ln θ, signed.
     pub effects: Vec<[f64; 2]>,
+    /// Per input (in the order of the priors), the second order: ∂²ln G'/∂(ln θ)² and
+    /// ∂²ln η/∂(ln θ)²; empty (or zero) for first order alone.
+    pub second_order: Vec<[f64; 2]>,
     /// The mode's own independent noise, per source: name and relative standard deviations of
     /// G' and η.
     pub noise: Vec<(String, [f64; 2])>,
 }
 
 impl ModePoint {
-    /// Σ_j e_kj (δ_j − δ₀_j): how far the inputs' changes `delta` from nominal move this
-    /// mode's ln G' and ln η, its point taken at the priors' `at`.
+    /// Σ_j [e_kj Δ_j + ½ c_kj Δ_j²], Δ_j = δ_j − δ₀_j: how far the inputs' changes `delta`
+    /// from nominal move this mode's ln G' and ln η, its point taken at the priors' `at`, with
+    /// the second order c_kj where it is given ([`ModePoint::second_order`]).
     fn input_shift(&self, delta: &[f64], priors: &[InputPrior]) -> [f64; 2] {
         let part = |c: usize| {
             self.effects
                 .iter()
                 .zip(delta)
                 .zip(priors)
-                .map(|((e, d), p)| e[c] * (d - p.at))
+                .enumerate()
+                .map(|(j, ((e, d), p))| {
+                    let step = d - p.at;
+                    let second = self.second_order.get(j).map_or(0.0, |s| s[c]);
+                    e[c] * step + 0.5 * second * step * step
+                })
                 .sum()
         };
         [part(0), part(1)]
@@ -1050,6 +1064,7 @@ mod tests {
                     found_at_hz: Complex64::new(f, 0.0),
                     core_shear_pa: Complex64::new(storage, storage * eta),
                     effects: e,
+                    second_order: Vec::new(),
                     noise: vec![("EMA pole".into(), [sd, sd])],
                 }
             })
@@ -1070,6 +1085,72 @@ mod tests {
             assert!((p.loss_factor / (g.im / g.re) - 1.0).abs() < 5e-3, "{p:?}");
         }
         assert_eq!(fit.dof, 6);
+    }
+
+    /// Points whose inputs act to second order (true = found + e δ + ½ c δ², the faces 1.5 sd
+    /// off, c of the size measured on the small laminate: a second difference of a third to a
+    /// half of the first-order shift at 1 sd): with the second order given the law is as close
+    /// to the truth as the same test in a world linear in the inputs (0.11 %; measured within
+    /// 1e-5 of it) and the face modulus found lies within its interval; the same points read
+    /// to first order alone put the law 1.7 % off.
+    #[test]
+    fn second_order_effects_are_modelled() {
+        let delta = [0.015, -0.00375];
+        let second = |k: usize| -> Vec<[f64; 2]> {
+            effects(k)
+                .iter()
+                .map(|e| [-0.4 * e[0].abs() / 0.01, 0.3 * e[1].abs() / 0.01])
+                .collect()
+        };
+        let mut rng = Normal::new(11);
+        let pts: Vec<ModePoint> = points(&[0.0, 0.0], 1e-3, &mut rng)
+            .into_iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let q = |c: usize| -> f64 {
+                    let first: f64 = p.effects.iter().zip(&delta).map(|(e, d)| e[c] * d).sum();
+                    let sec: f64 = second(k)
+                        .iter()
+                        .zip(&delta)
+                        .map(|(s, d)| 0.5 * s[c] * d * d)
+                        .sum();
+                    first + sec
+                };
+                let g = log_parts(p.core_shear_pa);
+                ModePoint {
+                    core_shear_pa: from_log_parts([g[0] - q(0), g[1] - q(1)]),
+                    second_order: second(k),
+                    ..p
+                }
+            })
+            .collect();
+        let worst = |fit: &CoreLawFit| -> f64 {
+            fit.curve(40)
+                .iter()
+                .map(|p| {
+                    let g = truth().modulus(2.0 * PI * p.freq_hz);
+                    (p.storage_pa / g.re - 1.0)
+                        .abs()
+                        .max((p.loss_factor / (g.im / g.re) - 1.0).abs())
+                })
+                .fold(0.0, f64::max)
+        };
+        let linear = points(&delta, 1e-3, &mut Normal::new(11));
+        let linear = fit_core_law(&linear, &priors(), CoreLaw::FractionalZener).unwrap();
+        let fit = fit_core_law(&pts, &priors(), CoreLaw::FractionalZener).unwrap();
+        assert!(worst(&fit) < 5e-3, "{}", worst(&fit));
+        assert!((worst(&fit) - worst(&linear)).abs() < 1e-4);
+        let e = &fit.inputs()[0];
+        assert!(e.ci95[0] <= delta[0] && delta[0] <= e.ci95[1], "{e:?}");
+        let first_only: Vec<ModePoint> = pts
+            .iter()
+            .map(|p| ModePoint {
+                second_order: Vec::new(),
+                ..p.clone()
+            })
+            .collect();
+        let fit = fit_core_law(&first_only, &priors(), CoreLaw::FractionalZener).unwrap();
+        assert!(worst(&fit) > 0.01, "{}", worst(&fit));
     }
 
     /// A per-mode law leaves the inputs at their priors, so each mode's band is the quadrature
@@ -1155,6 +1236,7 @@ mod tests {
                     found_at_hz: at,
                     core_shear_pa: truth().modulus_at_complex(2.0 * PI * at),
                     effects: effects(k),
+                    second_order: Vec::new(),
                     noise: vec![("EMA pole".into(), [1e-3, 1e-3])],
                 }
             })
@@ -1196,6 +1278,7 @@ mod tests {
                 found_at_hz: Complex64::new(f, 0.0),
                 core_shear_pa: law.modulus(2.0 * PI * f),
                 effects: effects(k),
+                second_order: Vec::new(),
                 noise: vec![("EMA pole".into(), [1e-3, 1e-3])],
             })
             .collect();
@@ -1334,6 +1417,7 @@ mod tests {
                     found_at_hz: at,
                     core_shear_pa: prony_truth(2.0 * PI * at),
                     effects: Vec::new(),
+                    second_order: Vec::new(),
                     noise: vec![("EMA pole".into(), [0.005, 0.005])],
                 }
             })

@@ -22,7 +22,7 @@
 //!   sensitivity dG*/d ln θ on the coarsest model at the converged G* ([`lamdyn_layered::sensitivity`]), to first order: a sensitivity of −20
 //!   turns a 1 % face modulus into 20 % of G', so the bands of a stiff-core laminate are wide
 //!   and, at tens of per cent, only roughly normal;
-//! - those inputs beyond first order (`second_order_sd`): the core found is not linear in
+//! - those inputs beyond first order (`second_order`): the core found is not linear in
 //!   the faces, and the joint law fit, which shares one first-order shift of the inputs among
 //!   all modes, must not take a mode's first-order point for more than it is;
 //! - the pole's scatter over the stabilization diagram: the sample standard deviation of the
@@ -454,6 +454,9 @@ pub struct LayeredBand {
     /// Per input known within a tolerance: its name, its prior's relative standard deviation
     /// and the signed ∂ln G'/∂ln θ, ∂ln η/∂ln θ (what the joint law fit needs).
     pub inputs: Vec<(String, f64, [f64; 2])>,
+    /// Per input, the second order ∂²ln G'/∂(ln θ)², ∂²ln η/∂(ln θ)² (`second_order`; zero
+    /// for an input with a wide prior, which the law fit re-linearises instead).
+    pub second_order: Vec<[f64; 2]>,
     /// Per input, how far (ln θ/θ_job) the model's value lies from the job file's: 0 but for
     /// the supports of a re-run at the supports the law found ([`supports_found`]).
     pub inputs_at: Vec<f64>,
@@ -612,9 +615,17 @@ fn band(
             [from_f[0].hypot(from_zeta[0]), from_f[1].hypot(from_zeta[1])],
         ));
     }
+    let second_order = second_order(coarsest, &sens, &inputs, at, g0);
     sources.push((
-        "inputs beyond first order".into(),
-        second_order_sd(coarsest, &sens, &inputs, at, g0),
+        SECOND_ORDER.into(),
+        [0, 1].map(|k| {
+            let var: f64 = second_order
+                .iter()
+                .zip(&inputs)
+                .map(|(c, (_, sd, _))| 0.75 * (c[k] * sd * sd).powi(2))
+                .sum();
+            var.sqrt()
+        }),
     ));
     sources.push((
         "discretization".into(),
@@ -625,6 +636,7 @@ fn band(
         half_width: [total(0), total(1)],
         sources,
         inputs,
+        second_order,
         inputs_at,
         found_at_hz: target.sqrt() / (2.0 * std::f64::consts::PI),
         found_pa: g0,
@@ -632,44 +644,49 @@ fn band(
     })
 }
 
-/// The standard deviations of ln G' and ln η the inputs' second order adds to a mode's first-order
-/// model (the "inputs beyond first order" source of [`LayeredBand`]). Each input j with a
-/// prior s_j below [`WIDE_PRIOR`] (the wide ones are re-linearised by [`fit_law`] instead) is
-/// moved by ±s_j on the coarsest model and the mode's coarse eigenvalue inverted there: the
-/// second difference d_j = ln x₊ + ln x₋ − 2 ln x₀ makes the quadratic term ½ d_j (δ_j/s_j)²,
-/// whose root mean square over δ_j ~ N(0, s_j²) is (√3/2)|d_j|; the inputs add in quadrature.
-/// On a glass laminate the core found is far from linear in the faces: on the small test
-/// laminate a 1 % face modulus moves G' at its 103 Hz mode by −10.9 % to first order and the
-/// second difference is −3.8 % (η: −26.7 % and +8.0 %), and with the faces drawn from their
-/// priors the first-order points missed the truth by up to 2.5 % in G' where their other
-/// sources said 0.4 %. An input whose moved inversion fails adds nothing.
-fn second_order_sd(
+/// The second order of the inputs' effect on a mode's core, per input: ∂²ln x/∂(ln θ_j)² for
+/// x = G' and η (the "inputs beyond first order" of [`LayeredBand`]). Each input j with a prior
+/// s_j below [`WIDE_PRIOR`] (the wide ones are re-linearised by [`fit_law`] instead) is moved
+/// by ±s_j on the coarsest model and the mode's coarse eigenvalue inverted there: the second
+/// difference d_j = ln x₊ + ln x₋ − 2 ln x₀ gives d_j/s_j². On a glass laminate the core found
+/// is far from linear in the faces: on the small test laminate a 1 % face modulus moves G' at
+/// its 103 Hz mode by −10.9 % to first order with a second difference of −3.8 % (η: −26.7 %
+/// and +8.0 %), and with the faces drawn from their priors the first-order points missed the
+/// truth by up to 2.5 % in G' where their other sources said 0.4 %. The joint law fit models
+/// this term ([`lamdyn_fit::joint::ModePoint::second_order`]); the per-mode band takes its
+/// root mean square over the prior, (√3/2)|d_j| (the quadratic term ½ d_j (δ_j/s_j)² with
+/// δ_j ~ N(0, s_j²)), as a source. An input whose moved inversion fails gets zero.
+fn second_order(
     coarsest: &LayeredInverse,
     sens: &ModeSensitivity,
     inputs: &[(String, f64, [f64; 2])],
     at: Complex64,
     g0: Complex64,
-) -> [f64; 2] {
+) -> Vec<[f64; 2]> {
     let log = |x: Complex64| [x.re.ln(), (x.im / x.re).ln()];
     let c = log(g0);
-    let mut var = [0.0; 2];
-    for (e, (_, sd, _)) in sens.inputs.iter().zip(inputs) {
-        if !(*sd > 0.0 && *sd < WIDE_PRIOR) {
-            continue;
-        }
-        let moved = |sign: f64| -> Option<[f64; 2]> {
-            let m = coarsest.with_inputs_moved(&[(e.input, sign * sd)]).ok()?;
-            let g = m.invert(at, g0).ok()?.core_shear_pa;
-            (g.re > 0.0 && g.im > 0.0).then(|| log(g))
-        };
-        if let (Some(p), Some(m)) = (moved(1.0), moved(-1.0)) {
-            for k in 0..2 {
-                var[k] += 0.75 * (p[k] + m[k] - 2.0 * c[k]).powi(2);
+    sens.inputs
+        .iter()
+        .zip(inputs)
+        .map(|(e, (_, sd, _))| {
+            if !(*sd > 0.0 && *sd < WIDE_PRIOR) {
+                return [0.0; 2];
             }
-        }
-    }
-    var.map(f64::sqrt)
+            let moved = |sign: f64| -> Option<[f64; 2]> {
+                let m = coarsest.with_inputs_moved(&[(e.input, sign * sd)]).ok()?;
+                let g = m.invert(at, g0).ok()?.core_shear_pa;
+                (g.re > 0.0 && g.im > 0.0).then(|| log(g))
+            };
+            match (moved(1.0), moved(-1.0)) {
+                (Some(p), Some(m)) => [0, 1].map(|k| (p[k] + m[k] - 2.0 * c[k]) / (sd * sd)),
+                _ => [0.0; 2],
+            }
+        })
+        .collect()
 }
+
+/// The band's source of the inputs' second order ([`second_order`]).
+const SECOND_ORDER: &str = "inputs beyond first order";
 
 /// The job's core law for the joint fit (`inverse.core_law`), if any.
 fn core_laws(choice: crate::job::CoreLawChoice) -> Vec<CoreLaw> {
@@ -961,10 +978,12 @@ fn mode_points(modal: &[CorePoint]) -> (Vec<usize>, Vec<ModePoint>, Vec<InputPri
             found_at_hz: band.found_at_hz,
             core_shear_pa: band.found_pa,
             effects: band.inputs.iter().map(|i| i.2).collect(),
+            second_order: band.second_order.clone(),
+            // The inputs, to second order, are the fit's parameters, not the point's noise.
             noise: band
                 .sources
                 .iter()
-                .filter(|s| !is_input(&s.0))
+                .filter(|s| !is_input(&s.0) && s.0 != SECOND_ORDER)
                 .cloned()
                 .collect(),
         });
@@ -972,13 +991,15 @@ fn mode_points(modal: &[CorePoint]) -> (Vec<usize>, Vec<ModePoint>, Vec<InputPri
     // An input whose prior is zero (known exactly) is not a parameter.
     let keep: Vec<bool> = priors.iter().map(|p| p.rel_sd > 0.0).collect();
     priors.retain(|p| p.rel_sd > 0.0);
-    for pt in &mut points {
-        pt.effects = pt
-            .effects
-            .iter()
+    let kept = |v: &[[f64; 2]]| -> Vec<[f64; 2]> {
+        v.iter()
             .zip(&keep)
             .filter_map(|(e, &k)| k.then_some(*e))
-            .collect();
+            .collect()
+    };
+    for pt in &mut points {
+        pt.effects = kept(&pt.effects);
+        pt.second_order = kept(&pt.second_order);
     }
     (index, points, priors)
 }
@@ -1255,6 +1276,7 @@ mod tests {
                         found_at_hz: Complex64::new(f, 0.0),
                         core_shear_pa: g(f),
                         effects: Vec::new(),
+                        second_order: Vec::new(),
                         noise: vec![("EMA pole".into(), [0.005, 0.005])],
                     }
                 })
@@ -1316,6 +1338,7 @@ mod tests {
                         found_at_hz: Complex64::new(f, 0.0),
                         core_shear_pa: Complex64::new(storage, storage * eta),
                         effects: e.to_vec(),
+                        second_order: Vec::new(),
                         noise: vec![("EMA pole".into(), [1e-3, 1e-3])],
                     }
                 })
