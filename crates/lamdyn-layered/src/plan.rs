@@ -133,7 +133,8 @@ struct PlanPoints {
 fn plan_points(surface: &Mesh) -> PlanPoints {
     let nodes = surface.nodes();
     let dirs = surface.directors();
-    let mut index: HashMap<usize, usize> = HashMap::new();
+    // Plan point of each mesh node (usize::MAX: none yet; a 9-node centre never gets one).
+    let mut index = vec![usize::MAX; nodes.len()];
     let mut mids: HashMap<(usize, usize), usize> = HashMap::new();
     let mut p = PlanPoints {
         position: Vec::new(),
@@ -150,21 +151,19 @@ fn plan_points(surface: &Mesh) -> PlanPoints {
     for e in 0..surface.n_elements() {
         let conn = surface.element_nodes(e);
         let mut out = [0usize; 8];
+        let mut of_node = |p: &mut PlanPoints, n: usize, corner: bool| {
+            if index[n] == usize::MAX {
+                index[n] = point(p, nodes[n], dirs[n], corner);
+            }
+            index[n]
+        };
         for c in 0..4 {
-            let n = conn[c];
-            out[c] = *index
-                .entry(n)
-                .or_insert_with(|| point(&mut p, nodes[n], dirs[n], true));
+            out[c] = of_node(&mut p, conn[c], true);
         }
         for edge in 0..4 {
             let (a, b) = (conn[edge], conn[(edge + 1) % 4]);
             out[4 + edge] = match surface.order() {
-                ElementOrder::Quadratic => {
-                    let n = conn[4 + edge];
-                    *index
-                        .entry(n)
-                        .or_insert_with(|| point(&mut p, nodes[n], dirs[n], false))
-                }
+                ElementOrder::Quadratic => of_node(&mut p, conn[4 + edge], false),
                 ElementOrder::Linear => *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
                     let x = std::array::from_fn(|k| 0.5 * (nodes[a][k] + nodes[b][k]));
                     let d: [f64; 3] = std::array::from_fn(|k| dirs[a][k] + dirs[b][k]);

@@ -29,6 +29,61 @@ fn small(snr_db: f64, seed: u64) -> Description {
     Description::parse("small.toml", &text).expect("the small laminate parses")
 }
 
+/// The inputs of one seed: the faces' modulus and densities as factors, the thicknesses as
+/// changes in m (faces by one draw, the core by its own).
+#[derive(Clone, Copy)]
+struct Drawn {
+    face_modulus: f64,
+    face_thickness_m: f64,
+    core_thickness_m: f64,
+    face_density: f64,
+    core_density: f64,
+}
+
+impl Drawn {
+    /// ln(θ/θ_nominal) of the input the band names `name` (the small laminate's 3 mm faces and
+    /// 0.76 mm core).
+    fn delta(&self, name: &str) -> f64 {
+        match name {
+            "face modulus" => self.face_modulus.ln(),
+            "face thickness" => (1.0 + self.face_thickness_m / 3e-3).ln(),
+            "core thickness" => (1.0 + self.core_thickness_m / 0.76e-3).ln(),
+            "face density" => self.face_density.ln(),
+            "core density" => self.core_density.ln(),
+            _ => 0.0,
+        }
+    }
+}
+
+/// With `CHAIN_COVERAGE_VERBOSE` set: a mode's band sources, and what its point's first order
+/// leaves of the error `err` (ln G', ln η against the truth) at the true inputs.
+fn explain(
+    band: &lamdyn_pipeline::layered::LayeredBand,
+    freq_hz: f64,
+    err: [f64; 2],
+    drawn: &Drawn,
+) {
+    let s: Vec<String> = band
+        .sources
+        .iter()
+        .map(|(n, v)| format!("{n} {:.2}/{:.2} %", 100.0 * v[0], 100.0 * v[1]))
+        .collect();
+    println!("  {freq_hz:.0} Hz sources: {}", s.join(", "));
+    let shift: [f64; 2] = [0, 1].map(|c| {
+        band.inputs
+            .iter()
+            .map(|(n, _, sens)| sens[c] * drawn.delta(n))
+            .sum::<f64>()
+    });
+    println!(
+        "  at the true inputs, first order {:+.2}/{:+.2} % -> left {:+.2}/{:+.2} %",
+        100.0 * shift[0],
+        100.0 * shift[1],
+        100.0 * (err[0] + shift[0]),
+        100.0 * (err[1] + shift[1])
+    );
+}
+
 /// Median of `v` (NaN when empty).
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -43,18 +98,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut pairs, mut in_mode, mut in_law) = (0, [0, 0], [0, 0]);
     let (mut half_mode, mut half_law) = (vec![Vec::new(); 2], vec![Vec::new(); 2]);
     let started = std::time::Instant::now();
+    let verbose = std::env::var_os("CHAIN_COVERAGE_VERBOSE").is_some();
     for seed in 1..=seeds {
         let nominal = small(snr_db, seed);
         let mut truth = nominal.clone();
         // The drawn inputs: faces' modulus, faces' and core's thickness and density.
         let mut draw = Normal::new(1000 + seed);
-        let (e, tf, tc, rf, rc) = (
-            1.0 + 0.01 * draw.sample(),
-            1e-5 * draw.sample(),
-            1e-5 * draw.sample(),
-            1.0 + 0.005 * draw.sample(),
-            1.0 + 0.005 * draw.sample(),
-        );
+        let drawn = Drawn {
+            face_modulus: 1.0 + 0.01 * draw.sample(),
+            face_thickness_m: 1e-5 * draw.sample(),
+            core_thickness_m: 1e-5 * draw.sample(),
+            face_density: 1.0 + 0.005 * draw.sample(),
+            core_density: 1.0 + 0.005 * draw.sample(),
+        };
+        let Drawn {
+            face_modulus: e,
+            face_thickness_m: tf,
+            core_thickness_m: tc,
+            face_density: rf,
+            core_density: rc,
+        } = drawn;
         for l in &mut truth.layers {
             if let Some(y) = l.young_pa.as_mut() {
                 *y *= e;
@@ -101,37 +164,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 continue;
             };
             pairs += 1;
-            if std::env::var_os("CHAIN_COVERAGE_VERBOSE").is_some() {
-                let s: Vec<String> = band
-                    .sources
-                    .iter()
-                    .map(|(n, v)| format!("{n} {:.2}/{:.2} %", 100.0 * v[0], 100.0 * v[1]))
-                    .collect();
-                println!("  {:.0} Hz sources: {}", p.freq_hz, s.join(", "));
-                let delta = |name: &str| match name {
-                    "face modulus" => e.ln(),
-                    "face thickness" => (1.0 + tf / 3e-3).ln(),
-                    "core thickness" => (1.0 + tc / 0.76e-3).ln(),
-                    "face density" => rf.ln(),
-                    "core density" => rc.ln(),
-                    _ => 0.0,
-                };
-                let shift: [f64; 2] = [0, 1].map(|c| {
-                    band.inputs
-                        .iter()
-                        .map(|(n, _, sens)| sens[c] * delta(n))
-                        .sum::<f64>()
-                });
-                let err = [(g.re / t.re).ln(), ((g.im / g.re) / (t.im / t.re)).ln()];
-                println!(
-                    "  at the true inputs, first order {:+.2}/{:+.2} % -> left {:+.2}/{:+.2} %",
-                    100.0 * shift[0],
-                    100.0 * shift[1],
-                    100.0 * (err[0] + shift[0]),
-                    100.0 * (err[1] + shift[1])
-                );
-            }
             let err = [(g.re / t.re).ln(), ((g.im / g.re) / (t.im / t.re)).ln()];
+            if verbose {
+                explain(band, p.freq_hz, err, &drawn);
+            }
             for c in 0..2 {
                 in_mode[c] += usize::from(err[c].abs() <= band.half_width[c]);
                 half_mode[c].push(band.half_width[c]);
@@ -165,7 +201,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         println!("{line}");
-        if std::env::var_os("CHAIN_COVERAGE_VERBOSE").is_some() {
+        if verbose {
             if let Some(l) = law {
                 println!("  {}", l.describe());
                 for i in l.inputs() {
