@@ -11,6 +11,7 @@
 //! | fit | the laminate's E*(ω) so that synthesized FRFs match (eqs. 2–10) | lamdyn-fit |
 //! | inverse | G*(f) of the core by the paper's inverse (eqs. 33–45) and the exact one | lamdyn-material |
 //! | layered inverse | G* at each EMA pole through a layered solid model ([`layered`]) | lamdyn-testbench |
+//! | core law | the core's law fitted to all layered modes with the inputs shared; its band widths and what would narrow them ([`band_widths`]) | lamdyn-fit |
 //! | uncertainty | Monte Carlo over the stack and the fit's covariance ([`uncertainty`]) | here |
 //! | report | HTML with figures, CSV/JSON tables ([`report`]) into a results folder ([`output`]) | lamdyn-report |
 //!
@@ -42,6 +43,7 @@
 //! Errors are [`PipelineError`]s: each layer says what failed, the causes are its source chain
 //! ([`error::chain_text`] joins them into one line).
 
+pub mod band_widths;
 pub mod cache;
 pub mod demo;
 pub mod error;

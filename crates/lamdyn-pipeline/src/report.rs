@@ -45,6 +45,17 @@ fn band_text(b: Option<Band>, scale: f64, digits: usize) -> String {
     })
 }
 
+/// A layered band as [`band_text`], or "not determined" where it spans more than
+/// [`crate::band_widths::UNDETERMINED_FACTOR`] either way (the CSV keeps the numbers).
+fn layered_band_text(b: Option<Band>, scale: f64, digits: usize) -> String {
+    match b {
+        Some([lo, hi]) if !crate::band_widths::determines(0.5 * (hi / lo).ln()) => {
+            "not determined".into()
+        }
+        _ => band_text(b, scale, digits),
+    }
+}
+
 fn rel_err(got: Option<f64>, truth: Option<f64>) -> Option<f64> {
     Some(got? / truth? - 1.0)
 }
@@ -480,9 +491,9 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             fmt(loss(ge), 1.0, 3),
             band_text(b.exact_loss_factor, 1.0, 3),
             fmt(storage(gl), 1e6, 3),
-            band_text(lb.storage, 1e6, 3),
+            layered_band_text(lb.storage, 1e6, 3),
             fmt(loss(gl), 1.0, 3),
-            band_text(lb.loss, 1.0, 3),
+            layered_band_text(lb.loss, 1.0, 3),
             lb.freq_error.map_or("-".into(), |e| format!("{e:+.1e}")),
             lb.loss_error.map_or("-".into(), |e| format!("{e:+.1e}")),
             pct(lb.coarsest.and_then(|c| rel_err(storage(gl), Some(c.re)))),
@@ -881,6 +892,9 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     let (header, rows, modal_csv) = modal_table(r);
     lead_section(&mut html, r, &header, &rows);
     law_section(&mut html, &mut files, r);
+    if let Some(b) = r.band_widths() {
+        html.paragraph(&format!("Band widths. {}", b.describe()));
+    }
     add_figure(
         &mut html,
         &mut files,
@@ -1092,6 +1106,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         "core_law": r.core_law.as_ref().map(|l| l.as_ref().map_err(String::as_str)),
         "ema_modes": r.ema.modes.iter().map(|m| serde_json::json!({"freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "mpc": m.mpc})).collect::<Vec<_>>(),
         "uncertainty": r.uncertainty,
+        "band_widths": r.band_widths(),
         "warnings": r.warnings,
         "timings": r.timings.iter().map(|t| serde_json::json!({"stage": t.name, "seconds": t.seconds, "cached": t.cached})).collect::<Vec<_>>(),
     });

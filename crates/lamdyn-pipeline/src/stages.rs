@@ -170,6 +170,15 @@ pub struct ChainResult {
 }
 
 impl ChainResult {
+    /// How wide the layered route's bands are and what would narrow them
+    /// ([`crate::band_widths`]); `None` without a layered band.
+    pub fn band_widths(&self) -> Option<crate::band_widths::BandWidths> {
+        crate::band_widths::band_widths(
+            &self.modal,
+            self.core_law.as_ref().and_then(|l| l.as_ref().ok()),
+        )
+    }
+
     /// Frequencies (Hz) of the modes where no inverse found a core it can stand behind: no
     /// exact and no layered result, and the paper's none or beyond its validity
     /// (|φ| > [`PHI_ACCURACY_LIMIT`](lamdyn_material::laminate::PHI_ACCURACY_LIMIT)). The run

@@ -91,6 +91,9 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
     if let Some(l) = &r.layered_line {
         rep.input("layered inverse", l.clone());
     }
+    if let Some(b) = r.band_widths() {
+        rep.input("bands", b.describe());
+    }
     rep.input("report", dir.join("report.html").display().to_string());
     if let Some(m) = &r.uncertainty {
         rep.input(

@@ -1,0 +1,364 @@
+//! How wide the layered route's 95 % bands are, and what would narrow them (issue 15.4).
+//!
+//! The report and `lamdyn run` state, after the law:
+//! - the median half-width of the law's band over the measured band (ln G' and ln η, from the
+//!   first identified mode to the last: [`CURVE_POINTS`] frequencies even in ln f) and of the
+//!   per-mode bands;
+//! - per part (G', η), the widest band of the law at a mode, the source contributing most to
+//!   it and what would narrow that source ([`what_would_narrow`]);
+//! - the modes whose own band spans more than a factor [`UNDETERMINED_FACTOR`] either way: that
+//!   mode alone does not determine the core (a mode that mostly moves the part on its
+//!   supports); the law still uses it, weighted by its band.
+//!
+//! A half-width h is that of ln x: the band is [x e^−h, x e^h], and h ≈ the relative half-width
+//! when small.
+
+use crate::stages::CorePoint;
+use lamdyn_fit::joint::CoreLawFit;
+use serde::Serialize;
+
+/// Frequencies of the law's curve over which the median half-width is taken.
+pub const CURVE_POINTS: usize = 60;
+
+/// A mode whose own band spans more than this factor either way of its value (hi/lo above its
+/// square) does not determine the core by itself.
+pub const UNDETERMINED_FACTOR: f64 = 10.0;
+
+/// Names of the parts, in the order of every `[G', η]` pair.
+const PARTS: [&str; 2] = ["G'", "eta"];
+
+/// The widest band of one part and what would narrow it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WidestBand {
+    /// "G'" or "eta".
+    pub part: &'static str,
+    /// The mode's frequency, Hz.
+    pub freq_hz: f64,
+    /// Half-width of the band of ln G' or ln η.
+    pub half_width: f64,
+    /// The source contributing most to it (an input's name, "EMA pole", "discretization", ...).
+    pub source: String,
+    /// What would narrow that source ([`what_would_narrow`]).
+    pub advice: String,
+}
+
+/// A mode whose own band does not determine the core.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UndeterminedMode {
+    /// Its frequency, Hz.
+    pub freq_hz: f64,
+    /// Per part, G' and η, whether its band spans more than [`UNDETERMINED_FACTOR`] either way.
+    pub parts: [bool; 2],
+    /// The source contributing most to its widest part.
+    pub source: String,
+    /// What would narrow that source.
+    pub advice: String,
+}
+
+/// The band widths of one run (module docs).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BandWidths {
+    /// Median half-width of the law's band over the measured band, ln G' and ln η (`None`
+    /// without a law).
+    pub law_median: Option<[f64; 2]>,
+    /// Median half-width of the per-mode layered bands, ln G' and ln η, over the modes that
+    /// have one and determine the core (`None` when none does).
+    pub modes_median: Option<[f64; 2]>,
+    /// Per part, the widest band: the law's at a mode where there is a law, else the modes'.
+    pub widest: Vec<WidestBand>,
+    /// The modes whose own band does not determine the core.
+    pub undetermined: Vec<UndeterminedMode>,
+}
+
+/// What would narrow a band whose main source is `source` (the names of
+/// `lamdyn_pipeline::layered::LayeredBand::sources` and of the joint fit's rows).
+pub fn what_would_narrow(source: &str) -> String {
+    match source {
+        "face modulus" => "a measured face modulus (a coupon or a face's own resonance)".into(),
+        "face thickness" => "measured face thicknesses (a micrometer at several points)".into(),
+        "core thickness" => "a measured core thickness (the stack's total minus the faces')".into(),
+        "face density" | "core density" => "weighed layers (measured densities)".into(),
+        "support stiffness" => {
+            "softer supports (their resonances well below the first mode), or their stiffness measured"
+                .into()
+        }
+        "support damping" => {
+            "softer supports with less damping, or their damping measured".into()
+        }
+        "inputs beyond first order" | "inputs beyond second order" => {
+            "narrower priors on the inputs (a measured face modulus and thicknesses): the core then depends on them nearly linearly"
+                .into()
+        }
+        "EMA pole" | "noise floor" => {
+            "a better-identified pole: more averages, more hits, or a reference that excites the mode"
+                .into()
+        }
+        "discretization" => "a smaller inverse.tolerance (finer meshes in the ladder)".into(),
+        "scatter about the law" => {
+            "more modes, or a law that follows the modes (generalized Maxwell or a per-mode table)"
+                .into()
+        }
+        other => format!("a narrower prior on the {other}"),
+    }
+}
+
+/// The band widths of a run's per-mode layered points `modal` and its law `law` (module
+/// docs); `None` when neither has a band.
+pub fn band_widths(modal: &[CorePoint], law: Option<&CoreLawFit>) -> Option<BandWidths> {
+    let bands: Vec<(f64, &crate::layered::LayeredBand)> = modal
+        .iter()
+        .filter_map(|p| Some((p.freq_hz, p.layered_band.as_ref()?.as_ref().ok()?)))
+        .collect();
+    let undetermined: Vec<UndeterminedMode> = bands
+        .iter()
+        .filter_map(|(f, b)| undetermined(*f, b.half_width, [b.dominant(0), b.dominant(1)]))
+        .collect();
+    let determined: Vec<[f64; 2]> = bands
+        .iter()
+        .filter(|(f, _)| !undetermined.iter().any(|u| u.freq_hz == *f))
+        .map(|(_, b)| b.half_width)
+        .collect();
+    let modes_median = median_pair(&determined);
+    let law_median = law.and_then(|l| {
+        let curve: Vec<[f64; 2]> = l.curve(CURVE_POINTS).iter().map(half_widths).collect();
+        median_pair(&curve)
+    });
+    let widest: Vec<WidestBand> = match law {
+        Some(l) => widest_of_law(l),
+        None => widest_of_modes(&bands, &undetermined),
+    };
+    if law_median.is_none() && modes_median.is_none() && undetermined.is_empty() {
+        return None;
+    }
+    Some(BandWidths {
+        law_median,
+        modes_median,
+        widest,
+        undetermined,
+    })
+}
+
+/// Whether a band of half-width `h` (of a logarithm) determines its value: finite and within
+/// [`UNDETERMINED_FACTOR`] either way.
+pub fn determines(h: f64) -> bool {
+    h.is_finite() && h <= UNDETERMINED_FACTOR.ln()
+}
+
+/// The mode at `freq_hz` if its band (half-widths `half_width` of ln G' and ln η, main
+/// sources `dominant`) spans more than [`UNDETERMINED_FACTOR`] either way; a NaN band counts.
+fn undetermined(
+    freq_hz: f64,
+    half_width: [f64; 2],
+    dominant: [&str; 2],
+) -> Option<UndeterminedMode> {
+    let parts = half_width.map(|h| !determines(h));
+    if !parts.iter().any(|&p| p) {
+        return None;
+    }
+    // The part beyond the factor; of two, the wider.
+    let worst = match parts {
+        [true, false] => 0,
+        [false, true] => 1,
+        _ => usize::from(half_width[1] > half_width[0]),
+    };
+    let source = dominant[worst].to_string();
+    Some(UndeterminedMode {
+        freq_hz,
+        parts,
+        advice: what_would_narrow(&source),
+        source,
+    })
+}
+
+/// Half-widths of ln G' and ln η of a law point's band.
+fn half_widths(p: &lamdyn_fit::joint::LawPoint) -> [f64; 2] {
+    [
+        0.5 * (p.storage_ci95[1] / p.storage_ci95[0]).ln(),
+        0.5 * (p.loss_factor_ci95[1] / p.loss_factor_ci95[0]).ln(),
+    ]
+}
+
+/// Per part, the widest of the law's bands at its modes.
+fn widest_of_law(law: &CoreLawFit) -> Vec<WidestBand> {
+    (0..2)
+        .filter_map(|c| {
+            let p = law
+                .at_modes
+                .iter()
+                .max_by(|a, b| half_widths(a)[c].total_cmp(&half_widths(b)[c]))?;
+            let source = p.dominant[c].clone();
+            Some(WidestBand {
+                part: PARTS[c],
+                freq_hz: p.freq_hz,
+                half_width: half_widths(p)[c],
+                advice: what_would_narrow(&source),
+                source,
+            })
+        })
+        .collect()
+}
+
+/// Per part, the widest of the per-mode bands that determine the core.
+fn widest_of_modes(
+    bands: &[(f64, &crate::layered::LayeredBand)],
+    undetermined: &[UndeterminedMode],
+) -> Vec<WidestBand> {
+    let determined: Vec<&(f64, &crate::layered::LayeredBand)> = bands
+        .iter()
+        .filter(|(f, _)| !undetermined.iter().any(|u| u.freq_hz == *f))
+        .collect();
+    (0..2)
+        .filter_map(|c| {
+            let (f, b) = determined
+                .iter()
+                .max_by(|a, b| a.1.half_width[c].total_cmp(&b.1.half_width[c]))?;
+            let source = b.dominant(c).to_string();
+            Some(WidestBand {
+                part: PARTS[c],
+                freq_hz: *f,
+                half_width: b.half_width[c],
+                advice: what_would_narrow(&source),
+                source,
+            })
+        })
+        .collect()
+}
+
+/// Per part, the median of `v` (the upper of the two middle values); `None` when empty.
+fn median_pair(v: &[[f64; 2]]) -> Option<[f64; 2]> {
+    if v.is_empty() {
+        return None;
+    }
+    Some([0, 1].map(|c| {
+        let mut x: Vec<f64> = v.iter().map(|p| p[c]).collect();
+        x.sort_by(f64::total_cmp);
+        x[x.len() / 2]
+    }))
+}
+
+impl BandWidths {
+    /// One paragraph for the report and one line for the console: the medians, the widest band
+    /// per part with its source and advice, and the modes that do not determine the core.
+    pub fn describe(&self) -> String {
+        let pct = |h: f64| width_text(h);
+        let mut parts = Vec::new();
+        if let Some(m) = self.law_median {
+            parts.push(format!(
+                "the law's 95 % band has a median half-width of {} in G' and {} in eta over the measured band",
+                pct(m[0]),
+                pct(m[1])
+            ));
+        }
+        if let Some(m) = self.modes_median {
+            parts.push(format!(
+                "each mode's own band {} / {} (median)",
+                pct(m[0]),
+                pct(m[1])
+            ));
+        }
+        let mut text = capitalise(&parts.join("; "));
+        for w in &self.widest {
+            text += &format!(
+                ". Widest in {}: {} at {:.1} Hz, mainly from the {}; what would narrow it: {}",
+                w.part,
+                pct(w.half_width),
+                w.freq_hz,
+                w.source,
+                w.advice
+            );
+        }
+        if !self.undetermined.is_empty() {
+            let list: Vec<String> = self
+                .undetermined
+                .iter()
+                .map(|u| format!("{:.1} Hz ({})", u.freq_hz, u.source))
+                .collect();
+            text += &format!(
+                ". Not determined by its own mode (band wider than a factor {UNDETERMINED_FACTOR} either way; the law weighs it by that band): {}; what would narrow them: {}",
+                list.join(", "),
+                self.undetermined[0].advice
+            );
+        }
+        text + "."
+    }
+}
+
+/// A half-width h of a logarithm in words: "±2.7 %" below 20 %, "a factor 3.1 either way"
+/// above, where ±h would understate the upper side (e^h − 1) and overstate the lower.
+fn width_text(h: f64) -> String {
+    if h < 0.2 {
+        format!("±{:.1} %", 100.0 * h)
+    } else {
+        format!("a factor {:.2} either way", h.exp())
+    }
+}
+
+/// `s` with its first letter in upper case.
+fn capitalise(s: &str) -> String {
+    let mut c = s.chars();
+    match c.next() {
+        Some(f) => f.to_uppercase().collect::<String>() + c.as_str(),
+        None => String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lamdyn_layered::sensitivity::Input;
+
+    /// Every source a band can name gets advice of its own, not the fallback: the inputs, the
+    /// per-mode sources and the joint fit's rows.
+    #[test]
+    fn every_band_source_has_its_own_advice() {
+        let mut names: Vec<&str> = Input::ALL.iter().map(|i| i.name()).collect();
+        names.extend([
+            "EMA pole",
+            "inputs beyond first order",
+            "inputs beyond second order",
+            "discretization",
+            "noise floor",
+            "scatter about the law",
+        ]);
+        for n in names {
+            let advice = what_would_narrow(n);
+            assert!(
+                !advice.starts_with("a narrower prior on the"),
+                "{n}: {advice}"
+            );
+        }
+        assert_eq!(
+            what_would_narrow("temperature"),
+            "a narrower prior on the temperature"
+        );
+    }
+
+    /// A band wider than the factor in either part, or NaN, is not determined by its mode,
+    /// and the wider part names the source; one just inside is.
+    #[test]
+    fn a_band_beyond_the_factor_does_not_determine_its_mode() {
+        let limit = UNDETERMINED_FACTOR.ln();
+        let src = ["face modulus", "support stiffness"];
+        assert_eq!(undetermined(20.0, [0.05, 0.999 * limit], src), None);
+        let u = undetermined(20.0, [0.05, 1.001 * limit], src).expect("undetermined");
+        assert_eq!(u.parts, [false, true]);
+        assert_eq!(u.source, "support stiffness");
+        assert_eq!(u.advice, what_would_narrow("support stiffness"));
+        let nan = undetermined(20.0, [f64::NAN, 0.1], src).expect("NaN is not determined");
+        assert_eq!(nan.parts, [true, false]);
+        assert_eq!(nan.source, "face modulus");
+    }
+
+    #[test]
+    fn widths_read_as_percent_or_factor() {
+        assert_eq!(width_text(0.027), "±2.7 %");
+        assert_eq!(width_text(2.0f64.ln()), "a factor 2.00 either way");
+    }
+
+    #[test]
+    fn medians_take_each_part_apart() {
+        let v = [[0.03, 0.5], [0.01, 0.1], [0.02, 0.2]];
+        assert_eq!(median_pair(&v), Some([0.02, 0.2]));
+        assert_eq!(median_pair(&[]), None);
+    }
+}
