@@ -296,21 +296,14 @@ pub fn run(
         modal[k].layered_convergence = m.ok().copied();
     }
     // Each mode's band on its own (in parallel; sequential inside, so the same bits).
+    let moved = MovedBySd::build(&coarsest, &plate, &job.uncertainty);
     let bands: Vec<_> = with_pole
         .par_iter()
         .zip(&out.modes)
         .map(|(&(k, target), m)| {
             let m = m.as_ref().ok()?;
             let scatter = pole_scatter(ema, ema_groups, modal[k].freq_hz);
-            Some(band(
-                &coarsest,
-                &plate,
-                &job.uncertainty,
-                m,
-                target,
-                scatter,
-                supports_at,
-            ))
+            Some(band(&coarsest, &moved, m, target, scatter, supports_at))
         })
         .collect();
     for (&(k, _), b) in with_pole.iter().zip(bands) {
@@ -542,11 +535,84 @@ fn stabilization_scatter(ema: &EmaResult, mode: usize) -> Option<[f64; 2]> {
     (near.len() >= 3).then(|| sample_sd(&near))
 }
 
+/// The relative standard deviation of the job's prior on `input` (`[uncertainty]`; a
+/// thickness's sd in m over the first face's or core's thickness in `plate`).
+fn input_rel_sd(
+    input: Input,
+    plate: &LayeredPlate,
+    priors: &crate::job::UncertaintyOptions,
+) -> f64 {
+    let thickness = |core: bool| {
+        plate
+            .layers
+            .iter()
+            .find(|l| l.young_pa.is_none() == core)
+            .map_or(f64::INFINITY, |l| l.thickness_m)
+    };
+    match input {
+        Input::FaceModulus => priors.face_modulus_rel_sd,
+        Input::FaceThickness => priors.thickness_sd_m / thickness(false),
+        Input::CoreThickness => priors.thickness_sd_m / thickness(true),
+        Input::FaceDensity | Input::CoreDensity => priors.density_rel_sd,
+        Input::SupportStiffness => priors.support_stiffness_rel_sd,
+        Input::SupportDamping => priors.support_damping_rel_sd,
+    }
+}
+
+/// Each input's prior and the coarsest model moved by ±1 sd of each input with a prior below
+/// [`WIDE_PRIOR`], built once for every mode's band ([`band`], [`second_order`]): neither
+/// depends on the mode.
+struct MovedBySd {
+    /// Per input: its prior's relative sd ([`input_rel_sd`]) and the models at +1 sd and
+    /// −1 sd (none for a wide or zero prior, or a move that failed).
+    models: Vec<(Input, f64, Option<[LayeredInverse; 2]>)>,
+}
+
+impl MovedBySd {
+    /// The moves of `coarsest` by the priors of `plate`'s inputs in `priors`.
+    fn build(
+        coarsest: &LayeredInverse,
+        plate: &LayeredPlate,
+        priors: &crate::job::UncertaintyOptions,
+    ) -> Self {
+        let models = coarsest
+            .inputs()
+            .into_par_iter()
+            .map(|input| {
+                let sd = input_rel_sd(input, plate, priors);
+                let moved = (sd > 0.0 && sd < WIDE_PRIOR)
+                    .then(|| {
+                        let at = |sign: f64| coarsest.with_inputs_moved(&[(input, sign * sd)]).ok();
+                        Some([at(1.0)?, at(-1.0)?])
+                    })
+                    .flatten();
+                (input, sd, moved)
+            })
+            .collect();
+        Self { models }
+    }
+
+    /// The models at ±1 sd of `input`, if it has them.
+    fn of(&self, input: Input) -> Option<&[LayeredInverse; 2]> {
+        self.models
+            .iter()
+            .find(|(i, _, _)| *i == input)
+            .and_then(|(_, _, m)| m.as_ref())
+    }
+
+    /// The relative sd of the prior on `input` (0 for an input the model has no derivative for).
+    fn rel_sd(&self, input: Input) -> f64 {
+        self.models
+            .iter()
+            .find(|(i, _, _)| *i == input)
+            .map_or(0.0, |(_, sd, _)| *sd)
+    }
+}
+
 /// The band of one converged mode (module docs).
 fn band(
     coarsest: &LayeredInverse,
-    plate: &LayeredPlate,
-    priors: &crate::job::UncertaintyOptions,
+    moved: &MovedBySd,
     mode: &lamdyn_layered::convergence::ConvergedMode,
     target: Complex64,
     scatter: Option<[f64; 2]>,
@@ -564,25 +630,11 @@ fn band(
     let sens: ModeSensitivity = coarsest.sensitivity(g0, rank, at)?;
     // A change of the measured eigenvalue acts through the corrected model λ_∞ = (λ_∞/λ_c) λ_c.
     let to_model = at / target;
-    let thickness = |core: bool| {
-        plate
-            .layers
-            .iter()
-            .find(|l| l.young_pa.is_none() == core)
-            .map_or(f64::INFINITY, |l| l.thickness_m)
-    };
     let inputs: Vec<(String, f64, [f64; 2])> = sens
         .inputs
         .iter()
         .map(|e| {
-            let rel_sd = match e.input {
-                Input::FaceModulus => priors.face_modulus_rel_sd,
-                Input::FaceThickness => priors.thickness_sd_m / thickness(false),
-                Input::CoreThickness => priors.thickness_sd_m / thickness(true),
-                Input::FaceDensity | Input::CoreDensity => priors.density_rel_sd,
-                Input::SupportStiffness => priors.support_stiffness_rel_sd,
-                Input::SupportDamping => priors.support_damping_rel_sd,
-            };
+            let rel_sd = moved.rel_sd(e.input);
             (e.input.name().to_string(), rel_sd, log_parts(e.dg_dln, g0))
         })
         .collect();
@@ -615,7 +667,7 @@ fn band(
             [from_f[0].hypot(from_zeta[0]), from_f[1].hypot(from_zeta[1])],
         ));
     }
-    let curvature = second_order(coarsest, &sens, &inputs, at, g0);
+    let curvature = second_order(moved, &sens, &inputs, at, g0);
     let second_order: Vec<[f64; 2]> = curvature.iter().map(|c| c.second).collect();
     let [modelled, beyond] = second_order_sd(&inputs, &curvature);
     sources.push((SECOND_ORDER.into(), modelled));
@@ -640,7 +692,8 @@ fn band(
 /// The second order of the inputs' effect on a mode's core, per input: ∂²ln x/∂(ln θ_j)² for
 /// x = G' and η (the "inputs beyond first order" of [`LayeredBand`]). Each input j with a prior
 /// s_j below [`WIDE_PRIOR`] (the wide ones are re-linearised by [`fit_law`] instead) is moved
-/// by ±s_j on the coarsest model and the mode's coarse eigenvalue inverted there: the second
+/// by ±s_j on the coarsest model (once for all modes, [`MovedBySd`]) and the mode's coarse
+/// eigenvalue inverted there: the second
 /// difference d_j = ln x₊ + ln x₋ − 2 ln x₀ gives d_j/s_j². On a glass laminate the core found
 /// is far from linear in the faces: on the small test laminate a 1 % face modulus moves G' at
 /// its 103 Hz mode by −10.9 % to first order with a second difference of −3.8 % (η: −26.7 %
@@ -653,7 +706,7 @@ fn band(
 /// its root mean square over the priors ([`second_order_sd`]) as a source. An input whose
 /// moved inversion fails gets zero.
 fn second_order(
-    coarsest: &LayeredInverse,
+    moved: &MovedBySd,
     sens: &ModeSensitivity,
     inputs: &[(String, f64, [f64; 2])],
     at: Complex64,
@@ -665,15 +718,14 @@ fn second_order(
         .iter()
         .zip(inputs)
         .map(|(e, (_, sd, first))| {
-            if !(*sd > 0.0 && *sd < WIDE_PRIOR) {
+            let Some([up, down]) = moved.of(e.input) else {
                 return InputCurvature::default();
-            }
-            let moved = |sign: f64| -> Option<[f64; 2]> {
-                let m = coarsest.with_inputs_moved(&[(e.input, sign * sd)]).ok()?;
+            };
+            let found = |m: &LayeredInverse| -> Option<[f64; 2]> {
                 let g = m.invert(at, g0).ok()?.core_shear_pa;
                 (g.re > 0.0 && g.im > 0.0).then(|| log(g))
             };
-            match (moved(1.0), moved(-1.0)) {
+            match (found(up), found(down)) {
                 (Some(p), Some(m)) => InputCurvature {
                     second: [0, 1].map(|k| (p[k] + m[k] - 2.0 * c[k]) / (sd * sd)),
                     third_at_sd: [0, 1].map(|k| 0.5 * (p[k] - m[k]) - first[k] * sd),
@@ -1216,6 +1268,7 @@ mod tests {
             &Input::ALL,
         )
         .unwrap();
+        let moved = MovedBySd::build(&nominal, &nominal_plate, priors);
         let (sd_f_rel, sd_zeta) = (2e-4, 2e-4);
         let mut rng = Normal::new(2026);
         let mut inside = [[0usize; 2]; 2];
@@ -1256,8 +1309,7 @@ mod tests {
                 };
                 let b = band(
                     &nominal,
-                    &nominal_plate,
-                    priors,
+                    &moved,
                     &mode,
                     target,
                     Some([sd_f_rel * f, sd_zeta]),
