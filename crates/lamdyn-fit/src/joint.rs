@@ -195,9 +195,10 @@ pub struct ModePoint {
 
 impl ModePoint {
     /// Σ_j e_kj Δ_j − u_k + g(u_k) ≈ Σ_j e_kj Δ_j + ½ κ_k u_k², Δ_j = δ_j − δ₀_j, u_k =
-    /// Σ_j e_kj Δ_j over the inputs with a second order, g as [`along_curve`]: how far the inputs' changes `delta` from nominal move this mode's ln G'
-    /// and ln η, its point taken at the priors' `at` (module docs; κ_k from
-    /// [`shared_curvature`], zero without [`ModePoint::second_order`]).
+    /// Σ_j e_kj Δ_j over the inputs with a second order, g as [`along_curve`]: how far the
+    /// inputs' changes `delta` from nominal move this mode's ln G' and ln η, its point taken at
+    /// the priors' `at` (module docs; κ_k from [`shared_curvature`], zero without
+    /// [`ModePoint::second_order`]).
     fn input_shift(&self, delta: &[f64], priors: &[InputPrior]) -> [f64; 2] {
         let sds: Vec<f64> = priors.iter().map(|p| p.rel_sd).collect();
         let kappa = shared_curvature(&self.effects, &self.second_order, &sds);
@@ -231,7 +232,7 @@ fn along_curve(kappa: f64, u: f64) -> f64 {
 
 /// Whether input `j` has a measured second order (an entry not exactly zero: zero marks an
 /// input whose second order was not taken, a wide prior or a failed move).
-fn has_second_order(second_order: &[[f64; 2]], j: usize) -> bool {
+pub fn has_second_order(second_order: &[[f64; 2]], j: usize) -> bool {
     second_order.get(j).is_some_and(|c| *c != [0.0, 0.0])
 }
 
@@ -1140,8 +1141,9 @@ mod tests {
     }
 
     /// Points whose inputs act to second order along their combined shift (true = found +
-    /// g(u) ≈ u + ½ κ u², u = Σ e δ, [`along_curve`], the faces 1.5 sd off, κ = −1 in G' and +0.5 in η: at the 25 Hz mode
-    /// the second order is a third of the first at 1 sd) and give the diagonal second
+    /// g(u) ≈ u + ½ κ u², u = Σ e δ, [`along_curve`], the faces 1.5 sd off, κ = −1 in G' and
+    /// +0.5 in η: at the 25 Hz mode the second order is a third of the first at 1 sd) and give
+    /// the diagonal second
     /// differences c_j = κ e_j² such a world has: the law is as close to the truth as the same
     /// test in a world linear in the inputs (0.105 % against 0.106 %) and the face modulus found
     /// lies within its interval; the same points read to first order alone put the law 4.5 %

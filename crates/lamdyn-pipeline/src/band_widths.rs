@@ -113,19 +113,20 @@ pub fn band_widths(modal: &[CorePoint], law: Option<&CoreLawFit>) -> Option<Band
         .iter()
         .filter_map(|(f, b)| undetermined(*f, b.half_width, [b.dominant(0), b.dominant(1)]))
         .collect();
-    let determined: Vec<[f64; 2]> = bands
+    let determined: Vec<(f64, &crate::layered::LayeredBand)> = bands
         .iter()
         .filter(|(f, _)| !undetermined.iter().any(|u| u.freq_hz == *f))
-        .map(|(_, b)| b.half_width)
+        .copied()
         .collect();
-    let modes_median = median_pair(&determined);
+    let halves: Vec<[f64; 2]> = determined.iter().map(|(_, b)| b.half_width).collect();
+    let modes_median = median_pair(&halves);
     let law_median = law.and_then(|l| {
         let curve: Vec<[f64; 2]> = l.curve(CURVE_POINTS).iter().map(half_widths).collect();
         median_pair(&curve)
     });
     let widest: Vec<WidestBand> = match law {
         Some(l) => widest_of_law(l),
-        None => widest_of_modes(&bands, &undetermined),
+        None => widest_of_modes(&determined),
     };
     if law_median.is_none() && modes_median.is_none() && undetermined.is_empty() {
         return None;
@@ -199,14 +200,7 @@ fn widest_of_law(law: &CoreLawFit) -> Vec<WidestBand> {
 }
 
 /// Per part, the widest of the per-mode bands that determine the core.
-fn widest_of_modes(
-    bands: &[(f64, &crate::layered::LayeredBand)],
-    undetermined: &[UndeterminedMode],
-) -> Vec<WidestBand> {
-    let determined: Vec<&(f64, &crate::layered::LayeredBand)> = bands
-        .iter()
-        .filter(|(f, _)| !undetermined.iter().any(|u| u.freq_hz == *f))
-        .collect();
+fn widest_of_modes(determined: &[(f64, &crate::layered::LayeredBand)]) -> Vec<WidestBand> {
     (0..2)
         .filter_map(|c| {
             let (f, b) = determined

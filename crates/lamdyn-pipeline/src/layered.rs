@@ -768,8 +768,8 @@ fn second_order_sd(
     let kappa = lamdyn_fit::joint::shared_curvature(&effects, &second, &sds);
     let parts = [0, 1].map(|k| {
         let (mut var_u, mut rest) = (0.0, 0.0);
-        for ((e, s), c) in effects.iter().zip(&sds).zip(curvature) {
-            if c.second == [0.0, 0.0] {
+        for (j, ((e, s), c)) in effects.iter().zip(&sds).zip(curvature).enumerate() {
+            if !lamdyn_fit::joint::has_second_order(&second, j) {
                 continue;
             }
             var_u += (e[k] * s).powi(2);
