@@ -254,20 +254,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         started.elapsed().as_secs_f64(),
         rayon::current_num_threads()
     );
-    println!(
-        "per-mode band holds the truth: G' {:.1} %, eta {:.1} %; median half-width {:.2} % / {:.2} %",
-        pct(in_mode[0]),
-        pct(in_mode[1]),
-        100.0 * median(half_mode[0].clone()),
-        100.0 * median(half_mode[1].clone())
-    );
-    println!(
-        "law band holds the truth: G' {:.1} %, eta {:.1} %; median half-width {:.2} % / {:.2} %",
-        pct(in_law[0]),
-        pct(in_law[1]),
-        100.0 * median(half_law[0].clone()),
-        100.0 * median(half_law[1].clone())
-    );
+    for (which, inside, halves) in [("per-mode", in_mode, half_mode), ("law", in_law, half_law)] {
+        println!(
+            "{which} band holds the truth: G' {:.1} %, eta {:.1} %; median half-width {:.2} % / {:.2} %",
+            pct(inside[0]),
+            pct(inside[1]),
+            100.0 * median(halves[0].clone()),
+            100.0 * median(halves[1].clone())
+        );
+    }
     std::fs::remove_dir_all(&root).ok();
     Ok(())
 }

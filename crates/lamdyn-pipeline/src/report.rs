@@ -892,7 +892,8 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     let (header, rows, modal_csv) = modal_table(r);
     lead_section(&mut html, r, &header, &rows);
     law_section(&mut html, &mut files, r);
-    if let Some(b) = r.band_widths() {
+    let band_widths = r.band_widths();
+    if let Some(b) = &band_widths {
         html.paragraph(&format!("Band widths. {}", b.describe()));
     }
     add_figure(
@@ -1106,7 +1107,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         "core_law": r.core_law.as_ref().map(|l| l.as_ref().map_err(String::as_str)),
         "ema_modes": r.ema.modes.iter().map(|m| serde_json::json!({"freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "mpc": m.mpc})).collect::<Vec<_>>(),
         "uncertainty": r.uncertainty,
-        "band_widths": r.band_widths(),
+        "band_widths": band_widths,
         "warnings": r.warnings,
         "timings": r.timings.iter().map(|t| serde_json::json!({"stage": t.name, "seconds": t.seconds, "cached": t.cached})).collect::<Vec<_>>(),
     });
