@@ -17,7 +17,11 @@
 //! `CHAIN_COVERAGE_TRUE_INPUTS` gives the job the drawn inputs instead of the nominal ones (what
 //! is left is the identification's own error); `CHAIN_COVERAGE_TRUTH_ELEMENTS` sets the
 //! truth's mesh (default 36 per side: on 18 × 18 the truth's own discretization error puts η
-//! 0.6–2.2 % off at the true inputs, against 0.1–0.6 % on 36 × 36).
+//! 0.6–2.2 % off at the true inputs, against 0.1–0.6 % on 36 × 36);
+//! `CHAIN_COVERAGE_SUPPORTS` puts the laminate on four foam blocks near its corners (4 × 4 cm,
+//! 2.5 / 2.5 / 12.5 kN/m and 5 / 5 / 10 N s/m each: bounce and rocking near 25 Hz, inside the
+//! measured band), their stiffness and damping drawn from the job's priors (20 % and 30 %, all
+//! blocks by one factor) and told to the job at nominal.
 
 use lamdyn_fit::synthetic::Normal;
 use lamdyn_pipeline::demo::{DemoSampling, write_virtual_test};
@@ -41,6 +45,22 @@ fn small(snr_db: f64, seed: u64) -> Description {
     Description::parse("small.toml", &text).expect("the small laminate parses")
 }
 
+/// Four foam blocks near the corners (`CHAIN_COVERAGE_SUPPORTS`, module docs), stiffness and
+/// damping times `k` and `c`.
+fn foam_blocks(k: f64, c: f64) -> lamdyn_testbench::description::SupportsSpec {
+    let block = |xy_fraction: [f64; 2]| lamdyn_testbench::description::SupportPoint {
+        xy_fraction,
+        stiffness_n_m: [2.5e3 * k, 2.5e3 * k, 12.5e3 * k],
+        damping_n_s_m: [5.0 * c, 5.0 * c, 10.0 * c],
+        patch_m: [0.04, 0.04],
+    };
+    lamdyn_testbench::description::SupportsSpec {
+        points: [[0.15, 0.15], [0.85, 0.15], [0.15, 0.85], [0.85, 0.85]]
+            .map(block)
+            .to_vec(),
+    }
+}
+
 /// The inputs of one seed: the faces' modulus and densities as factors, the thicknesses as
 /// changes in m (faces by one draw, the core by its own).
 #[derive(Clone, Copy)]
@@ -50,6 +70,8 @@ struct Drawn {
     core_thickness_m: f64,
     face_density: f64,
     core_density: f64,
+    support_stiffness: f64,
+    support_damping: f64,
 }
 
 impl Drawn {
@@ -62,6 +84,8 @@ impl Drawn {
             "core thickness" => (1.0 + self.core_thickness_m / 0.76e-3).ln(),
             "face density" => self.face_density.ln(),
             "core density" => self.core_density.ln(),
+            "support stiffness" => self.support_stiffness.ln(),
+            "support damping" => self.support_damping.ln(),
             _ => 0.0,
         }
     }
@@ -128,23 +152,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let started = std::time::Instant::now();
     let verbose = std::env::var_os("CHAIN_COVERAGE_VERBOSE").is_some();
     for seed in 1..=seeds {
-        let nominal = small(snr_db, seed);
+        let mut nominal = small(snr_db, seed);
+        let supported = std::env::var_os("CHAIN_COVERAGE_SUPPORTS").is_some();
+        if supported {
+            nominal.supports = Some(foam_blocks(1.0, 1.0));
+        }
         let mut truth = nominal.clone();
-        // The drawn inputs: faces' modulus, faces' and core's thickness and density.
+        // The drawn inputs: faces' modulus, faces' and core's thickness and density (and the
+        // supports' stiffness and damping, drawn after them so that the faces' draws are the
+        // free runs').
         let mut draw = Normal::new(1000 + seed);
-        let drawn = Drawn {
+        let mut drawn = Drawn {
             face_modulus: 1.0 + 0.01 * draw.sample(),
             face_thickness_m: 1e-5 * draw.sample(),
             core_thickness_m: 1e-5 * draw.sample(),
             face_density: 1.0 + 0.005 * draw.sample(),
             core_density: 1.0 + 0.005 * draw.sample(),
+            support_stiffness: 1.0,
+            support_damping: 1.0,
         };
+        if supported {
+            drawn.support_stiffness = (0.2 * draw.sample()).exp();
+            drawn.support_damping = (0.3 * draw.sample()).exp();
+            truth.supports = Some(foam_blocks(drawn.support_stiffness, drawn.support_damping));
+        }
         let Drawn {
             face_modulus: e,
             face_thickness_m: tf,
             core_thickness_m: tc,
             face_density: rf,
             core_density: rc,
+            ..
         } = drawn;
         for l in &mut truth.layers {
             if let Some(y) = l.young_pa.as_mut() {
@@ -172,6 +210,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         } else {
             &nominal
         };
+        if supported && told.supports != truth.supports {
+            // The job's supports are the truth's as written: put back the nominal ones.
+            let nominal_blocks = foam_blocks(1.0, 1.0);
+            for (spec, block) in job.inverse.supports.iter_mut().zip(&nominal_blocks.points) {
+                spec.stiffness_n_m = block.stiffness_n_m;
+                spec.damping_n_s_m = block.damping_n_s_m;
+            }
+        }
         for (spec, l) in job.stack.layers.iter_mut().zip(&told.layers) {
             spec.thickness_m = l.thickness_m;
             spec.density_kg_m3 = l.density_kg_m3;
@@ -186,9 +232,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let truth_g = result.truth.as_ref().ok_or("the job names its truth")?;
         let law = result.core_law.as_ref().and_then(|l| l.as_ref().ok());
         let mut line = format!(
-            "seed {seed:2}: E x{e:.4}, t_f {:+.1} um, t_c {:+.1} um, rho x{rf:.4} / x{rc:.4}:",
+            "seed {seed:2}: E x{e:.4}, t_f {:+.1} um, t_c {:+.1} um, rho x{rf:.4} / x{rc:.4}{}:",
             tf * 1e6,
-            tc * 1e6
+            tc * 1e6,
+            if supported {
+                format!(
+                    ", supports k x{:.3} c x{:.3}",
+                    drawn.support_stiffness, drawn.support_damping
+                )
+            } else {
+                String::new()
+            }
         );
         for p in &result.modal {
             let (Some(g), Some(t)) = (p.layered_g(), truth_g.at(p.freq_hz)) else {

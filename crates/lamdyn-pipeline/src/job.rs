@@ -272,6 +272,12 @@ pub struct InverseOptions {
     /// Largest number of meshes in the ladder (3..=6).
     #[serde(default = "default_layered_levels")]
     pub layered_levels: usize,
+    /// Largest layered mesh the ladder builds, in dofs (estimated before it is built,
+    /// lamdyn_layered::convergence::LadderSettings::max_dofs): the ladder stops below it and
+    /// says so, and refuses to start when its third level is above it. Default 250 000 (the
+    /// demo roof's finest level has 37 149, the in-band foam roof's 67 509).
+    #[serde(default = "default_layered_max_dofs")]
+    pub layered_max_dofs: usize,
     /// Edge grading of the layered meshes in [0, 1) (lamdyn_layered::mesh; 0: uniform).
     #[serde(default)]
     pub layered_edge_grading: f64,
@@ -350,6 +356,9 @@ fn default_ladder_tolerance() -> f64 {
 fn default_layered_levels() -> usize {
     LadderSettings::default().max_levels
 }
+fn default_layered_max_dofs() -> usize {
+    LadderSettings::default().max_dofs
+}
 
 fn default_kinematics() -> KinematicsChoice {
     KinematicsChoice::Plate
@@ -366,6 +375,7 @@ impl Default for InverseOptions {
             layered_modes: default_layered_modes(),
             tolerance: default_ladder_tolerance(),
             layered_levels: default_layered_levels(),
+            layered_max_dofs: default_layered_max_dofs(),
             layered_edge_grading: 0.0,
             core_law: CoreLawChoice::default(),
             supports: Vec::new(),
@@ -619,6 +629,12 @@ impl Job {
             return Err(err!(
                 "inverse.layered_levels: {} must lie in 3..=6 (three meshes give the order of convergence)",
                 inv.layered_levels
+            ));
+        }
+        if inv.layered_max_dofs < 1000 {
+            return Err(err!(
+                "inverse.layered_max_dofs: {} is below 1000 dofs, smaller than any useful layered mesh",
+                inv.layered_max_dofs
             ));
         }
         if !(0.0..1.0).contains(&inv.layered_edge_grading) {

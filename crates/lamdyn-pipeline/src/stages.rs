@@ -917,19 +917,7 @@ mod tests {
             paper: Err("not used".into()),
             exact: Err("not used".into()),
             layered: Some(Ok(g)),
-            layered_convergence: Some(ConvergedMode {
-                core_shear_pa: g,
-                coarsest_pa: g,
-                freq_error: 0.0,
-                loss_error: 0.0,
-                residual_freq_error: 0.0,
-                storage_band: 0.0,
-                loss_band: 0.0,
-                order: 2.0,
-                loss_order: 2.0,
-                monotone: true,
-                rank,
-            }),
+            layered_convergence: Some(ConvergedMode::exact(g, g, rank)),
             layered_band: None,
         }
     }

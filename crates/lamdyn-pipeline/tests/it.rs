@@ -496,6 +496,14 @@ fn bad_job_files_name_the_field() {
         ),
         "inverse.layered_levels: 2 must lie in 3..=6",
     );
+    check(
+        "max_dofs.toml",
+        good.replace(
+            "tolerance = 1e-4\n",
+            "tolerance = 1e-4\nlayered_max_dofs = 10\n",
+        ),
+        "inverse.layered_max_dofs: 10 is below 1000 dofs",
+    );
     // Priors of the layered band and the Monte Carlo (issue 15.4): a negative or non-finite
     // standard deviation, each named.
     for (field, value, expect) in [
