@@ -268,3 +268,16 @@ fn built_in_roof_is_the_papers_part() {
     assert!(d.hits.is_some_and(|h| h.count > 1));
     assert!(d.supports.is_some());
 }
+
+/// The damped sandwich panel of `examples/damped-sandwich.toml` (docs/run.md, "Other
+/// laminates") parses: aluminium faces, a generalized Maxwell core, free, 0-500 Hz.
+#[test]
+fn damped_sandwich_example_parses() {
+    let text = include_str!("../examples/damped-sandwich.toml");
+    let d = Description::parse("damped-sandwich.toml", text).unwrap();
+    let t: Vec<f64> = d.layers.iter().map(|l| l.thickness_m).collect();
+    assert_eq!(t, vec![1e-3, 2e-3, 1e-3]);
+    assert!(d.supports.is_none());
+    assert_eq!(d.test.max_hz, 500.0);
+    assert!(d.layers[1].young_pa.is_none() && d.layers[0].young_pa == Some(70e9));
+}
