@@ -390,6 +390,28 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
         cached,
         ["ema", "ema by response group", "model", "layered inverse"]
     );
+    // A dof cap below the layered model's coarsest mesh: nothing is built, and every mode and
+    // the layered line say why (issue 15's "clear errors").
+    let capped = dir.join("input/capped.toml");
+    let capped_text = std::fs::read_to_string(&job_path).unwrap().replace(
+        "tolerance = 1e-4\n",
+        "tolerance = 1e-4\nlayered_max_dofs = 5000\n",
+    );
+    std::fs::write(&capped, capped_text).unwrap();
+    let r = run_job(Job::read(&capped).unwrap(), &capped, &options, &Silent).unwrap();
+    let line = r.layered_line.as_deref().unwrap_or("");
+    assert!(
+        line.starts_with("not built: the layered model's coarsest mesh (12 x 12) has")
+            && line.contains("above inverse.layered_max_dofs = 5000"),
+        "{line}"
+    );
+    for p in &r.modal {
+        let why = p.layered.as_ref().and_then(|l| l.as_ref().err());
+        assert!(
+            why.is_some_and(|w| w.contains("layered_max_dofs") || w.contains("no EMA pole")),
+            "{why:?}"
+        );
+    }
     let report = dir.join("report/report.html");
     let before = std::fs::read(&report).unwrap();
     // A job whose model cannot hold the channels: the model stage fails, named, and nothing
