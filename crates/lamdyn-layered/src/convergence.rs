@@ -229,7 +229,7 @@ pub fn converge(
     let third = estimated_dofs(coarsest.size().0, start, meshes[2]);
     if third > settings.max_dofs {
         return Err(LayeredError::Invalid(format!(
-            "the ladder's third level, {} x {} elements, would have about {} dofs, above inverse.layered_max_dofs = {} (the coarsest has {}): start from a coarser mesh (inverse.layered_elements, or fewer quadrilaterals in the plan's Gmsh mesh) or raise inverse.layered_max_dofs if the memory allows",
+            "the ladder's third level, {} x {} elements, would have about {} dofs, above inverse.layered_max_dofs = {} (the coarsest has {}): start from a coarser mesh (inverse.layered_elements, inverse.layered_subdivisions or fewer quadrilaterals in the plan's Gmsh mesh) or raise inverse.layered_max_dofs if the memory allows",
             meshes[2][0],
             meshes[2][1],
             third,

@@ -152,9 +152,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut half_mode, mut half_law) = (vec![Vec::new(); 2], vec![Vec::new(); 2]);
     let started = std::time::Instant::now();
     let verbose = std::env::var_os("CHAIN_COVERAGE_VERBOSE").is_some();
+    let supported = std::env::var_os("CHAIN_COVERAGE_SUPPORTS").is_some();
     for seed in 1..=seeds {
         let mut nominal = small(snr_db, seed);
-        let supported = std::env::var_os("CHAIN_COVERAGE_SUPPORTS").is_some();
         if supported {
             nominal.supports = Some(foam_blocks(1.0, 1.0));
         }
