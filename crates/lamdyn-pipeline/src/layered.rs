@@ -237,10 +237,7 @@ pub fn run(
             plate.plan.level_label(start),
             settings.max_dofs
         );
-        for &(k, _) in &with_pole {
-            modal[k].layered = Some(Err(why.clone()));
-        }
-        return Ok(((Some(format!("not built: {why}")), None), false));
+        return Ok((no_layered(modal, &with_pole, "not built", &why), false));
     }
     // The coarsest model and the first finer levels at once, on two lanes, the largest level
     // alone on one (longest first; each build is sequential inside, so the bits do not depend
@@ -300,10 +297,10 @@ pub fn run(
     let out = match out {
         Ok(o) => o,
         Err(e) => {
-            for &(k, _) in &with_pole {
-                modal[k].layered = Some(Err(e.to_string()));
-            }
-            return Ok(((Some(format!("not converged: {e}")), None), false));
+            return Ok((
+                no_layered(modal, &with_pole, "not converged", &e.to_string()),
+                false,
+            ));
         }
     };
     for (&(k, _), m) in with_pole.iter().zip(&out.modes) {
@@ -345,6 +342,20 @@ pub fn run(
         if cached { ", cached" } else { "" }
     );
     Ok(((Some(line), Some(coarsest)), cached))
+}
+
+/// The layered stage's outcome when no mode gets a layered G*: each mode with a pole
+/// (`with_pole`, indices into `modal`) says `why`, and so does the line (`what: why`).
+fn no_layered(
+    modal: &mut [CorePoint],
+    with_pole: &[(usize, Complex64)],
+    what: &str,
+    why: &str,
+) -> LayeredOutcome {
+    for &(k, _) in with_pole {
+        modal[k].layered = Some(Err(why.to_string()));
+    }
+    (Some(format!("{what}: {why}")), None)
 }
 
 /// The layered inverse's start where the effective-modulus route gives none (a stack of other
