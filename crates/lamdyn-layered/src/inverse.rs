@@ -70,7 +70,9 @@ impl LayeredPlate {
         Ok(3 * self.plan.mesh(elements, &self.layer_meshes())?.nodes.len())
     }
 
-    /// The layers as the mesh takes them: one element each through the thickness.
+    /// The layers as the mesh takes them: one element each through the thickness (against
+    /// [2, 4, 2] through faces and core, at most 2.5e-4 in frequency and 0.1 % in the G' found on
+    /// the laminates of example `thickness_convergence`; docs/run.md, "Through the thickness").
     fn layer_meshes(&self) -> Vec<LayerMesh> {
         self.layers
             .iter()
