@@ -122,7 +122,11 @@ fn main() {
                 100.0 * m.loss_band,
                 m.order,
                 m.loss_order,
-                if m.monotone { "" } else { " (not monotone)" }
+                if m.asymptotic {
+                    ""
+                } else {
+                    " (not asymptotic: p = 2)"
+                }
             ),
             Err(e) => println!("{f:.3}  {e}"),
         }

@@ -31,6 +31,10 @@ pub struct LayeredSystem {
     pub n_dofs: usize,
     /// Grounded springs (supports) on single dofs, N/m, added to every stiffness.
     pub springs: Option<SparseColMat<usize, f64>>,
+    /// The supports' dashpots C_s, N·s/m ([`Self::add_support_springs`]): not part of any
+    /// real eigenproblem here, but the reduced basis holds the modes' static response to their
+    /// forces ([`crate::reduced::ReducedModel::with_orders`]).
+    pub dashpots: Option<SparseColMat<usize, f64>>,
 }
 
 impl LayeredSystem {
@@ -94,6 +98,7 @@ impl LayeredSystem {
             m_layers,
             n_dofs: n,
             springs: None,
+            dashpots: None,
         })
     }
 
@@ -116,31 +121,47 @@ impl LayeredSystem {
         self.accumulate_springs(&t)
     }
 
-    /// Adds the supports' springs k w wᵀ ([`crate::supports::SupportTerm`]).
+    /// Adds the supports' springs k w wᵀ to K_s and records their dashpots c w wᵀ in C_s
+    /// ([`crate::supports::SupportTerm`]).
     ///
     /// # Errors
-    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite stiffness.
+    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite stiffness
+    /// or damping.
     pub fn add_support_springs(
         &mut self,
         terms: &[crate::supports::SupportTerm],
     ) -> Result<(), LayeredError> {
-        let mut t: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        let (mut k_t, mut c_t): (Vec<Triplet<usize, usize, f64>>, Vec<_>) =
+            (Vec::new(), Vec::new());
         for term in terms {
-            let k = term.stiffness_n_m;
-            if !(k.is_finite() && k >= 0.0) || term.weights.iter().any(|w| w.0 >= self.n_dofs) {
+            let (k, c) = (term.stiffness_n_m, term.damping_n_s_m);
+            if !(k.is_finite() && k >= 0.0 && c.is_finite() && c >= 0.0)
+                || term.weights.iter().any(|w| w.0 >= self.n_dofs)
+            {
                 return Err(LayeredError::Invalid(format!(
-                    "support spring of {k} N/m on dofs {:?} of {}",
+                    "support spring of {k} N/m and dashpot of {c} N s/m on dofs {:?} of {}",
                     term.weights.iter().map(|w| w.0).collect::<Vec<_>>(),
                     self.n_dofs
                 )));
             }
             for &(i, wi) in &term.weights {
                 for &(j, wj) in &term.weights {
-                    t.push(Triplet::new(i, j, k * wi * wj));
+                    k_t.push(Triplet::new(i, j, k * wi * wj));
+                    if c > 0.0 {
+                        c_t.push(Triplet::new(i, j, c * wi * wj));
+                    }
                 }
             }
         }
-        self.accumulate_springs(&t)
+        if !c_t.is_empty() {
+            let add = SparseColMat::try_new_from_triplets(self.n_dofs, self.n_dofs, &c_t)
+                .map_err(|e| LayeredError::Solver(format!("dashpots: {e:?}")))?;
+            self.dashpots = Some(match self.dashpots.take() {
+                Some(d) => &d + &add,
+                None => add,
+            });
+        }
+        self.accumulate_springs(&k_t)
     }
 
     /// Adds the spring entries `t` (summed where they repeat) to K_s.

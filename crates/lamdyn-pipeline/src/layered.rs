@@ -123,7 +123,7 @@ fn cached_model(
     modes: usize,
     coarsest: bool,
 ) -> std::result::Result<(LayeredInverse, bool), LayeredError> {
-    let mut key = Key::new(concat!("layered basis v6 ", env!("CARGO_PKG_VERSION")))
+    let mut key = Key::new(concat!("layered basis v7 ", env!("CARGO_PKG_VERSION")))
         .f64(g_ref)
         .bytes(
             format!(
