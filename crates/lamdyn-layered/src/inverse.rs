@@ -242,8 +242,7 @@ impl LayeredInverse {
             ));
         }
         let (mesh, mut system) = assemble(plate, elements, g_ref_pa)?;
-        let supports = support_terms(&mesh, &plate.supports)?;
-        system.add_support_springs(&supports)?;
+        system.add_supports(&support_terms(&mesh, &plate.supports)?)?;
         // A unit load at the first top node: its static residual vector rounds off the basis.
         let mut load = vec![0.0; system.n_dofs];
         let (node, _) = mesh
@@ -263,7 +262,6 @@ impl LayeredInverse {
             krylov_orders(ratios),
         )?;
         model.set_elastic_loss(eta_e.unwrap_or(0.0))?;
-        model.add_support_dashpots(&supports)?;
         // The supports' inputs only where there are supports (on a free part they are zero).
         let inputs = inputs
             .iter()
@@ -827,7 +825,7 @@ mod tests {
     ) {
         let (mesh, mut system) = assemble(plate, elements, g_ref).unwrap();
         system
-            .add_support_springs(&support_terms(&mesh, &plate.supports).unwrap())
+            .add_supports(&support_terms(&mesh, &plate.supports).unwrap())
             .unwrap();
         let full = crate::reduced::DirectSolver::new(&system, &[1]).unwrap();
         let coarsest = LayeredInverse::build(plate, elements, g_ref, 12).unwrap();

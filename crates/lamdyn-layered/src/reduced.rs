@@ -7,8 +7,8 @@
 //!
 //! (K_e the elastic layers with a constant loss factor η_e, zero unless set by
 //! [`ReducedModel::set_elastic_loss`] — a constant loss factor is not causal, keep it small for
-//! time signals; K_s the supports' springs and C_s their dashpots, [`ReducedModel::add_support_dashpots`],
-//! causal viscous damping; K_c the core: scaling the whole core matrix by one complex factor
+//! time signals; K_s the supports' springs and C_s their dashpots,
+//! [`LayeredSystem::add_supports`], causal viscous damping; K_c the core: scaling the whole core matrix by one complex factor
 //! assumes a constant Poisson's ratio of the core) and the receptance to a load f is
 //! u = Z(ω)⁻¹ f. The reduced basis V holds, at each reference core modulus G_j with
 //! K_j = K_e + (G_j/G_a) K_c: the real modes φ of (K_j, M), the static residual vectors
@@ -223,13 +223,17 @@ impl ReducedModel {
                 k_elastic += project(k);
             }
         }
-        let k_springs = match &sys.springs {
-            Some(k) => project(k),
+        let project_or_zero = |a: &Option<SparseColMat<usize, f64>>| match a {
+            Some(a) => project(a),
             None => Mat::zeros(basis.ncols(), basis.ncols()),
         };
+        let (k_springs, c_dampers) = (
+            project_or_zero(&sys.springs),
+            project_or_zero(&sys.dashpots),
+        );
         Ok(Self {
             k_elastic,
-            c_dampers: Mat::zeros(k_springs.nrows(), k_springs.ncols()),
+            c_dampers,
             k_springs,
             elastic_loss: 0.0,
             k_core: project(&k_core),
@@ -248,8 +252,7 @@ impl ReducedModel {
     /// Adds the derivatives with respect to `input` ([`crate::sensitivity`]) of this model's
     /// matrices, `sys` being the system it was built from: the face modulus and the densities
     /// from `sys`'s own per-layer operators (exact), the supports' stiffness and damping from
-    /// this model's springs and dashpots (exact; add the dashpots first,
-    /// [`Self::add_support_dashpots`]), a thickness from the central difference
+    /// this model's springs and dashpots (exact), a thickness from the central difference
     /// of `plus` and `minus`, the systems assembled with that thickness times 1 ± h (same
     /// mesh topology).
     ///
@@ -335,41 +338,6 @@ impl ReducedModel {
             )));
         }
         self.elastic_loss = eta;
-        Ok(())
-    }
-
-    /// Adds the supports' dashpots c (Vᵀw)(Vᵀw)ᵀ ([`crate::supports::SupportTerm`]).
-    ///
-    /// # Errors
-    /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite damping.
-    pub fn add_support_dashpots(
-        &mut self,
-        terms: &[crate::supports::SupportTerm],
-    ) -> Result<(), LayeredError> {
-        let n = self.basis.nrows();
-        let m = self.size();
-        for term in terms {
-            let c = term.damping_n_s_m;
-            if !(c.is_finite() && c >= 0.0) || term.weights.iter().any(|w| w.0 >= n) {
-                return Err(LayeredError::Invalid(format!(
-                    "support dashpot of {c} N s/m on dofs {:?} of {n}",
-                    term.weights.iter().map(|w| w.0).collect::<Vec<_>>()
-                )));
-            }
-            let v: Vec<f64> = (0..m)
-                .map(|j| {
-                    term.weights
-                        .iter()
-                        .map(|&(d, w)| w * self.basis[(d, j)])
-                        .sum()
-                })
-                .collect();
-            for i in 0..m {
-                for j in 0..m {
-                    self.c_dampers[(i, j)] += c * v[i] * v[j];
-                }
-            }
-        }
         Ok(())
     }
 

@@ -6,8 +6,8 @@
 //! Each support acts at its point of the plan on the bottom surface, along the global x, y and
 //! z axes, through the shape functions of the bottom face that holds it ([`SupportTerm`]):
 //! stiffness k (N/m) into K_s and viscous damping c (N·s/m) into C_s
-//! ([`crate::system::LayeredSystem::add_support_springs`],
-//! [`crate::reduced::ReducedModel::add_support_dashpots`]).
+//! ([`crate::system::LayeredSystem::add_supports`]; the reduced model projects both,
+//! [`crate::reduced::ReducedModel::with_orders`]).
 //!
 //! A support with a contact patch (a foam block's face, [`PointSupport::patch_m`]) spreads k
 //! and c evenly over a fixed grid of [`PATCH_POINTS`] × [`PATCH_POINTS`] points of the patch

@@ -31,9 +31,9 @@ pub struct LayeredSystem {
     pub n_dofs: usize,
     /// Grounded springs (supports) on single dofs, N/m, added to every stiffness.
     pub springs: Option<SparseColMat<usize, f64>>,
-    /// The supports' dashpots C_s, N·s/m ([`Self::add_support_springs`]): not part of any
-    /// real eigenproblem here, but the reduced basis holds the modes' static response to their
-    /// forces ([`crate::reduced::ReducedModel::with_orders`]).
+    /// The supports' dashpots C_s, N·s/m ([`Self::add_supports`]): in no real eigenproblem
+    /// here; the reduced model projects them and its basis holds the modes' static response to
+    /// their forces ([`crate::reduced::ReducedModel::with_orders`]).
     pub dashpots: Option<SparseColMat<usize, f64>>,
 }
 
@@ -127,7 +127,7 @@ impl LayeredSystem {
     /// # Errors
     /// [`LayeredError::Invalid`] for a dof out of range or a negative or non-finite stiffness
     /// or damping.
-    pub fn add_support_springs(
+    pub fn add_supports(
         &mut self,
         terms: &[crate::supports::SupportTerm],
     ) -> Result<(), LayeredError> {

@@ -458,24 +458,19 @@ impl Description {
         let mesh = self.mesh_spec()?.build()?;
         progress("assembly");
         let mut system = LayeredSystem::assemble(&mesh, &elastic)?;
-        let supports = match &self.supports {
-            Some(s) => {
-                let pts: Vec<Support> = s
-                    .points
-                    .iter()
-                    .map(|p| Support {
-                        xy_fraction: p.xy_fraction,
-                        stiffness_n_m: p.stiffness_n_m,
-                        damping_n_s_m: p.damping_n_s_m,
-                        patch_m: p.patch_m,
-                    })
-                    .collect();
-                let terms = support_terms(&mesh, &pts)?;
-                system.add_support_springs(&terms)?;
-                terms
-            }
-            None => Vec::new(),
-        };
+        if let Some(s) = &self.supports {
+            let pts: Vec<Support> = s
+                .points
+                .iter()
+                .map(|p| Support {
+                    xy_fraction: p.xy_fraction,
+                    stiffness_n_m: p.stiffness_n_m,
+                    damping_n_s_m: p.damping_n_s_m,
+                    patch_m: p.patch_m,
+                })
+                .collect();
+            system.add_supports(&support_terms(&mesh, &pts)?)?;
+        }
         let test = self.impact_test(&mesh)?;
         check_layout(&mesh, &test)?;
         let hits = self.hit_settings()?;
@@ -498,7 +493,6 @@ impl Description {
             shift,
         )?;
         model.set_elastic_loss(eta_e)?;
-        model.add_support_dashpots(&supports)?;
         Ok(Bench {
             mesh,
             system,
