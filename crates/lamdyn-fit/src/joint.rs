@@ -105,18 +105,43 @@ pub enum CoreLaw {
 /// loss growing with f, so the decade either side lets the series follow the slopes at the
 /// band's ends; one term per mode keeps the law's parameters (n + 1) at most 2K − K + 1.
 pub fn prony_relaxation_times(log_freqs: &[f64]) -> Vec<f64> {
+    prony_relaxation_times_shifted(log_freqs, 0.0)
+}
+
+/// The relaxation times of [`prony_relaxation_times`] with every f_k moved up by `offset`
+/// times their spacing in ln f (0 ≤ offset < 1: a whole spacing gives the same grid but at
+/// its ends). Where the terms sit between the modes is a choice the modes do not make: on a
+/// roof whose core is a Prony series with one term per decade, fits on grids a quarter of a
+/// spacing apart differed by up to 1.2 % in G' and 2.1 % in η between the modes, each
+/// matching the modes within their noise ([`CoreLawFit::with_alternatives`]).
+pub fn prony_relaxation_times_shifted(log_freqs: &[f64], offset: f64) -> Vec<f64> {
     let n = prony_terms(log_freqs.len());
     let (first, last) = match (log_freqs.first(), log_freqs.last()) {
         (Some(&a), Some(&b)) => (a, b),
         _ => return Vec::new(),
     };
     let (lo, hi) = (first - 10f64.ln(), last + 10f64.ln());
+    let step = (hi - lo) / (n - 1) as f64;
     (0..n)
         .map(|k| {
-            let lf = lo + (hi - lo) * k as f64 / (n - 1) as f64;
+            let lf = lo + step * (k as f64 + offset);
             1.0 / (2.0 * PI * lf.exp())
         })
         .collect()
+}
+
+/// The modes' frequencies a law is fitted at (ln Hz, increasing) and, for the generalized
+/// Maxwell law, where its relaxation times sit ([`prony_relaxation_times_shifted`]).
+#[derive(Debug, Clone)]
+struct ModeFrequencies {
+    ln: Vec<f64>,
+    prony_offset: f64,
+}
+
+impl ModeFrequencies {
+    fn relaxation_times(&self) -> Vec<f64> {
+        prony_relaxation_times_shifted(&self.ln, self.prony_offset)
+    }
 }
 
 /// Terms of the [`CoreLaw::GeneralizedMaxwell`] fit to `modes` modes.
@@ -369,8 +394,33 @@ pub struct CoreLawFit {
     pub real_frequency_factors: Vec<Complex64>,
     /// Each real-frequency point moved by the fitted inputs as well: G*_k e^{e_k (δ − δ₀)}, Pa.
     pub corrected_points: Vec<Complex64>,
+    /// The other laws fitted to the same modes that share the band, with their Akaike
+    /// weights, and this law's own weight ([`Self::with_alternatives`]; none and 1 alone).
+    #[serde(skip)]
+    alternatives: Vec<(f64, CoreLawFit)>,
+    #[serde(skip)]
+    own_weight: f64,
     #[serde(skip)]
     fit: Internal,
+}
+
+/// The band source of the choice between laws that fit the modes alike
+/// ([`CoreLawFit::with_alternatives`]).
+pub const LAW_BETWEEN_MODES: &str = "the law between the modes";
+
+/// Alternatives whose Akaike weight is below this are left out of the band: their share of
+/// its sd is below a tenth of their difference from the chosen law, 1e-4 of ln for a law 10 %
+/// away.
+const LEAST_WEIGHT: f64 = 1e-3;
+
+/// A law's own value and band at one frequency, before the alternatives.
+struct OwnBand {
+    /// ln G', ln η.
+    value: [f64; 2],
+    /// Their standard deviations.
+    sd: [f64; 2],
+    /// The largest source of each and its variance.
+    dominant: [(String, f64); 2],
 }
 
 /// What the bands need after the fit.
@@ -381,23 +431,24 @@ struct Internal {
     gain: Mat<f64>,
     /// Per observation row: (source, share) pairs.
     rows: Vec<Vec<(String, f64)>>,
-    log_freqs: Vec<f64>,
+    log_freqs: ModeFrequencies,
 }
 
 /// ln G' and ln η of the law at `f_hz` on the searched parameters `u` (the law's part).
-fn log_law(law: CoreLaw, u: &[f64], log_freqs: &[f64], f_hz: f64) -> Option<[f64; 2]> {
+fn log_law(law: CoreLaw, u: &[f64], log_freqs: &ModeFrequencies, f_hz: f64) -> Option<[f64; 2]> {
     match law {
         CoreLaw::FractionalZener => {
             let g = law_of(u)?.modulus(2.0 * PI * f_hz);
             (g.re > 0.0 && g.im > 0.0).then(|| log_parts(g))
         }
         CoreLaw::GeneralizedMaxwell => {
-            let taus = prony_relaxation_times(log_freqs);
+            let taus = log_freqs.relaxation_times();
             let g = prony_modulus(u, &taus, Complex64::new(2.0 * PI * f_hz, 0.0))?;
             (g.re > 0.0 && g.im > 0.0).then(|| log_parts(g))
         }
         CoreLaw::PerMode => {
             let x = f_hz.ln();
+            let log_freqs = &log_freqs.ln;
             let n = log_freqs.len();
             let k = log_freqs.partition_point(|&l| l < x).clamp(1, n.max(2) - 1);
             if n == 1 {
@@ -514,17 +565,15 @@ fn check(points: &[ModePoint], priors: &[InputPrior], law: CoreLaw) -> Result<()
 fn log_law_at_point(
     law: CoreLaw,
     u: &[f64],
-    log_freqs: &[f64],
+    log_freqs: &ModeFrequencies,
     p: &ModePoint,
     slope: Complex64,
 ) -> Option<[f64; 2]> {
     let g = match law {
         CoreLaw::FractionalZener => law_of(u)?.modulus_at_complex(2.0 * PI * p.found_at_hz),
-        CoreLaw::GeneralizedMaxwell => prony_modulus(
-            u,
-            &prony_relaxation_times(log_freqs),
-            2.0 * PI * p.found_at_hz,
-        )?,
+        CoreLaw::GeneralizedMaxwell => {
+            prony_modulus(u, &log_freqs.relaxation_times(), 2.0 * PI * p.found_at_hz)?
+        }
         CoreLaw::PerMode => {
             from_log_parts(log_law(law, u, log_freqs, p.freq_hz)?) * (slope * log_offset(p)).exp()
         }
@@ -539,7 +588,7 @@ fn residuals(
     points: &[ModePoint],
     sd: &[[f64; 2]],
     priors: &[InputPrior],
-    log_freqs: &[f64],
+    log_freqs: &ModeFrequencies,
     slope: Complex64,
 ) -> Option<Vec<f64>> {
     let np = law.parameter_count(points.len());
@@ -559,7 +608,7 @@ fn residuals(
 
 /// Starting points of the law's parameters, best first (a grid over α and τ for the
 /// fractional Zener law, G0 and G∞ from the data's range; the data themselves per mode).
-fn starts(law: CoreLaw, points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>> {
+fn starts(law: CoreLaw, points: &[ModePoint], log_freqs: &ModeFrequencies) -> Vec<Vec<f64>> {
     match law {
         CoreLaw::PerMode => vec![
             points
@@ -602,7 +651,7 @@ fn starts(law: CoreLaw, points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>
             scored.sort_by(|a, b| a.0.total_cmp(&b.0));
             scored.into_iter().take(6).map(|(_, u)| u).collect()
         }
-        CoreLaw::GeneralizedMaxwell => prony_starts(points, log_freqs),
+        CoreLaw::GeneralizedMaxwell => prony_starts(points, &log_freqs.relaxation_times()),
     }
 }
 
@@ -610,8 +659,7 @@ fn starts(law: CoreLaw, points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>
 /// points' G' and G'' (each row divided by |G*_k|), its negative or tiny strengths raised to
 /// 1e-3 of the largest (the search is on their logarithms), and the same from a flat spectrum
 /// (every g_k alike, G_e the lowest G').
-fn prony_starts(points: &[ModePoint], log_freqs: &[f64]) -> Vec<Vec<f64>> {
-    let taus = prony_relaxation_times(log_freqs);
+fn prony_starts(points: &[ModePoint], taus: &[f64]) -> Vec<Vec<f64>> {
     let n = taus.len() + 1;
     let i = Complex64::new(0.0, 1.0);
     let mut a = Mat::<f64>::zeros(2 * points.len(), n);
@@ -671,8 +719,37 @@ pub fn fit_core_law(
     priors: &[InputPrior],
     law: CoreLaw,
 ) -> Result<CoreLawFit, FitError> {
+    fit_core_law_shifted(points, priors, law, 0.0)
+}
+
+/// [`fit_core_law`] with a generalized Maxwell law's relaxation times moved by `prony_offset`
+/// of their spacing ([`prony_relaxation_times_shifted`]; other laws ignore it).
+///
+/// # Errors
+/// Those of [`fit_core_law`], and an offset outside [0, 1).
+pub fn fit_core_law_shifted(
+    points: &[ModePoint],
+    priors: &[InputPrior],
+    law: CoreLaw,
+    prony_offset: f64,
+) -> Result<CoreLawFit, FitError> {
     check(points, priors, law)?;
-    let log_freqs: Vec<f64> = points.iter().map(|p| p.freq_hz.ln()).collect();
+    if !(0.0..1.0).contains(&prony_offset) {
+        return Err(inconsistent(
+            CONTEXT,
+            format!(
+                "the relaxation times' offset {prony_offset} must lie in [0, 1) of their spacing"
+            ),
+        ));
+    }
+    let log_freqs = ModeFrequencies {
+        ln: points.iter().map(|p| p.freq_hz.ln()).collect(),
+        prony_offset: if law == CoreLaw::GeneralizedMaxwell {
+            prony_offset
+        } else {
+            0.0
+        },
+    };
     let stated: Vec<[f64; 2]> = points.iter().map(noise_sd).collect();
     let slope = log_slope(points);
     let np = law.parameter_count(points.len());
@@ -757,7 +834,7 @@ pub fn fit_core_law(
                 .collect()
         }
         CoreLaw::GeneralizedMaxwell => {
-            let taus = prony_relaxation_times(&log_freqs);
+            let taus = log_freqs.relaxation_times();
             points
                 .iter()
                 .map(|p| {
@@ -807,6 +884,8 @@ pub fn fit_core_law(
         real_frequency_points,
         real_frequency_factors: to_real,
         corrected_points,
+        alternatives: Vec::new(),
+        own_weight: 1.0,
         fit: Internal {
             u: best.x,
             gain,
@@ -821,7 +900,7 @@ pub fn fit_core_law(
 fn parameter_names(
     law: CoreLaw,
     modes: usize,
-    log_freqs: &[f64],
+    log_freqs: &ModeFrequencies,
     priors: &[InputPrior],
 ) -> Vec<String> {
     let mut names: Vec<String> = match law {
@@ -833,7 +912,8 @@ fn parameter_names(
             .collect(),
         CoreLaw::GeneralizedMaxwell => std::iter::once("g_e_pa".to_string())
             .chain(
-                prony_relaxation_times(log_freqs)
+                log_freqs
+                    .relaxation_times()
                     .iter()
                     .enumerate()
                     .map(|(k, tau)| format!("g{}_pa (tau {tau:.3e} s)", k + 1)),
@@ -939,7 +1019,7 @@ fn row_sources(
 impl CoreLawFit {
     /// Number of the law's own parameters.
     fn law_parameters(&self) -> usize {
-        self.law.parameter_count(self.fit.log_freqs.len())
+        self.law.parameter_count(self.fit.log_freqs.ln.len())
     }
 
     /// ln G' and ln η of the law at `f_hz` on parameters `u`.
@@ -952,12 +1032,12 @@ impl CoreLawFit {
         )
     }
 
-    /// The law and its 95 % band at `f_hz` (None where the law is not defined).
-    pub fn at(&self, f_hz: f64) -> Option<LawPoint> {
+    /// The law's value and its own band at `f_hz`, without the alternatives.
+    fn own_band(&self, f_hz: f64) -> Option<OwnBand> {
         let u = &self.fit.u;
         let value = self.log_at(u, f_hz)?;
-        let mut half = [0.0; 2];
-        let mut dominant = [String::new(), String::new()];
+        let mut sd = [0.0; 2];
+        let mut dominant = [(String::new(), 0.0), (String::new(), 0.0)];
         for c in 0..2 {
             // Gradient over the searched parameters (the law's; the inputs do not enter it).
             let g: Vec<f64> = (0..u.len())
@@ -984,15 +1064,44 @@ impl CoreLawFit {
                     }
                 }
             }
-            let var: f64 = by_source.iter().map(|s| s.1).sum();
-            half[c] = self.z * var.sqrt();
+            sd[c] = by_source.iter().map(|s| s.1).sum::<f64>().sqrt();
             dominant[c] = by_source
-                .iter()
+                .into_iter()
                 .max_by(|a, b| a.1.total_cmp(&b.1))
-                .map_or_else(|| "-".into(), |s| s.0.clone());
+                .unwrap_or_else(|| ("-".into(), 0.0));
         }
-        let storage = value[0].exp();
-        let loss = value[1].exp();
+        Some(OwnBand {
+            value,
+            sd,
+            dominant,
+        })
+    }
+
+    /// The law and its 95 % band at `f_hz` (None where the law is not defined). With
+    /// alternatives ([`Self::with_alternatives`]) the band's sd is Σ_i w_i √(sd_i² + (x_i − x)²)
+    /// over this law and the others, x this law's ln G' or ln η.
+    pub fn at(&self, f_hz: f64) -> Option<LawPoint> {
+        let own = self.own_band(f_hz)?;
+        let mut sd = own.sd.map(|v| self.own_weight * v);
+        for (w, other) in &self.alternatives {
+            let Some(o) = other.own_band(f_hz) else {
+                continue;
+            };
+            for c in 0..2 {
+                sd[c] += w * o.sd[c].hypot(o.value[c] - own.value[c]);
+            }
+        }
+        let dominant: [String; 2] = std::array::from_fn(|c| {
+            let between = sd[c] * sd[c] - own.sd[c] * own.sd[c];
+            if between > own.dominant[c].1 {
+                LAW_BETWEEN_MODES.to_string()
+            } else {
+                own.dominant[c].0.clone()
+            }
+        });
+        let half = sd.map(|v| self.z * v);
+        let storage = own.value[0].exp();
+        let loss = own.value[1].exp();
         Some(LawPoint {
             freq_hz: f_hz,
             storage_pa: storage,
@@ -1001,6 +1110,63 @@ impl CoreLawFit {
             loss_factor_ci95: [loss * (-half[1]).exp(), loss * half[1].exp()],
             dominant,
         })
+    }
+
+    /// This fit with the band widened by `others`, the other laws (or relaxation grids of a
+    /// generalized Maxwell law, [`prony_relaxation_times_shifted`]) fitted to the same modes,
+    /// each with its Akaike criterion ([`Self::akaike`], on the same footing as
+    /// `own_criterion`, this law's). Laws that fit the modes alike can differ between them,
+    /// and the modes cannot tell which is right there: the band takes that in as model
+    /// selection uncertainty, with the Akaike weights w_i = e^{−Δ_i/2} / Σ_j e^{−Δ_j/2}, Δ_i =
+    /// AICc_i − min AICc, and sd = Σ_i w_i √(sd_i² + (x_i − x)²) about this law's estimate x
+    /// [Burnham & Anderson 2002, §4.3.2, eq. 4.9, there about the weighted mean]. At a mode
+    /// every law that fits holds the point and the band hardly moves; between modes far apart
+    /// it widens where the laws part. Others of weight below 1e-3 are left out; this law is
+    /// the caller's choice (the lowest criterion, normally).
+    pub fn with_alternatives(mut self, own_criterion: f64, others: Vec<(f64, CoreLawFit)>) -> Self {
+        let best = others.iter().map(|o| o.0).fold(own_criterion, f64::min);
+        let weight = |a: f64| {
+            if a.is_finite() {
+                (-(a - best) / 2.0).exp()
+            } else {
+                0.0
+            }
+        };
+        let own = weight(own_criterion);
+        let total = own + others.iter().map(|o| weight(o.0)).sum::<f64>();
+        if !(total > 0.0 && total.is_finite()) {
+            return self;
+        }
+        self.own_weight = own / total;
+        self.alternatives = others
+            .into_iter()
+            .map(|(a, fit)| (weight(a) / total, fit))
+            .filter(|(w, _)| *w >= LEAST_WEIGHT)
+            .collect();
+        // The weights left out are the chosen law's: its band stays at least its own.
+        self.own_weight = 1.0 - self.alternatives.iter().map(|a| a.0).sum::<f64>();
+        let freqs: Vec<f64> = self.fit.log_freqs.ln.iter().map(|l| l.exp()).collect();
+        self.at_modes = freqs.iter().filter_map(|&f| self.at(f)).collect();
+        self
+    }
+
+    /// The alternatives sharing the band, with their weights ([`Self::with_alternatives`]).
+    pub fn alternatives(&self) -> impl Iterator<Item = (f64, &CoreLawFit)> {
+        self.alternatives.iter().map(|(w, f)| (*w, f))
+    }
+
+    /// The law's name, with where a generalized Maxwell law's relaxation times sit when
+    /// they are moved from [`prony_relaxation_times`].
+    pub fn form(&self) -> String {
+        if self.fit.log_freqs.prony_offset == 0.0 {
+            self.law.name().to_string()
+        } else {
+            format!(
+                "{} (relaxation times moved by {} of their spacing)",
+                self.law.name(),
+                self.fit.log_freqs.prony_offset
+            )
+        }
     }
 
     /// Akaike's information criterion of the law with the small-sample correction, AICc =
@@ -1014,7 +1180,7 @@ impl CoreLawFit {
     /// Zener law (10.1 against 10.5), AICc does not (40.1 against 23.9).
     pub fn akaike(&self) -> f64 {
         let p = self.law_parameters() as f64;
-        let n = 2.0 * self.fit.log_freqs.len() as f64;
+        let n = 2.0 * self.fit.log_freqs.ln.len() as f64;
         if n <= p + 1.0 {
             return f64::INFINITY;
         }
@@ -1023,7 +1189,7 @@ impl CoreLawFit {
 
     /// The law at `n` frequencies spaced evenly in ln f from the first mode to the last.
     pub fn curve(&self, n: usize) -> Vec<LawPoint> {
-        let lf = &self.fit.log_freqs;
+        let lf = &self.fit.log_freqs.ln;
         let (a, b) = (lf[0], lf[lf.len() - 1]);
         (0..n.max(2))
             .filter_map(|k| self.at((a + (b - a) * k as f64 / (n.max(2) - 1) as f64).exp()))
@@ -1518,5 +1684,116 @@ mod tests {
             fz.akaike(),
             gm.akaike()
         );
+    }
+
+    /// The Prony core of the roof's independent check (one term per decade, τ from 100 s to
+    /// 1 ns, strengths rising as τ^−0.37: G' 14–22 MPa, η 0.64–0.68 at 17–64 Hz), G* at ω.
+    fn roof_prony_truth(omega: Complex64) -> Complex64 {
+        let g = [
+            3.6394e5, 8.5316e5, 2.0e6, 4.6885e6, 1.0991e7, 2.5765e7, 6.0399e7, 1.4159e8, 3.3192e8,
+            7.7809e8, 1.8240e9, 4.2759e9,
+        ];
+        let i = Complex64::new(0.0, 1.0);
+        g.iter()
+            .enumerate()
+            .fold(Complex64::new(0.3e6, 0.0), |acc, (k, g)| {
+                let x = i * omega * 10f64.powi(2 - k as i32);
+                acc + g * x / (1.0 + x)
+            })
+    }
+
+    /// Five modes of the free roof (17–64 Hz) on that Prony core, with the errors and noise the
+    /// chain's points had there: the generalized Maxwell law on the four grids a quarter of a
+    /// spacing apart matches the modes alike (χ² 0.5–5 on 10 values), but between the modes
+    /// the grids part by more than their own bands. Measured: the grids' laws lie up to 2.6 %,
+    /// 1.3 %, 0.48 % and 1.9 % off the truth, and three of the four own bands miss it at 21–23 of
+    /// 40 lines; with the others as alternatives ([`CoreLawFit::with_alternatives`]) every
+    /// grid's band holds it at all 40 lines. The grid of the lowest criterion (the one the
+    /// pipeline reports) is the closest, and its band widens at the modes by 1.16 times.
+    #[test]
+    fn alternatives_hold_the_law_between_the_modes() {
+        // Each point off the truth as the chain's were on that roof (64 x 64 truth, face data
+        // known): G' and η in per cent.
+        let off: [[f64; 2]; 5] = [
+            [-0.46, -0.07],
+            [-0.21, -0.03],
+            [-0.29, 0.17],
+            [-1.09, 1.19],
+            [-0.34, 0.38],
+        ];
+        // Their bands' sd (per cent): the 25 and 51 Hz modes are weakly determined.
+        let sd: [[f64; 2]; 5] = [
+            [0.36, 0.41],
+            [1.7, 3.0],
+            [0.6, 0.77],
+            [1.6, 2.8],
+            [0.56, 0.74],
+        ];
+        let pts: Vec<ModePoint> = [17.19, 25.21, 43.69, 50.95, 64.24]
+            .iter()
+            .zip(off)
+            .zip(sd)
+            .map(|((&f, off), sd)| {
+                let at = Complex64::new(f, 0.015 * f);
+                let t = log_parts(roof_prony_truth(2.0 * PI * at));
+                ModePoint {
+                    freq_hz: f,
+                    found_at_hz: at,
+                    core_shear_pa: from_log_parts([
+                        t[0] + (0.01 * off[0]).ln_1p(),
+                        t[1] + (0.01 * off[1]).ln_1p(),
+                    ]),
+                    effects: Vec::new(),
+                    second_order: Vec::new(),
+                    noise: vec![("EMA pole".into(), sd.map(|v| 0.01 * v))],
+                }
+            })
+            .collect();
+        let fits: Vec<CoreLawFit> = [0.0, 0.25, 0.5, 0.75]
+            .iter()
+            .map(|&o| fit_core_law_shifted(&pts, &[], CoreLaw::GeneralizedMaxwell, o).unwrap())
+            .collect();
+        // Lines whose band misses the truth, and the largest error, per fit.
+        let misses = |fit: &CoreLawFit| {
+            fit.curve(40).iter().fold((0, 0.0f64), |(n, w), p| {
+                let t = roof_prony_truth(Complex64::new(2.0 * PI * p.freq_hz, 0.0));
+                let eta = t.im / t.re;
+                let inside = (p.storage_ci95[0]..=p.storage_ci95[1]).contains(&t.re)
+                    && (p.loss_factor_ci95[0]..=p.loss_factor_ci95[1]).contains(&eta);
+                let err = (p.storage_pa / t.re - 1.0)
+                    .abs()
+                    .max((p.loss_factor / eta - 1.0).abs());
+                (n + usize::from(!inside), w.max(err))
+            })
+        };
+        let alone: Vec<(usize, f64)> = fits.iter().map(misses).collect();
+        assert!(alone.iter().filter(|m| m.0 > 10).count() >= 2, "{alone:?}");
+        let best = (0..4)
+            .min_by(|&a, &b| fits[a].akaike().total_cmp(&fits[b].akaike()))
+            .unwrap();
+        assert!(alone.iter().all(|m| m.1 >= alone[best].1), "{alone:?}");
+        for (k, fit) in fits.iter().enumerate() {
+            let others: Vec<(f64, CoreLawFit)> = fits
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, f)| (f.akaike(), f.clone()))
+                .collect();
+            let with = fit.clone().with_alternatives(fit.akaike(), others);
+            let m = misses(&with);
+            let widening: f64 = with
+                .at_modes
+                .iter()
+                .zip(&fit.at_modes)
+                .map(|(a, b)| {
+                    (a.storage_ci95[1] / a.storage_pa).ln()
+                        / (b.storage_ci95[1] / b.storage_pa).ln()
+                })
+                .fold(0.0, f64::max);
+            assert_eq!(m.0, 0, "grid {k}: {m:?}");
+            if k == best {
+                assert!(widening < 1.3, "{widening}");
+            }
+        }
     }
 }

@@ -94,6 +94,10 @@ pub fn what_would_narrow(source: &str) -> String {
                 .into()
         }
         "discretization" => "a smaller inverse.tolerance (finer meshes in the ladder)".into(),
+        lamdyn_fit::joint::LAW_BETWEEN_MODES => {
+            "more modes between those identified (another hammer or response point that excites them), or a narrower measured band"
+                .into()
+        }
         "scatter about the law" => {
             "more modes, or a law that follows the modes (generalized Maxwell or a per-mode table)"
                 .into()
@@ -313,6 +317,7 @@ mod tests {
             "discretization",
             "noise floor",
             "scatter about the law",
+            lamdyn_fit::joint::LAW_BETWEEN_MODES,
         ]);
         for n in names {
             let advice = what_would_narrow(n);

@@ -37,7 +37,7 @@ use crate::Reporter;
 use crate::error::{Context, Result};
 use lamdyn_ema::identify::EmaResult;
 use lamdyn_fem::model::MeshSpec;
-use lamdyn_fit::joint::{CoreLaw, CoreLawFit, InputPrior, ModePoint, fit_core_law};
+use lamdyn_fit::joint::{CoreLaw, CoreLawFit, InputPrior, ModePoint, fit_core_law_shifted};
 use lamdyn_layered::LayeredError;
 use lamdyn_layered::convergence::{LadderSettings, build_level, converge, level_mesh};
 use lamdyn_layered::inverse::{BASIS_RATIOS, InverseLayer, LayeredInverse, LayeredPlate};
@@ -837,36 +837,63 @@ fn core_laws(choice: crate::job::CoreLawChoice) -> Vec<CoreLaw> {
     }
 }
 
-/// Of the laws fitted to the same modes, the one with the lowest Akaike criterion
-/// ([`CoreLawFit::akaike`]), with why it was chosen; the first failure when none fitted.
+/// A law to fit: the law and, for the generalized Maxwell law, where its relaxation times
+/// sit (offset in their spacing, [`lamdyn_fit::joint::prony_relaxation_times_shifted`]).
+type Candidate = (CoreLaw, f64);
+
+/// The offsets of a generalized Maxwell law's relaxation times tried ([`fit_law`]): a quarter
+/// of their spacing apart, which the modes cannot choose between where they lie far apart.
+const PRONY_OFFSETS: [f64; 4] = [0.0, 0.25, 0.5, 0.75];
+
+/// The candidates of a job's law choice ([`core_laws`], each generalized Maxwell law on every
+/// offset of [`PRONY_OFFSETS`]).
+fn candidates(choice: crate::job::CoreLawChoice) -> Vec<Candidate> {
+    core_laws(choice)
+        .into_iter()
+        .flat_map(|law| match law {
+            CoreLaw::GeneralizedMaxwell => PRONY_OFFSETS.iter().map(|&o| (law, o)).collect(),
+            _ => vec![(law, 0.0)],
+        })
+        .collect()
+}
+
+/// The largest difference of Akaike criteria at which another law can still weigh 1e-3 in
+/// the band ([`CoreLawFit::with_alternatives`]): 2 ln 1000.
+const AKAIKE_REACH: f64 = 13.9;
+
+/// Of the laws fitted to the same modes, the index of the one with the lowest Akaike criterion
+/// ([`CoreLawFit::akaike`]) and why it was chosen; the first failure when none fitted.
 fn lowest_akaike(
-    fits: Vec<(CoreLaw, std::result::Result<CoreLawFit, String>)>,
-) -> Option<std::result::Result<CoreLawFit, String>> {
+    fits: &[(Candidate, std::result::Result<CoreLawFit, String>)],
+) -> Option<std::result::Result<(usize, Option<String>), String>> {
     let first_error = fits.iter().find_map(|f| f.1.clone().err());
-    let mut ok: Vec<CoreLawFit> = fits.into_iter().filter_map(|f| f.1.ok()).collect();
-    ok.sort_by(|a, b| a.akaike().total_cmp(&b.akaike()));
-    let mut iter = ok.into_iter();
-    let Some(mut best) = iter.next() else {
+    let mut ok: Vec<(usize, &CoreLawFit)> = fits
+        .iter()
+        .enumerate()
+        .filter_map(|(k, f)| Some((k, f.1.as_ref().ok()?)))
+        .collect();
+    ok.sort_by(|a, b| a.1.akaike().total_cmp(&b.1.akaike()));
+    let Some(&(best, best_fit)) = ok.first() else {
         return first_error.map(Err);
     };
     let describe = |f: &CoreLawFit| {
         format!(
             "{} (chi2 {:.2}, {} parameters: AICc {:.2})",
-            f.law.name(),
+            f.form(),
             f.chi2,
             f.parameters.len() - f.inputs().len(),
             f.akaike()
         )
     };
-    let others: Vec<String> = iter.map(|o| describe(&o)).collect();
-    if !others.is_empty() {
-        best.selection = Some(format!(
+    let others: Vec<String> = ok[1..].iter().map(|o| describe(o.1)).collect();
+    let why = (!others.is_empty()).then(|| {
+        format!(
             "chosen by Akaike's criterion with the small-sample correction: {} over {}",
-            describe(&best),
+            describe(best_fit),
             others.join(", ")
-        ));
-    }
-    Some(Ok(best))
+        )
+    });
+    Some(Ok((best, why)))
 }
 
 /// The core's law fitted to every mode with a layered result and a band, jointly with the
@@ -893,27 +920,40 @@ pub fn fit_law(
     modal: &[CorePoint],
     coarsest: Option<&LayeredInverse>,
 ) -> Option<std::result::Result<CoreLawFit, String>> {
-    let laws = core_laws(job.inverse.core_law);
-    if laws.len() < 2 {
-        let law = *laws.first()?;
+    let candidates = candidates(job.inverse.core_law);
+    if candidates.len() < 2 {
+        let law = *candidates.first()?;
         return fit_law_with(law, modal, coarsest, Weights::Law);
     }
     // The choice on the modes' own noise, the law's values and bands with all of it.
-    let shapes: Vec<_> = laws
+    let shapes: Vec<_> = candidates
         .into_iter()
-        .filter_map(|law| Some((law, fit_law_with(law, modal, coarsest, Weights::Shape)?)))
+        .filter_map(|c| Some((c, fit_law_with(c, modal, coarsest, Weights::Shape)?)))
         .collect();
-    let chosen = match lowest_akaike(shapes)? {
-        Ok(f) => f,
+    let (chosen, why) = match lowest_akaike(&shapes)? {
+        Ok(c) => c,
         Err(e) => return Some(Err(e)),
     };
-    let mut fit = fit_law_with(chosen.law, modal, coarsest, Weights::Law)?;
-    if let (Ok(f), Some(why)) = (&mut fit, chosen.selection) {
-        f.selection = Some(format!(
-            "{why}, each fitted with the modes' own noise (the inputs beyond second order left out: they act on every mode at once, and as independent noise they hide the law's shape); the law's values and bands are from its fit with them"
-        ));
-    }
-    Some(fit)
+    let criterion = |k: usize| shapes[k].1.as_ref().map_or(f64::INFINITY, |f| f.akaike());
+    let own = criterion(chosen);
+    // The laws that fit the modes nearly as well share the band (model selection).
+    let others: Vec<(f64, CoreLawFit)> = (0..shapes.len())
+        .filter(|&k| k != chosen && criterion(k) - own < AKAIKE_REACH)
+        .filter_map(|k| {
+            let fit = fit_law_with(shapes[k].0, modal, coarsest, Weights::Law)?.ok()?;
+            Some((criterion(k), fit))
+        })
+        .collect();
+    let fit = fit_law_with(shapes[chosen].0, modal, coarsest, Weights::Law)?;
+    Some(fit.map(|f| {
+        let mut f = f.with_alternatives(own, others);
+        if let Some(why) = why {
+            f.selection = Some(format!(
+                "{why}, each fitted with the modes' own noise (the inputs beyond second order left out: they act on every mode at once, and as independent noise they hide the law's shape); the law's values and bands are from its fit with them, and its band holds the others' spread where their Akaike weights reach 1e-3"
+            ));
+        }
+        f
+    }))
 }
 
 /// Which of a mode's band sources weigh its point in the joint law fit ([`fit_law`]).
@@ -990,7 +1030,7 @@ pub const RELINEARISATIONS: usize = 4;
 
 /// [`fit_law`] with the law given.
 fn fit_law_with(
-    law: CoreLaw,
+    (law, prony_offset): Candidate,
     modal: &[CorePoint],
     coarsest: Option<&LayeredInverse>,
     weights: Weights,
@@ -999,7 +1039,7 @@ fn fit_law_with(
     if points.is_empty() {
         return None;
     }
-    let mut fit = match fit_core_law(&points, &priors, law) {
+    let mut fit = match fit_core_law_shifted(&points, &priors, law, prony_offset) {
         Ok(f) => f,
         Err(e) => return Some(Err(e.to_string())),
     };
@@ -1032,7 +1072,7 @@ fn fit_law_with(
         else {
             break;
         };
-        match fit_core_law(&moved_points, &moved_priors, law) {
+        match fit_core_law_shifted(&moved_points, &moved_priors, law, prony_offset) {
             Ok(f) => (fit, at) = (f, found),
             Err(_) => break,
         }
@@ -1182,6 +1222,7 @@ fn mode_points(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use lamdyn_fit::joint::fit_core_law;
     use lamdyn_fit::synthetic::Normal;
     use lamdyn_layered::convergence::ConvergedMode;
     use lamdyn_material::law::{FractionalZener, ViscoelasticLaw};
@@ -1345,7 +1386,7 @@ mod tests {
                 });
             }
             let joint = fit_law_with(
-                CoreLaw::FractionalZener,
+                (CoreLaw::FractionalZener, 0.0),
                 &modal,
                 Some(&nominal),
                 Weights::Law,
@@ -1451,30 +1492,46 @@ mod tests {
                 })
                 .collect()
         };
-        let fits = |pts: &[ModePoint]| -> Vec<(CoreLaw, std::result::Result<CoreLawFit, String>)> {
-            core_laws(crate::job::CoreLawChoice::Auto)
+        type Fits = Vec<(Candidate, std::result::Result<CoreLawFit, String>)>;
+        let fits = |pts: &[ModePoint]| -> Fits {
+            candidates(crate::job::CoreLawChoice::Auto)
                 .into_iter()
-                .map(|law| (law, fit_core_law(pts, &[], law).map_err(|e| e.to_string())))
+                .map(|c| {
+                    let fit = fit_core_law_shifted(pts, &[], c.0, c.1);
+                    (c, fit.map_err(|e| e.to_string()))
+                })
                 .collect()
         };
+        let chosen = |fits: &Fits| {
+            let (k, why) = lowest_akaike(fits).unwrap().unwrap();
+            (fits[k].0, why)
+        };
         let zener = points(&|f| law().modulus(2.0 * PI * f));
-        let chosen = lowest_akaike(fits(&zener)).unwrap().unwrap();
-        assert_eq!(chosen.law, CoreLaw::FractionalZener);
-        let why = chosen.selection.as_deref().unwrap();
-        assert!(why.contains("over generalized_maxwell (chi2"), "{why}");
-        let chosen = lowest_akaike(fits(&points(&prony))).unwrap().unwrap();
-        assert_eq!(chosen.law, CoreLaw::GeneralizedMaxwell);
-        // One candidate failed: the other, with nothing to choose between.
+        let (law_found, why) = chosen(&fits(&zener));
+        assert_eq!(law_found.0, CoreLaw::FractionalZener);
+        let why = why.unwrap();
+        assert!(why.contains("over generalized_maxwell"), "{why}");
+        assert!(why.contains("moved by 0.25 of their spacing"), "{why}");
+        assert_eq!(
+            chosen(&fits(&points(&prony))).0.0,
+            CoreLaw::GeneralizedMaxwell
+        );
+        // All but one candidate failed: that one, with nothing to choose between.
         let mut one = fits(&zener);
-        one[0].1 = Err("no start".into());
-        let chosen = lowest_akaike(one).unwrap().unwrap();
-        assert!(chosen.law == CoreLaw::GeneralizedMaxwell && chosen.selection.is_none());
+        for f in &mut one[..4] {
+            f.1 = Err("no start".into());
+        }
+        let (found, why) = chosen(&one);
+        assert!(found == (CoreLaw::GeneralizedMaxwell, 0.75) && why.is_none());
         let none = vec![
-            (CoreLaw::FractionalZener, Err("first".to_string())),
-            (CoreLaw::GeneralizedMaxwell, Err("second".to_string())),
+            ((CoreLaw::FractionalZener, 0.0), Err("first".to_string())),
+            (
+                (CoreLaw::GeneralizedMaxwell, 0.0),
+                Err("second".to_string()),
+            ),
         ];
-        assert_eq!(lowest_akaike(none).unwrap().unwrap_err(), "first");
-        assert!(lowest_akaike(Vec::new()).is_none());
+        assert_eq!(lowest_akaike(&none).unwrap().unwrap_err(), "first");
+        assert!(lowest_akaike(&[]).is_none());
         assert!(core_laws(crate::job::CoreLawChoice::None).is_empty());
     }
 

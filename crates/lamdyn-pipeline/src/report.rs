@@ -730,7 +730,7 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
         }
     ));
     if let Some(why) = &law.selection {
-        html.paragraph(&format!("The {} law was {why}.", law.law.name()));
+        html.paragraph(&format!("The {} law was {why}.", law.form()));
     }
     let truth = |f: f64| r.truth.as_ref().and_then(|t| t.at(f));
     let mut header = vec![
