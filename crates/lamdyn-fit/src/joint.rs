@@ -408,10 +408,10 @@ pub struct CoreLawFit {
 /// ([`CoreLawFit::with_alternatives`]).
 pub const LAW_BETWEEN_MODES: &str = "the law between the modes";
 
-/// Alternatives whose Akaike weight is below this are left out of the band: their share of
-/// its sd is below a tenth of their difference from the chosen law, 1e-4 of ln for a law 10 %
-/// away.
-const LEAST_WEIGHT: f64 = 1e-3;
+/// Alternatives whose Akaike weight is below this are left out of the band
+/// ([`CoreLawFit::with_alternatives`]): their share of its sd is below a thousandth of their
+/// difference from the chosen law, 1e-4 of ln for a law 10 % away.
+pub const LEAST_WEIGHT: f64 = 1e-3;
 
 /// A law's own value and band at one frequency, before the alternatives.
 struct OwnBand {
@@ -1148,11 +1148,6 @@ impl CoreLawFit {
         let freqs: Vec<f64> = self.fit.log_freqs.ln.iter().map(|l| l.exp()).collect();
         self.at_modes = freqs.iter().filter_map(|&f| self.at(f)).collect();
         self
-    }
-
-    /// The alternatives sharing the band, with their weights ([`Self::with_alternatives`]).
-    pub fn alternatives(&self) -> impl Iterator<Item = (f64, &CoreLawFit)> {
-        self.alternatives.iter().map(|(w, f)| (*w, f))
     }
 
     /// The law's name, with where a generalized Maxwell law's relaxation times sit when

@@ -897,9 +897,13 @@ fn candidates(choice: crate::job::CoreLawChoice) -> Vec<Candidate> {
         .collect()
 }
 
-/// The largest difference of Akaike criteria at which another law can still weigh 1e-3 in
-/// the band ([`CoreLawFit::with_alternatives`]): 2 ln 1000.
-const AKAIKE_REACH: f64 = 13.9;
+/// The largest difference of Akaike criteria at which another law can still weigh
+/// [`lamdyn_fit::joint::LEAST_WEIGHT`] in the band ([`CoreLawFit::with_alternatives`]): its
+/// weight is at most e^{−Δ/2}, so Δ = −2 ln(least weight), 13.8 for 1e-3. Laws beyond it are
+/// not fitted again.
+fn akaike_reach() -> f64 {
+    -2.0 * lamdyn_fit::joint::LEAST_WEIGHT.ln()
+}
 
 /// Of the laws fitted to the same modes, the index of the one with the lowest Akaike criterion
 /// ([`CoreLawFit::akaike`]) and why it was chosen; the first failure when none fitted.
@@ -978,7 +982,7 @@ pub fn fit_law(
     let own = criterion(chosen);
     // The laws that fit the modes nearly as well share the band (model selection).
     let others: Vec<(f64, CoreLawFit)> = (0..shapes.len())
-        .filter(|&k| k != chosen && criterion(k) - own < AKAIKE_REACH)
+        .filter(|&k| k != chosen && criterion(k) - own < akaike_reach())
         .filter_map(|k| {
             let fit = fit_law_with(shapes[k].0, modal, coarsest, Weights::Law)?.ok()?;
             Some((criterion(k), fit))

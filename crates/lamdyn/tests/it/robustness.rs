@@ -185,7 +185,8 @@ fn readme_install_command_names_the_binary_package() {
         .unwrap();
     let manifest = std::fs::read_to_string(root.join(path).join("Cargo.toml")).unwrap();
     assert!(manifest.contains("name = \"lamdyn\""), "{path}");
-    if readme.contains("../shared/reference") {
+    // The README names the workplace's reference folder beside the repository; no test reads it.
+    if readme.contains("shared/reference/") {
         assert!(readme.contains("not\nredistributed") || readme.contains("not redistributed"));
     }
 }
