@@ -377,7 +377,8 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
         cache_dir: Some(dir.join("input/.lamdyn-cache")),
     };
     // The demo filled the cache beside its job: a run of the same job takes the model, the EMA
-    // (of all responses and of each response group) and the layered model from it.
+    // (of all responses, of each response group and at the other model orders) and the layered
+    // model from it.
     let job = Job::read(&job_path).unwrap();
     let r = run_job(job, &job_path, &options, &Silent).unwrap();
     let cached: Vec<&str> = r
@@ -388,7 +389,13 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
         .collect();
     assert_eq!(
         cached,
-        ["ema", "ema by response group", "model", "layered inverse"]
+        [
+            "ema",
+            "ema by response group",
+            "ema at other model orders",
+            "model",
+            "layered inverse"
+        ]
     );
     // A dof cap below the layered model's coarsest mesh: nothing is built, and every mode and
     // the layered line say why (issue 15's "clear errors").
