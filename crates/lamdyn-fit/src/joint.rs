@@ -395,11 +395,9 @@ pub struct CoreLawFit {
     /// Each real-frequency point moved by the fitted inputs as well: G*_k e^{e_k (δ − δ₀)}, Pa.
     pub corrected_points: Vec<Complex64>,
     /// The other laws fitted to the same modes that share the band, with their Akaike
-    /// weights, and this law's own weight ([`Self::with_alternatives`]; none and 1 alone).
+    /// weights ([`Self::with_alternatives`]; none alone). This law's own weight is the rest.
     #[serde(skip)]
     alternatives: Vec<(f64, CoreLawFit)>,
-    #[serde(skip)]
-    own_weight: f64,
     #[serde(skip)]
     fit: Internal,
 }
@@ -885,7 +883,6 @@ pub fn fit_core_law_shifted(
         real_frequency_factors: to_real,
         corrected_points,
         alternatives: Vec::new(),
-        own_weight: 1.0,
         fit: Internal {
             u: best.x,
             gain,
@@ -1082,7 +1079,9 @@ impl CoreLawFit {
     /// over this law and the others, x this law's ln G' or ln η.
     pub fn at(&self, f_hz: f64) -> Option<LawPoint> {
         let own = self.own_band(f_hz)?;
-        let mut sd = own.sd.map(|v| self.own_weight * v);
+        // The weights of the alternatives left out are this law's: its band stays at least its own.
+        let own_weight = 1.0 - self.alternatives.iter().map(|a| a.0).sum::<f64>();
+        let mut sd = own.sd.map(|v| own_weight * v);
         for (w, other) in &self.alternatives {
             let Some(o) = other.own_band(f_hz) else {
                 continue;
@@ -1132,19 +1131,15 @@ impl CoreLawFit {
                 0.0
             }
         };
-        let own = weight(own_criterion);
-        let total = own + others.iter().map(|o| weight(o.0)).sum::<f64>();
+        let total = weight(own_criterion) + others.iter().map(|o| weight(o.0)).sum::<f64>();
         if !(total > 0.0 && total.is_finite()) {
             return self;
         }
-        self.own_weight = own / total;
         self.alternatives = others
             .into_iter()
             .map(|(a, fit)| (weight(a) / total, fit))
             .filter(|(w, _)| *w >= LEAST_WEIGHT)
             .collect();
-        // The weights left out are the chosen law's: its band stays at least its own.
-        self.own_weight = 1.0 - self.alternatives.iter().map(|a| a.0).sum::<f64>();
         let freqs: Vec<f64> = self.fit.log_freqs.ln.iter().map(|l| l.exp()).collect();
         self.at_modes = freqs.iter().filter_map(|&f| self.at(f)).collect();
         self
