@@ -93,6 +93,10 @@ pub fn what_would_narrow(source: &str) -> String {
             "a better-identified pole: more averages, more hits, or a reference that excites the mode"
                 .into()
         }
+        crate::layered::HITS_JACKKNIFE => {
+            "more hits, or cleaner ones (the identification moves when one hit is left out: check each hit for a double hit, an overload or a weak force)"
+                .into()
+        }
         "discretization" => "a smaller inverse.tolerance (finer meshes in the ladder)".into(),
         lamdyn_fit::joint::LAW_BETWEEN_MODES => {
             "more modes between those identified (another hammer or response point that excites them), or a narrower measured band"
@@ -318,6 +322,7 @@ mod tests {
             "noise floor",
             "scatter about the law",
             lamdyn_fit::joint::LAW_BETWEEN_MODES,
+            crate::layered::HITS_JACKKNIFE,
         ]);
         for n in names {
             let advice = what_would_narrow(n);

@@ -341,6 +341,60 @@ pub fn read_frfs(
     }
 }
 
+/// How a job's time data are turned into FRFs (H1, the job's trigger and windows).
+fn time_options(m: &Measurement, band_hz: Option<[f64; 2]>) -> Result<TimeOptions> {
+    Ok(TimeOptions {
+        estimator: Estimator::H1,
+        trigger: m.trigger,
+        pretrigger_s: m.pretrigger_s,
+        force_window_s: m.force_window_s,
+        record_s: None,
+        exp_tau_s: None,
+        excitation: Excitation::new(m.excitation, m.window, m.segment_s, m.overlap, band_hz)
+            .context("measurement.excitation")?,
+        quantity: m.quantity,
+    })
+}
+
+/// The fewest hammer hits for [`without_each_hit`]: with two, each set is one hit.
+pub const JACKKNIFE_HITS: usize = 3;
+
+/// The job's hammer-hit FRFs again without each hit in turn (the delete-one jackknife's sets,
+/// [Efron & Tibshirani 1993, ch. 11]), in the order of `measurement.time`, one set without each
+/// of its files (a file is one hit in the usual layout; a file of several hits is left out
+/// whole, a delete-a-group jackknife); empty unless the measurement is time data of at least
+/// [`JACKKNIFE_HITS`] files of an impact test. What the hits' noise
+/// does to a pole, bias of the identification included, is read from how the pole moves across
+/// these sets (`crate::layered`'s pole scatter).
+///
+/// # Errors
+/// As [`read_measurement`].
+pub fn without_each_hit(job: &Job, base: &Path) -> Result<Vec<FrfSet>> {
+    let m = &job.measurement;
+    let (Some(c), None, None) = (&m.channels, &m.frf, &m.uff) else {
+        return Ok(Vec::new());
+    };
+    if m.time.len() < JACKKNIFE_HITS || m.excitation != ExcitationKind::Impact {
+        return Ok(Vec::new());
+    }
+    let c = relative(base, c);
+    let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
+    let options = time_options(m, job.fit.misfit.band_hz)?;
+    (0..files.len())
+        .map(|left_out| {
+            let kept: Vec<PathBuf> = files
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| *k != left_out)
+                .map(|(_, f)| f.clone())
+                .collect();
+            time_frfs(&c, &kept, &options)
+                .map(|r| r.0)
+                .with_context(|| format!("measurement.time without hit {}", left_out + 1))
+        })
+        .collect()
+}
+
 /// The measured FRF set of the job, with the expected channel count checked.
 pub fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured> {
     read_measurement_section(&job.measurement, job.fit.misfit.band_hz, base, path)
@@ -384,23 +438,7 @@ pub fn read_measurement_section(
         (Some(c), None, None) => {
             let c = relative(base, c);
             let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
-            let options = TimeOptions {
-                estimator: Estimator::H1,
-                trigger: m.trigger,
-                pretrigger_s: m.pretrigger_s,
-                force_window_s: m.force_window_s,
-                record_s: None,
-                exp_tau_s: None,
-                excitation: Excitation::new(
-                    m.excitation,
-                    m.window,
-                    m.segment_s,
-                    m.overlap,
-                    band_hz,
-                )
-                .context("measurement.excitation")?,
-                quantity: m.quantity,
-            };
+            let options = time_options(m, band_hz)?;
             let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
                 format!(
                     "measurement.time (read against the channels of '{}')",

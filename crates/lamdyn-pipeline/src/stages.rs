@@ -264,6 +264,9 @@ pub fn run_job(
             orders: stage("ema at other model orders", spinner, &mut timings, || {
                 other_order_emas(&job, &measured.set, &cache, spinner)
             })?,
+            hits: stage("ema without each hit", spinner, &mut timings, || {
+                without_each_hit_emas(&job, &base, &cache, spinner)
+            })?,
         }
     } else {
         layered::PoleChecks::default()
@@ -520,6 +523,34 @@ fn other_order_emas(
             "stage 'ema at other model orders': highest order {order}"
         ));
         if let Ok((r, cached)) = run_ema_to_order(job, set, cache, &crate::Silent, order) {
+            all_cached &= cached;
+            out.push(r);
+        }
+    }
+    Ok((out, all_cached))
+}
+
+/// The modal identification again on the FRFs without each hammer hit in turn
+/// ([`crate::measurement::without_each_hit`]; none unless the measurement is time data of at
+/// least three hits), each cached like the whole. An identification that fails is left out;
+/// sets that cannot be read (the whole was) leave the jackknife out.
+fn without_each_hit_emas(
+    job: &Job,
+    base: &Path,
+    cache: &Cache,
+    spinner: &dyn Reporter,
+) -> Result<(Vec<EmaResult>, bool)> {
+    let sets = crate::measurement::without_each_hit(job, base).unwrap_or_default();
+    let mut out = Vec::new();
+    // Nothing to run (FRF data, fewer than three hits) is not a cache hit.
+    let mut all_cached = !sets.is_empty();
+    for (k, set) in sets.iter().enumerate() {
+        spinner.stage(&format!(
+            "stage 'ema without each hit': without hit {} of {}",
+            k + 1,
+            sets.len()
+        ));
+        if let Ok((r, cached)) = run_ema(job, set, cache, &crate::Silent) {
             all_cached &= cached;
             out.push(r);
         }
