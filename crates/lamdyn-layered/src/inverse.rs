@@ -45,8 +45,9 @@ pub struct InverseLayer {
 }
 
 /// The part the layered inverse models: its plan ([`Plan`]: a rectangle, flat or a shallow
-/// dome, or a quadrilateral mesh of the mid-surface), extruded through the stack with one
-/// element per layer through the thickness.
+/// dome, or a quadrilateral mesh of the mid-surface), extruded through the stack with
+/// `elements_per_layer` elements per layer through the thickness (one in the inverse's ladder;
+/// two for its check of what one leaves).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LayeredPlate {
     /// The plan ([`crate::plan`]).
@@ -57,6 +58,8 @@ pub struct LayeredPlate {
     pub layers: Vec<InverseLayer>,
     /// The supports the part rests on in the test ([`crate::supports`]; empty: free).
     pub supports: Vec<PointSupport>,
+    /// Elements through each layer's thickness (at least 1).
+    pub elements_per_layer: usize,
 }
 
 impl LayeredPlate {
@@ -70,15 +73,16 @@ impl LayeredPlate {
         Ok(3 * self.plan.mesh(elements, &self.layer_meshes())?.nodes.len())
     }
 
-    /// The layers as the mesh takes them: one element each through the thickness (against
-    /// [2, 4, 2] through faces and core, at most 2.5e-4 in frequency and 0.1 % in the G' found on
-    /// the laminates of example `thickness_convergence`; docs/run.md, "Through the thickness").
+    /// The layers as the mesh takes them: `elements_per_layer` each through the thickness (one
+    /// against [2, 4, 2] through faces and core: at most 2.5e-4 in frequency and 0.1 % in the G'
+    /// found on the laminates of example `thickness_convergence`; docs/run.md, "Through the
+    /// thickness").
     fn layer_meshes(&self) -> Vec<LayerMesh> {
         self.layers
             .iter()
             .map(|l| LayerMesh {
                 thickness_m: l.thickness_m,
-                elements: 1,
+                elements: self.elements_per_layer,
             })
             .collect()
     }
@@ -656,6 +660,7 @@ pub(crate) fn small_test_plate() -> LayeredPlate {
         },
         layers: vec![face, core, face],
         supports: Vec::new(),
+        elements_per_layer: 1,
     }
 }
 

@@ -98,6 +98,10 @@ pub fn what_would_narrow(source: &str) -> String {
                 .into()
         }
         "discretization" => "a smaller inverse.tolerance (finer meshes in the ladder)".into(),
+        crate::layered::THROUGH_THICKNESS => {
+            "no setting yet: the ladder refines in plane and keeps one element per layer through the thickness, which a core thick against its faces needs more of (docs/run.md, 'Through the thickness')"
+                .into()
+        }
         lamdyn_fit::joint::LAW_BETWEEN_MODES => {
             "more modes between those identified (another hammer or response point that excites them), or a narrower measured band"
                 .into()
@@ -323,6 +327,7 @@ mod tests {
             "scatter about the law",
             lamdyn_fit::joint::LAW_BETWEEN_MODES,
             crate::layered::HITS_JACKKNIFE,
+            crate::layered::THROUGH_THICKNESS,
         ]);
         for n in names {
             let advice = what_would_narrow(n);

@@ -463,7 +463,7 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         ]);
     }
     let mut csv = String::from(
-        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_storage_lo_pa,g_layered_storage_hi_pa,g_layered_loss_factor,g_layered_loss_factor_lo,g_layered_loss_factor_hi,layered_freq_error_finest,layered_loss_error_finest,layered_residual_freq_error,g_layered_coarsest_storage_pa,g_layered_coarsest_loss_factor,layered_discretization_half_width_storage,layered_discretization_half_width_loss_factor,layered_band_main_source",
+        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_storage_lo_pa,g_layered_storage_hi_pa,g_layered_loss_factor,g_layered_loss_factor_lo,g_layered_loss_factor_hi,layered_freq_error_finest,layered_loss_error_finest,layered_residual_freq_error,g_layered_coarsest_storage_pa,g_layered_coarsest_loss_factor,layered_discretization_half_width_storage,layered_discretization_half_width_loss_factor,layered_through_thickness_half_width_storage,layered_through_thickness_half_width_loss_factor,layered_band_main_source",
     );
     if truth {
         csv.push_str(",g_true_storage_pa,g_true_loss_factor,err_g_paper_storage,err_g_paper_loss_factor,err_g_exact_storage,err_g_exact_loss_factor,err_g_layered_storage,err_g_layered_loss_factor");
@@ -535,6 +535,10 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
                 .map_or(String::new(), |h| h[0].to_string()),
             lb.discretization_half_width
                 .map_or(String::new(), |h| h[1].to_string()),
+            lb.through_thickness_half_width
+                .map_or(String::new(), |h| h[0].to_string()),
+            lb.through_thickness_half_width
+                .map_or(String::new(), |h| h[1].to_string()),
             lb.dominant.clone().unwrap_or_default(),
         ];
         if let Some(t) = &r.truth {
@@ -568,6 +572,8 @@ struct LayeredColumns {
     storage: Option<Band>,
     loss: Option<Band>,
     discretization_half_width: Option<[f64; 2]>,
+    /// 1.96 times the band's source [`crate::layered::THROUGH_THICKNESS`].
+    through_thickness_half_width: Option<[f64; 2]>,
     dominant: Option<String>,
     freq_error: Option<f64>,
     loss_error: Option<f64>,
@@ -593,6 +599,13 @@ impl LayeredColumns {
             storage: band(storage(g), half.map(|h| h[0])),
             loss: band(loss(g), half.map(|h| h[1])),
             discretization_half_width: c.map(|c| [c.storage_band, c.loss_band]),
+            through_thickness_half_width: full.and_then(|b| {
+                let s = b
+                    .sources
+                    .iter()
+                    .find(|s| s.0 == crate::layered::THROUGH_THICKNESS)?;
+                Some(s.1.map(|v| 1.96 * v))
+            }),
             dominant: full.map(|b| format!("{}; {}", b.dominant(0), b.dominant(1))),
             freq_error: c.map(|c| c.freq_error),
             loss_error: c.map(|c| c.loss_error),
@@ -667,7 +680,7 @@ fn lead_section(
         row.push(pct(rel_err(loss(p.paper_g()), loss(best))));
     }
     let caption = if layered {
-        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole p (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below); the core so found holds at the pole's complex frequency −ip, and is moved from there to the mode's real frequency by the fitted law (or the modes' log-slope): 1–1.5 % of η on a lightly damped glass laminate. Its 95 % band holds, in quadrature, the inputs known within a tolerance ([uncertainty]: face modulus, thicknesses, densities, each through its sensitivity on the layered model), the pole's scatter over the stabilization diagram and the discretization (grid convergence index of the finest mesh); the modal table names each band's main source. It does not hold a model-form error (an unmodelled support); the law fitted to all modes below narrows it; the last columns show how far the paper's route lies from this answer"
+        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole p (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below); the core so found holds at the pole's complex frequency −ip, and is moved from there to the mode's real frequency by the fitted law (or the modes' log-slope): 1–1.5 % of η on a lightly damped glass laminate. Its 95 % band holds, in quadrature, the inputs known within a tolerance ([uncertainty]: face modulus, thicknesses, densities, each through its sensitivity on the layered model), the pole's scatter over the stabilization diagram (and, from hammer hits, how the pole moves when each hit is left out), the discretization in plane (grid convergence index of the finest mesh) and through the thickness (the coarsest mesh with two elements per layer); the modal table names each band's main source. It does not hold a model-form error (an unmodelled support); the law fitted to all modes below narrows it; the last columns show how far the paper's route lies from this answer"
     } else {
         "G*(f) of the core at each identified mode by the exact Mead-Markus inverse of the fitted effective modulus, with 95 % Monte Carlo bands (the layered inverse did not run); the last columns show how far the paper's route lies from it"
     };

@@ -30,6 +30,7 @@ pub fn plate(grading: f64) -> LayeredPlate {
         },
         layers: vec![glass, pvb, glass],
         supports: Vec::new(),
+        elements_per_layer: 1,
     }
 }
 
