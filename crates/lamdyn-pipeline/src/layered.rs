@@ -550,7 +550,7 @@ pub struct PoleChecks {
 }
 
 /// What the identification's noise does to one mode's pole ([`pole_scatter`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct PoleScatter {
     /// Standard deviations (Hz, damping ratio) from the stabilization diagram, the response
     /// groups and the model orders; `None` when nothing measured them.
@@ -573,10 +573,7 @@ pub const HITS_JACKKNIFE: &str = "EMA: hits left out (jackknife)";
 /// `hits`, the delete-one-hit jackknife ([`hit_jackknife`]).
 fn pole_scatter(ema: &EmaResult, checks: &PoleChecks, f: f64) -> PoleScatter {
     let Some(mode) = crate::stages::nearest_within(ema, f, 0.02) else {
-        return PoleScatter {
-            noise: None,
-            hits: None,
-        };
+        return PoleScatter::default();
     };
     let m = &ema.modes[mode];
     let noise = match (
@@ -1541,7 +1538,7 @@ mod tests {
                     target,
                     PoleScatter {
                         noise: Some([sd_f_rel * f, sd_zeta]),
-                        hits: None,
+                        ..Default::default()
                     },
                     [0.0; 2],
                 )
@@ -1635,10 +1632,6 @@ mod tests {
         assert!(group_spread(&found[..1]).is_none());
     }
 
-    /// The orders' spread is the sample sd of the whole's pole and the other orders' (not
-    /// divided by √n): the first mode of the damped-sandwich example (seed 1) came out at
-    /// damping ratios 2.538 % (orders 40 and 60) and 2.478 % (order 80), an sd of 0.034 %, 1.4 %
-    /// of itself; an order that found no pole of the mode gives nothing.
     /// The jackknife's sd is √((n − 1)/n Σ (θ_i − θ̄)²) over the sets without each hit (Efron
     /// & Tibshirani eq. 11.5, computed here from its definition): the first mode's damping
     /// ratios of the damped sandwich's seed 1 without each of its five hits give 0.040 %,
@@ -1656,6 +1649,10 @@ mod tests {
         assert!(hit_jackknife(&found[..2]).is_none());
     }
 
+    /// The orders' spread is the sample sd of the whole's pole and the other orders' (not
+    /// divided by √n): the first mode of the damped-sandwich example (seed 1) came out at
+    /// damping ratios 2.538 % (orders 40 and 60) and 2.478 % (order 80), an sd of 0.034 %, 1.4 %
+    /// of itself; an order that found no pole of the mode gives nothing.
     #[test]
     fn order_spread_is_the_sd_over_the_orders() {
         let main = [67.966, 0.025376];
@@ -1860,10 +1857,7 @@ mod tests {
             };
             let converged = est.core_shear_pa * 1.03;
             let mode = ConvergedMode::exact(converged, est.core_shear_pa, est.rank);
-            let scatter = PoleScatter {
-                noise: None,
-                hits: None,
-            };
+            let scatter = PoleScatter::default();
             let b = band((&nominal, None), &moved, &mode, target, scatter, [0.0; 2]).unwrap();
             let back = nominal.invert(b.coarse.1, b.found_pa).unwrap();
             let err = (back.core_shear_pa / converged - 1.0).norm();
@@ -1901,10 +1895,7 @@ mod tests {
                 continue;
             };
             let mode = ConvergedMode::exact(g1.core_shear_pa, g1.core_shear_pa, g1.rank);
-            let scatter = PoleScatter {
-                noise: None,
-                hits: None,
-            };
+            let scatter = PoleScatter::default();
             let b = band((&one, Some(&two)), &moved, &mode, target, scatter, [0.0; 2]).unwrap();
             let source = b
                 .sources

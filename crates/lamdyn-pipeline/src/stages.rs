@@ -479,22 +479,32 @@ fn response_group_emas(
     if points.len() < 2 * RESPONSE_GROUPS {
         return Ok((Vec::new(), true));
     }
-    let mut out = Vec::new();
-    let mut all_cached = true;
+    let mut subsets = Vec::new();
     for g in 0..RESPONSE_GROUPS {
         let keep: Vec<usize> = (0..group_of.len()).filter(|&i| group_of[i] == g).collect();
-        let subset = set.with_responses(&keep)?;
-        spinner.stage(&format!(
-            "stage 'ema by response group': group {} of {RESPONSE_GROUPS} ({} responses)",
-            g + 1,
-            keep.len()
-        ));
-        if let Ok((r, cached)) = run_ema(job, &subset, cache, &crate::Silent) {
-            all_cached &= cached;
-            out.push(r);
-        }
+        subsets.push((keep.len(), set.with_responses(&keep)?));
     }
-    Ok((out, all_cached))
+    Ok(successful(subsets.iter().enumerate().map(
+        |(g, (n, subset))| {
+            spinner.stage(&format!(
+                "stage 'ema by response group': group {} of {RESPONSE_GROUPS} ({n} responses)",
+                g + 1
+            ));
+            run_ema(job, subset, cache, &crate::Silent)
+        },
+    )))
+}
+
+/// The identifications of `runs` that succeed (one that fails is left out) and whether each of
+/// those came from the cache.
+fn successful(runs: impl Iterator<Item = Result<(EmaResult, bool)>>) -> (Vec<EmaResult>, bool) {
+    let mut out = Vec::new();
+    let mut all_cached = true;
+    for (r, cached) in runs.flatten() {
+        all_cached &= cached;
+        out.push(r);
+    }
+    (out, all_cached)
 }
 
 /// The highest model orders of the identifications that measure how much a pole depends on
@@ -515,19 +525,13 @@ fn other_order_emas(
     cache: &Cache,
     spinner: &dyn Reporter,
 ) -> Result<(Vec<EmaResult>, bool)> {
-    let mut out = Vec::new();
-    let mut all_cached = true;
-    for factor in OTHER_ORDERS {
+    Ok(successful(OTHER_ORDERS.iter().map(|factor| {
         let order = 2 * ((job.ema.max_order as f64 * factor / 2.0).round() as usize).max(2);
         spinner.stage(&format!(
             "stage 'ema at other model orders': highest order {order}"
         ));
-        if let Ok((r, cached)) = run_ema_to_order(job, set, cache, &crate::Silent, order) {
-            all_cached &= cached;
-            out.push(r);
-        }
-    }
-    Ok((out, all_cached))
+        run_ema_to_order(job, set, cache, &crate::Silent, order)
+    })))
 }
 
 /// The modal identification again on the FRFs without each hammer hit in turn
@@ -541,21 +545,16 @@ fn without_each_hit_emas(
     spinner: &dyn Reporter,
 ) -> Result<(Vec<EmaResult>, bool)> {
     let sets = crate::measurement::without_each_hit(job, base).unwrap_or_default();
-    let mut out = Vec::new();
-    // Nothing to run (FRF data, fewer than three hits) is not a cache hit.
-    let mut all_cached = !sets.is_empty();
-    for (k, set) in sets.iter().enumerate() {
+    let (out, all_cached) = successful(sets.iter().enumerate().map(|(k, set)| {
         spinner.stage(&format!(
             "stage 'ema without each hit': without hit {} of {}",
             k + 1,
             sets.len()
         ));
-        if let Ok((r, cached)) = run_ema(job, set, cache, &crate::Silent) {
-            all_cached &= cached;
-            out.push(r);
-        }
-    }
-    Ok((out, all_cached))
+        run_ema(job, set, cache, &crate::Silent)
+    }));
+    // Nothing to run (FRF data, fewer than three hits) is not a cache hit.
+    Ok((out, all_cached && !sets.is_empty()))
 }
 
 /// Modal identification, from the cache when the FRFs and settings are unchanged.
