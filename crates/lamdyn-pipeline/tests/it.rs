@@ -372,7 +372,7 @@ fn a_gmsh_model_goes_the_layered_route() {
 #[test]
 fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
     let dir = TempDir::new("pipeline-cache");
-    let (_, job_path) = demo(&dir, 0);
+    let (first, job_path) = demo(&dir, 0);
     let options = RunOptions {
         cache_dir: Some(dir.join("input/.lamdyn-cache")),
     };
@@ -398,6 +398,11 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
             "layered inverse"
         ]
     );
+    // From the cache, the same bits (the EMA's JSON floats round-trip exactly).
+    let layered = |r: &ChainResult| -> Vec<Option<num_complex::Complex64>> {
+        r.modal.iter().map(|p| p.layered_g()).collect()
+    };
+    assert_eq!(layered(&r), layered(&first));
     // A dof cap below the layered model's coarsest mesh: nothing is built, and every mode and
     // the layered line say why (issue 15's "clear errors").
     let capped = dir.join("input/capped.toml");
