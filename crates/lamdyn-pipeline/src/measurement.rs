@@ -185,6 +185,24 @@ pub fn time_frfs(
     files: &[PathBuf],
     options: &TimeOptions,
 ) -> Result<(FrfSet, Spectra, usize)> {
+    let records = read_records(channels, files, options)?;
+    let (set, spectra) = records.frfs(&records.hits, files, options)?;
+    Ok((set, spectra, records.hits.len()))
+}
+
+/// Hit files read against a channels table ([`read_records`]).
+struct Records {
+    responses: Vec<Channel>,
+    references: Vec<Channel>,
+    /// One per file, in their order.
+    hits: Vec<Hit>,
+    rate_hz: f64,
+    quantity: Option<Quantity>,
+}
+
+/// Reads the channels table and every hit file (one sampling rate and one response quantity
+/// for all).
+fn read_records(channels: &Path, files: &[PathBuf], options: &TimeOptions) -> Result<Records> {
     let (responses, references) =
         lamdyn_frf::csv::parse_channels(&channels.display().to_string(), &read_text(channels)?)?;
     let [hammer] = &references[..] else {
@@ -220,27 +238,45 @@ pub fn time_frfs(
         });
     }
     let rate_hz = rate.ok_or_else(|| err!("no time file given"))?;
-    let spectra = match options.excitation {
-        Excitation::Impact => impact_spectra(&hits, rate_hz, options)?,
-        Excitation::Continuous(c) => continuous_spectra(&hits, rate_hz, &c, files)?,
-    };
-    let data = spectra
-        .channels
-        .iter()
-        .flat_map(|c| match options.estimator {
-            Estimator::H1 => c.h1.clone(),
-            Estimator::H2 => c.h2.clone(),
-            Estimator::Hv => c.hv.clone(),
-        })
-        .collect();
-    let set = FrfSet::new(
-        spectra.freqs_hz.clone(),
+    Ok(Records {
         responses,
         references,
-        quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
-        data,
-    )?;
-    Ok((set, spectra, hits.len()))
+        hits,
+        rate_hz,
+        quantity,
+    })
+}
+
+impl Records {
+    /// The FRFs and spectra of `hits` (these records' or some of them, read from `files`).
+    fn frfs(
+        &self,
+        hits: &[Hit],
+        files: &[PathBuf],
+        options: &TimeOptions,
+    ) -> Result<(FrfSet, Spectra)> {
+        let spectra = match options.excitation {
+            Excitation::Impact => impact_spectra(hits, self.rate_hz, options)?,
+            Excitation::Continuous(c) => continuous_spectra(hits, self.rate_hz, &c, files)?,
+        };
+        let data = spectra
+            .channels
+            .iter()
+            .flat_map(|c| match options.estimator {
+                Estimator::H1 => c.h1.clone(),
+                Estimator::H2 => c.h2.clone(),
+                Estimator::Hv => c.hv.clone(),
+            })
+            .collect();
+        let set = FrfSet::new(
+            spectra.freqs_hz.clone(),
+            self.responses.clone(),
+            self.references.clone(),
+            self.quantity.unwrap_or(lamdyn_frf::Quantity::Receptance),
+            data,
+        )?;
+        Ok((set, spectra))
+    }
 }
 
 /// Welch spectra of continuous-excitation records (each file one record).
@@ -380,15 +416,21 @@ pub fn without_each_hit(job: &Job, base: &Path) -> Result<Vec<FrfSet>> {
     let c = relative(base, c);
     let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
     let options = time_options(m, job.fit.misfit.band_hz)?;
+    // Each file read once; each set's spectra from the hits it keeps.
+    let records = read_records(&c, &files, &options).context("measurement.time")?;
     (0..files.len())
         .map(|left_out| {
-            let kept: Vec<PathBuf> = files
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| *k != left_out)
-                .map(|(_, f)| f.clone())
+            let others = |k: &usize| *k != left_out;
+            let hits: Vec<Hit> = (0..files.len())
+                .filter(others)
+                .map(|k| records.hits[k].clone())
                 .collect();
-            time_frfs(&c, &kept, &options)
+            let kept: Vec<PathBuf> = (0..files.len())
+                .filter(others)
+                .map(|k| files[k].clone())
+                .collect();
+            records
+                .frfs(&hits, &kept, &options)
                 .map(|r| r.0)
                 .with_context(|| format!("measurement.time without hit {}", left_out + 1))
         })
