@@ -33,6 +33,9 @@ pub struct Measured {
     pub min_coherence: Option<Vec<f64>>,
     /// Time data: the estimator's warnings (double hits, overloads).
     pub warnings: Vec<String>,
+    /// Impact time data of at least [`JACKKNIFE_HITS`] files: the records read, kept for
+    /// [`without_each_hit`] (the files are read once).
+    records: Option<Records>,
 }
 
 fn read_text(p: &Path) -> Result<String> {
@@ -398,39 +401,29 @@ pub const JACKKNIFE_HITS: usize = 3;
 /// The job's hammer-hit FRFs again without each hit in turn (the delete-one jackknife's sets,
 /// [Efron & Tibshirani 1993, ch. 11]), in the order of `measurement.time`, one set without each
 /// of its files (a file is one hit in the usual layout; a file of several hits is left out
-/// whole, a delete-a-group jackknife); empty unless the measurement is time data of at least
-/// [`JACKKNIFE_HITS`] files of an impact test. What the hits' noise
-/// does to a pole, bias of the identification included, is read from how the pole moves across
-/// these sets (`crate::layered`'s pole scatter).
+/// whole, a delete-a-group jackknife), from the records `measured` kept; empty unless the
+/// measurement is time data of at least [`JACKKNIFE_HITS`] files of an impact test. What the
+/// hits' noise does to a pole, bias of the identification included, is read from how the pole
+/// moves across these sets (`crate::layered`'s pole scatter).
 ///
 /// # Errors
 /// As [`read_measurement`].
-pub fn without_each_hit(job: &Job, base: &Path) -> Result<Vec<FrfSet>> {
-    let m = &job.measurement;
-    let (Some(c), None, None) = (&m.channels, &m.frf, &m.uff) else {
+pub fn without_each_hit(job: &Job, measured: &Measured) -> Result<Vec<FrfSet>> {
+    let Some(records) = &measured.records else {
         return Ok(Vec::new());
     };
-    if m.time.len() < JACKKNIFE_HITS || m.excitation != ExcitationKind::Impact {
-        return Ok(Vec::new());
-    }
-    let c = relative(base, c);
-    let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
+    let m = &job.measurement;
     let options = time_options(m, job.fit.misfit.band_hz)?;
-    // Each file read once; each set's spectra from the hits it keeps.
-    let records = read_records(&c, &files, &options).context("measurement.time")?;
-    (0..files.len())
+    let n = records.hits.len();
+    (0..n)
         .map(|left_out| {
-            let others = |k: &usize| *k != left_out;
-            let hits: Vec<Hit> = (0..files.len())
-                .filter(others)
+            let hits: Vec<Hit> = (0..n)
+                .filter(|&k| k != left_out)
                 .map(|k| records.hits[k].clone())
                 .collect();
-            let kept: Vec<PathBuf> = (0..files.len())
-                .filter(others)
-                .map(|k| files[k].clone())
-                .collect();
+            // Impact spectra name no file.
             records
-                .frfs(&hits, &kept, &options)
+                .frfs(&hits, &[], &options)
                 .map(|r| r.0)
                 .with_context(|| format!("measurement.time without hit {}", left_out + 1))
         })
@@ -475,18 +468,25 @@ pub fn read_measurement_section(
                 source: format!("FRFs '{}', channels '{}'", f.display(), c.display()),
                 min_coherence: None,
                 warnings: vec![],
+                records: None,
             }
         }
         (Some(c), None, None) => {
             let c = relative(base, c);
             let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
             let options = time_options(m, band_hz)?;
-            let (set, spectra, hits) = time_frfs(&c, &files, &options).with_context(|| {
+            let context = || {
                 format!(
                     "measurement.time (read against the channels of '{}')",
                     c.display()
                 )
-            })?;
+            };
+            let records = read_records(&c, &files, &options).with_context(context)?;
+            let (set, spectra) = records
+                .frfs(&records.hits, &files, &options)
+                .with_context(context)?;
+            let hits = records.hits.len();
+            let jackknife = hits >= JACKKNIFE_HITS && m.excitation == ExcitationKind::Impact;
             let band = band_hz.unwrap_or([0.0, f64::INFINITY]);
             let min_coherence = spectra
                 .channels
@@ -512,6 +512,7 @@ pub fn read_measurement_section(
                 ),
                 min_coherence: Some(min_coherence),
                 warnings: spectra.warnings.clone(),
+                records: jackknife.then_some(records),
             }
         }
         (None, None, Some(u)) => {
@@ -522,6 +523,7 @@ pub fn read_measurement_section(
                 source,
                 min_coherence: None,
                 warnings: vec![],
+                records: None,
             }
         }
         _ => bail!(

@@ -265,7 +265,7 @@ pub fn run_job(
                 other_order_emas(&job, &measured.set, &cache, spinner)
             })?,
             hits: stage("ema without each hit", spinner, &mut timings, || {
-                without_each_hit_emas(&job, &base, &cache, spinner)
+                without_each_hit_emas(&job, &measured, &cache, spinner)
             })?,
         }
     } else {
@@ -540,11 +540,11 @@ fn other_order_emas(
 /// sets that cannot be read (the whole was) leave the jackknife out.
 fn without_each_hit_emas(
     job: &Job,
-    base: &Path,
+    measured: &Measured,
     cache: &Cache,
     spinner: &dyn Reporter,
 ) -> Result<(Vec<EmaResult>, bool)> {
-    let sets = crate::measurement::without_each_hit(job, base).unwrap_or_default();
+    let sets = crate::measurement::without_each_hit(job, measured).unwrap_or_default();
     let (out, all_cached) = successful(sets.iter().enumerate().map(|(k, set)| {
         spinner.stage(&format!(
             "stage 'ema without each hit': without hit {} of {}",
