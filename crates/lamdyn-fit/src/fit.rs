@@ -316,6 +316,37 @@ pub(crate) fn match_modes(peaks: &[Peak], fe_hz: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The effective modulus E* (Pa) each pole implies on the shell model alone, no FRF fit:
+/// E* = E_ref (f/f_FE)² e^{2i asin ζ} against the FE mode `match_modes` pairs it with (as
+/// the fit's start does). One modulus scales the whole stiffness, K = (E*/E_ref) K0, so the
+/// pole of FE mode ω_FE is p = i ω_FE √(E*/E_ref): its natural frequency |p|/2π = f gives
+/// |E*| = E_ref (f/f_FE)², and its damping ratio ζ = −Re p/|p| = sin(arg E*/2) gives the
+/// phase (loss factor tan(2 asin ζ) ≈ 2ζ). Exact for poles of that model. `poles`:
+/// (natural frequency in Hz, damping ratio), increasing in frequency. Empty when the model has
+/// no elastic mode or there are no poles.
+pub fn pole_moduli(model: &ModalModel, poles: &[(f64, f64)]) -> Vec<Complex64> {
+    let fe = elastic_hz(model);
+    if fe.is_empty() || poles.is_empty() {
+        return Vec::new();
+    }
+    let peaks: Vec<Peak> = poles
+        .iter()
+        .map(|&(freq_hz, zeta)| Peak {
+            freq_hz,
+            amplitude: 0.0,
+            damping_ratio: Some(zeta),
+        })
+        .collect();
+    match_modes(&peaks, &fe)
+        .iter()
+        .zip(poles)
+        .map(|(f_fe, &(f, zeta))| {
+            let magnitude = model.e_ref_pa() * (f / f_fe).powi(2);
+            Complex64::from_polar(magnitude, 2.0 * zeta.clamp(0.0, 1.0).asin())
+        })
+        .collect()
+}
+
 /// Fits the law of `settings` to `measured` through `model`, then checks the result against
 /// what a laminate can be ([`check_plausible`]).
 ///

@@ -193,7 +193,9 @@ pub fn run(
             p.exact_g()
                 .or(p.paper_g())
                 .filter(passive)
-                .or_else(|| homogenized_start(job, p.freq_hz, p.e_eff_pa, fallback))
+                .or_else(|| {
+                    homogenized_start(job, p.freq_hz, p.e_eff_pa.or(p.e_pole_pa)?, fallback)
+                })
                 .filter(passive)
                 .unwrap_or(fallback)
         })
@@ -1545,7 +1547,8 @@ mod tests {
                 .unwrap();
                 modal.push(CorePoint {
                     freq_hz: f,
-                    e_eff_pa: Complex64::new(0.0, 0.0),
+                    e_eff_pa: None,
+                    e_pole_pa: None,
                     e_sd: None,
                     paper: Err("not used".into()),
                     exact: Err("not used".into()),

@@ -38,6 +38,14 @@ pub struct Measured {
     records: Option<Records>,
 }
 
+impl Measured {
+    /// Whether the measurement kept hammer hits that [`without_each_hit`] can leave out in
+    /// turn (impact time data of at least [`JACKKNIFE_HITS`] files).
+    pub fn has_hits_to_leave_out(&self) -> bool {
+        self.records.is_some()
+    }
+}
+
 fn read_text(p: &Path) -> Result<String> {
     crate::io::read_text(p)
 }

@@ -14,6 +14,7 @@ use super::uncertainty::{Band, Bands};
 use super::{ChainResult, CorePoint};
 use crate::err;
 use crate::error::Result;
+use lamdyn_fit::fit::FitResult;
 use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
 use lamdyn_report::chart::{Axis, Chart, Mark, Series};
 use lamdyn_report::{HtmlReport, shape_map};
@@ -193,7 +194,7 @@ fn laminate_charts(r: &ChainResult) -> (Chart, Chart) {
         Mark::Line,
         r.curve
             .iter()
-            .map(|p| [p.freq_hz, p.e_eff_pa.re / 1e9])
+            .filter_map(|p| Some([p.freq_hz, p.e_storage_pa()? / 1e9]))
             .collect(),
     ));
     eta.series.push(Series::new(
@@ -202,7 +203,7 @@ fn laminate_charts(r: &ChainResult) -> (Chart, Chart) {
         Mark::Line,
         r.curve
             .iter()
-            .map(|p| [p.freq_hz, p.e_eff_pa.im / p.e_eff_pa.re])
+            .filter_map(|p| Some([p.freq_hz, p.e_loss_factor()?]))
             .collect(),
     ));
     e.series.push(Series::new(
@@ -211,7 +212,7 @@ fn laminate_charts(r: &ChainResult) -> (Chart, Chart) {
         Mark::Disc,
         r.modal
             .iter()
-            .map(|p| [p.freq_hz, p.e_eff_pa.re / 1e9])
+            .filter_map(|p| Some([p.freq_hz, p.e_storage_pa()? / 1e9]))
             .collect(),
     ));
     eta.series.push(Series::new(
@@ -220,7 +221,7 @@ fn laminate_charts(r: &ChainResult) -> (Chart, Chart) {
         Mark::Disc,
         r.modal
             .iter()
-            .map(|p| [p.freq_hz, p.e_eff_pa.im / p.e_eff_pa.re])
+            .filter_map(|p| Some([p.freq_hz, p.e_loss_factor()?]))
             .collect(),
     ));
     (e, eta)
@@ -478,8 +479,9 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         let lb = LayeredColumns::of(p);
         let mut row = vec![
             format!("{:.3}", p.freq_hz),
-            format!("{:.4}", p.e_eff_pa.re / 1e9),
-            format!("{:.3e}", p.e_eff_pa.im / p.e_eff_pa.re),
+            p.e_storage_pa()
+                .map_or("-".into(), |e| format!("{:.4}", e / 1e9)),
+            p.e_loss_factor().map_or("-".into(), |e| format!("{e:.3e}")),
             fmt(phi, 1.0, 4),
             valid.to_string(),
             fmt(storage(gp), 1e6, 3),
@@ -504,8 +506,8 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
         let hi = |b: Option<Band>| opt(b.map(|b| b[1]));
         let mut c = vec![
             format!("{}", p.freq_hz),
-            format!("{:e}", p.e_eff_pa.re),
-            format!("{:e}", p.e_eff_pa.im / p.e_eff_pa.re),
+            opt(p.e_storage_pa()),
+            opt(p.e_loss_factor()),
             opt(phi),
             valid.to_lowercase(),
             opt(storage(gp)),
@@ -853,8 +855,8 @@ fn curve_csv(r: &ChainResult) -> String {
         let kk = |i: usize| r.causality[i][k].map_or("n/a", |v| v.label());
         s.push_str(&csv_line(&[
             format!("{}", p.freq_hz),
-            format!("{:e}", p.e_eff_pa.re),
-            format!("{:e}", p.e_eff_pa.im / p.e_eff_pa.re),
+            opt(p.e_storage_pa()),
+            opt(p.e_loss_factor()),
             opt(p.phi()),
             opt(storage(p.paper_g())),
             opt(loss(p.paper_g())),
@@ -979,73 +981,13 @@ pub fn build(r: &ChainResult) -> Result<Files> {
             t.source
         ));
     }
-    html.heading("Causality");
-    html.paragraph(&causality_verdict(r));
-    files.push(("core_curve.csv".into(), curve_csv(r).into_bytes()));
-
-    html.heading("Laminate effective modulus");
-    let (e, eta) = laminate_charts(r);
-    add_figure(
-        &mut html,
-        &mut files,
-        "laminate_storage",
-        "Laminate E'(f) of the fitted law (paper Fig. 4)",
-        &e,
-    )?;
-    add_figure(
-        &mut html,
-        &mut files,
-        "laminate_loss",
-        "Laminate loss factor (paper Fig. 4)",
-        &eta,
-    )?;
-    let (params, params_csv) = parameter_table(r);
-    html.table(
-        "Fitted law parameters (SI: Pa, s, Pa s); 95 % intervals +-1.96 sd",
-        &["parameter", "value", "sd", "95% low", "95% high"],
-        params,
-    );
-    files.push(("parameters.csv".into(), params_csv.into_bytes()));
-
-    html.heading("Fit: measured vs fitted FRFs");
-    add_figure(
-        &mut html,
-        &mut files,
-        "rms_frf",
-        "RMS FRF over the responses, measured and fitted (paper Fig. 5)",
-        &rms_chart(r),
-    )?;
-    let (t3, t3_csv) = table3(r);
-    html.table(
-        "Table 3: RMS FRF peaks, measured vs fitted",
-        &[
-            "f meas [Hz]",
-            "f fit [Hz]",
-            "err [%]",
-            "amp meas",
-            "amp fit",
-            "err [%]",
-            "zeta meas",
-            "zeta fit",
-            "err [%]",
-        ],
-        t3,
-    );
-    files.push(("table3.csv".into(), t3_csv.into_bytes()));
-    let mut rms = format!(
-        "# RMS FRF over the responses ({})\nf_hz,measured,fitted\n",
-        r.measured.set.quantity().unit()
-    );
-    for &k in &r.fit_lines {
-        let _ = writeln!(
-            rms,
-            "{},{:e},{:e}",
-            r.measured.set.freqs_hz()[k],
-            r.measured_rms[k],
-            r.fitted_rms[k]
-        );
+    match &r.fit {
+        Some(fit) => paper_route_sections(&mut html, &mut files, r, fit)?,
+        None => html.paragraph(&format!(
+            "The paper's route has no result: {}. Its figures and files (core_curve.csv, parameters.csv, table3.csv, rms.csv) are not written; the layered route above does not depend on it.",
+            r.paper_route_error.as_deref().unwrap_or("not run")
+        )),
     }
-    files.push(("rms.csv".into(), rms.into_bytes()));
 
     html.heading("Modal identification");
     let f = r.measured.set.freqs_hz();
@@ -1117,6 +1059,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         "measurement": r.measured.source,
         "model": r.model_line,
         "fit": r.fit,
+        "paper_route_error": r.paper_route_error,
         "core_law": r.core_law.as_ref().map(|l| l.as_ref().map_err(String::as_str)),
         "ema_modes": r.ema.modes.iter().map(|m| serde_json::json!({"freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "mpc": m.mpc})).collect::<Vec<_>>(),
         "uncertainty": r.uncertainty,
@@ -1129,11 +1072,89 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     Ok(files)
 }
 
-fn parameter_table(r: &ChainResult) -> (Vec<Vec<String>>, String) {
+/// The paper's route's own sections: causality of its curve, the laminate's effective
+/// modulus, the fitted law's parameters and the fit against the measured RMS FRF.
+fn paper_route_sections(
+    html: &mut HtmlReport,
+    files: &mut Files,
+    r: &ChainResult,
+    fit: &FitResult,
+) -> Result<()> {
+    html.heading("Causality");
+    html.paragraph(&causality_verdict(r));
+    files.push(("core_curve.csv".into(), curve_csv(r).into_bytes()));
+
+    html.heading("Laminate effective modulus");
+    let (e, eta) = laminate_charts(r);
+    add_figure(
+        html,
+        files,
+        "laminate_storage",
+        "Laminate E'(f) of the fitted law (paper Fig. 4)",
+        &e,
+    )?;
+    add_figure(
+        html,
+        files,
+        "laminate_loss",
+        "Laminate loss factor (paper Fig. 4)",
+        &eta,
+    )?;
+    let (params, params_csv) = parameter_table(fit);
+    html.table(
+        "Fitted law parameters (SI: Pa, s, Pa s); 95 % intervals +-1.96 sd",
+        &["parameter", "value", "sd", "95% low", "95% high"],
+        params,
+    );
+    files.push(("parameters.csv".into(), params_csv.into_bytes()));
+
+    html.heading("Fit: measured vs fitted FRFs");
+    add_figure(
+        html,
+        files,
+        "rms_frf",
+        "RMS FRF over the responses, measured and fitted (paper Fig. 5)",
+        &rms_chart(r),
+    )?;
+    let (t3, t3_csv) = table3(r);
+    html.table(
+        "Table 3: RMS FRF peaks, measured vs fitted",
+        &[
+            "f meas [Hz]",
+            "f fit [Hz]",
+            "err [%]",
+            "amp meas",
+            "amp fit",
+            "err [%]",
+            "zeta meas",
+            "zeta fit",
+            "err [%]",
+        ],
+        t3,
+    );
+    files.push(("table3.csv".into(), t3_csv.into_bytes()));
+    let mut rms = format!(
+        "# RMS FRF over the responses ({})\nf_hz,measured,fitted\n",
+        r.measured.set.quantity().unit()
+    );
+    for &k in &r.fit_lines {
+        let _ = writeln!(
+            rms,
+            "{},{:e},{:e}",
+            r.measured.set.freqs_hz()[k],
+            r.measured_rms[k],
+            r.fitted_rms[k]
+        );
+    }
+    files.push(("rms.csv".into(), rms.into_bytes()));
+
+    Ok(())
+}
+
+fn parameter_table(fit: &FitResult) -> (Vec<Vec<String>>, String) {
     let mut csv = String::from("name,value,std_dev,ci95_low,ci95_high\n");
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
-    let rows = r
-        .fit
+    let rows = fit
         .parameters
         .iter()
         .map(|p| {

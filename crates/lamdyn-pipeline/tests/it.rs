@@ -425,6 +425,65 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
             "{why:?}"
         );
     }
+    // The paper's route fails: no peak of the RMS FRF stands out enough to start its fit (the
+    // prominence asked for is out of reach, as on a part so damped that its peaks merge), but
+    // the EMA still finds the poles. The layered route does not need the fit: it still
+    // recovers the core, each mode started from the modulus its pole implies on the shell
+    // model; the report says why the paper's route has no result and writes none of its files.
+    let no_fit = dir.join("input/no_fit.toml");
+    let text = std::fs::read_to_string(&job_path).unwrap();
+    assert_eq!(text.matches("[fit]\n").count(), 1);
+    std::fs::write(
+        &no_fit,
+        text.replace("[fit]\n", "[fit]\nprominence = 1e6\n"),
+    )
+    .unwrap();
+    let r = run_job(Job::read(&no_fit).unwrap(), &no_fit, &options, &Silent).unwrap();
+    let why = r.paper_route_error.as_deref().unwrap_or("");
+    assert!(
+        r.fit.is_none() && why.contains("no resonance peak"),
+        "{why}"
+    );
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.starts_with("the paper's route has no result (stage 'fit' failed")),
+        "{:?}",
+        r.warnings
+    );
+    assert!(r.curve.is_empty() && r.uncertainty.is_none());
+    for p in &r.modal {
+        assert!(p.e_eff_pa.is_none() && p.paper_g().is_none() && p.exact_g().is_none());
+    }
+    layered_recovers_the_truth(&r);
+    let no_fit_report = dir.join("no-fit-report");
+    let out = OutputDir::prepare(&no_fit_report, &[], false).unwrap();
+    out.write(&report::build(&r).unwrap()).unwrap();
+    let html = std::fs::read_to_string(no_fit_report.join("report.html")).unwrap();
+    assert!(html.contains("The paper&#39;s route has no result: stage &#39;fit&#39; failed"));
+    assert!(!no_fit_report.join("parameters.csv").exists());
+    assert!(no_fit_report.join("core_modal.csv").exists());
+    // Without the layered route the paper's is the only answer: its failure is the run's.
+    let paper_only = dir.join("input/paper_only.toml");
+    let text = std::fs::read_to_string(&no_fit).unwrap();
+    std::fs::write(
+        &paper_only,
+        text.replace("[inverse]\n", "[inverse]\nlayered = false\n"),
+    )
+    .unwrap();
+    let e = run_job(
+        Job::read(&paper_only).unwrap(),
+        &paper_only,
+        &options,
+        &Silent,
+    )
+    .err()
+    .expect("the fit stage fails");
+    assert!(
+        chain_text(&e).starts_with("stage 'fit' failed: "),
+        "{}",
+        chain_text(&e)
+    );
     let report = dir.join("report/report.html");
     let before = std::fs::read(&report).unwrap();
     // A job whose model cannot hold the channels: the model stage fails, named, and nothing
@@ -700,7 +759,14 @@ fn same_bits_on_one_and_two_threads() {
             .unwrap()
     };
     let bits = |r: &ChainResult| -> Vec<u64> {
-        let mut out: Vec<u64> = r.fit.parameters.iter().map(|p| p.value.to_bits()).collect();
+        let mut out: Vec<u64> = r
+            .fit
+            .as_ref()
+            .expect("the paper's route ran")
+            .parameters
+            .iter()
+            .map(|p| p.value.to_bits())
+            .collect();
         for m in &r.ema.modes {
             out.extend([m.freq_hz.to_bits(), m.damping_ratio.to_bits()]);
         }

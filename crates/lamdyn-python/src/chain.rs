@@ -20,8 +20,8 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 #[derive(Serialize)]
 struct ModalRow {
     f_hz: f64,
-    e_storage_pa: f64,
-    e_loss_factor: f64,
+    e_storage_pa: Option<f64>,
+    e_loss_factor: Option<f64>,
     phi_abs: Option<f64>,
     g_paper_storage_pa: Option<f64>,
     g_paper_loss_factor: Option<f64>,
@@ -61,8 +61,8 @@ fn run_out(r: &ChainResult, report_dir: Option<String>) -> PyResult<String> {
             let (gt, et) = split(r.truth.as_ref().and_then(|t| t.at(p.freq_hz)));
             ModalRow {
                 f_hz: p.freq_hz,
-                e_storage_pa: p.e_eff_pa.re,
-                e_loss_factor: p.e_eff_pa.im / p.e_eff_pa.re,
+                e_storage_pa: p.e_storage_pa(),
+                e_loss_factor: p.e_loss_factor(),
                 phi_abs: p.phi(),
                 g_paper_storage_pa: gp,
                 g_paper_loss_factor: ep,

@@ -131,7 +131,7 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
     };
     for p in &r.modal {
         let (gp, ge, gl) = (p.paper_g(), p.exact_g(), p.layered_g());
-        let mut row: Vec<Cell> = vec![p.freq_hz.into(), p.e_eff_pa.re.into(), p.phi().into()];
+        let mut row: Vec<Cell> = vec![p.freq_hz.into(), p.e_storage_pa().into(), p.phi().into()];
         row.extend(split(gp));
         row.extend(split(ge));
         row.extend(split(gl));
