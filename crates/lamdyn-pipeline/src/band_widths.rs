@@ -85,7 +85,10 @@ pub fn what_would_narrow(source: &str) -> String {
         "support damping" => {
             "softer supports with less damping, or their damping measured".into()
         }
-        "inputs beyond first order" | "inputs beyond second order" => {
+        "inputs beyond first order"
+        | "inputs beyond second order"
+        | "inputs beyond second order, shared (G')"
+        | "inputs beyond second order, shared (eta)" => {
             "narrower priors on the inputs (a measured face modulus and thicknesses): the core then depends on them nearly linearly"
                 .into()
         }
@@ -329,6 +332,7 @@ mod tests {
             crate::layered::HITS_JACKKNIFE,
             crate::layered::THROUGH_THICKNESS,
         ]);
+        names.extend(crate::layered::SHARED_REMAINDER);
         for n in names {
             let advice = what_would_narrow(n);
             assert!(

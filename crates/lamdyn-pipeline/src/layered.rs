@@ -1208,7 +1208,10 @@ fn fit_law_with(
         return Some(Ok(fit));
     };
     // Only where some input has a wide prior (the faces' first order holds over theirs).
-    if priors.iter().all(|p| p.rel_sd < WIDE_PRIOR) {
+    if priors
+        .iter()
+        .all(|p| p.rel_sd < WIDE_PRIOR || Input::named(&p.name).is_none())
+    {
         return Some(Ok(fit));
     }
     let bands: Vec<&LayeredBand> = index
@@ -1252,14 +1255,13 @@ fn relinearised(
     delta: &[f64],
     base: &[f64],
 ) -> Option<(Vec<ModePoint>, Vec<InputPrior>)> {
-    let inputs: Vec<Input> = priors
-        .iter()
-        .map(|p| Input::named(&p.name))
-        .collect::<Option<_>>()?;
+    // The shared remainder's terms (`share_the_remainder`) are no inputs of the model: their
+    // effects stay, and the points are not moved along them.
+    let inputs: Vec<Option<Input>> = priors.iter().map(|p| Input::named(&p.name)).collect();
     let changes: Vec<(Input, f64)> = inputs
         .iter()
         .zip(delta.iter().zip(base))
-        .map(|(&i, (d, b))| (i, d - b))
+        .filter_map(|(&i, (d, b))| Some((i?, d - b)))
         .collect();
     let moved = coarsest.with_inputs_moved(&changes).ok()?;
     let new_points = bands
@@ -1273,7 +1275,11 @@ fn relinearised(
             let sens = moved.sensitivity(g, rank, eigenvalue).ok()?;
             let effects = inputs
                 .iter()
-                .map(|&i| {
+                .zip(&p.effects)
+                .map(|(&i, &kept)| {
+                    let Some(i) = i else {
+                        return Some(kept);
+                    };
                     let e = sens.inputs.iter().find(|e| e.input == i)?;
                     Some(log_parts(e.dg_dln, g))
                 })
@@ -1288,7 +1294,11 @@ fn relinearised(
     let new_priors = priors
         .iter()
         .zip(delta)
-        .map(|(p, &d)| InputPrior { at: d, ..p.clone() })
+        .zip(&inputs)
+        .map(|((p, &d), i)| match i {
+            Some(_) => InputPrior { at: d, ..p.clone() },
+            None => p.clone(),
+        })
         .collect();
     Some((new_points, new_priors))
 }
@@ -1383,7 +1393,70 @@ fn mode_points(
         pt.effects = kept(&pt.effects);
         pt.second_order = kept(&pt.second_order);
     }
+    if weights == Weights::Law {
+        share_the_remainder(&mut points, &mut priors);
+    }
     (index, points, priors)
+}
+
+/// The part of each point's "inputs beyond second order" that all modes share: the square of
+/// the correlation between two modes' remainders (`share_the_remainder`).
+pub const REMAINDER_SHARED: f64 = 0.5;
+
+/// Names of the joint fit's two terms for the inputs' remainder beyond second order that the
+/// modes share (G', η).
+pub const SHARED_REMAINDER: [&str; 2] = [
+    "inputs beyond second order, shared (G')",
+    "inputs beyond second order, shared (eta)",
+];
+
+/// Splits each point's "inputs beyond second order" b_k (G', η) into a part of its own noise,
+/// √(1 − ρ) b_k, and a part all modes share, √ρ b_k times one term per quantity under a unit
+/// prior (two more "inputs" of the joint fit: [`SHARED_REMAINDER`]), with ρ =
+/// [`REMAINDER_SHARED`]; the variance per mode stays b_k². The remainder is a function of the
+/// inputs every mode shares, so taken as independent noise it averaged down over the modes
+/// while the modes' errors moved together: on the demo roof with the faces drawn from their
+/// priors (`chain_coverage`, 20 seeds) the law's η band held the truth at 85 % of the pairs,
+/// the law 2.8–4.3 % low in η at every mode of two seeds and 13–25 % high at three; split
+/// like this, at 94.7 % (G': 97.9 → 100 %). Its sign differs between modes in G' (seed 9:
+/// −15 … +5 %), so it is not all shared either.
+fn share_the_remainder(points: &mut [ModePoint], priors: &mut Vec<InputPrior>) {
+    let own = (1.0 - REMAINDER_SHARED).sqrt();
+    let mut shared = Vec::with_capacity(points.len());
+    for pt in points.iter_mut() {
+        let mut b = [0.0; 2];
+        for (name, sd) in &mut pt.noise {
+            if name == BEYOND_SECOND_ORDER {
+                b = *sd;
+                *sd = sd.map(|x| x * own);
+            }
+        }
+        shared.push(b);
+    }
+    // One shift of every mode alike, of the median remainder: a shift whose size follows the
+    // modes' own remainders is told apart from the law by the modes' pattern, and the fit
+    // pins it (seed 6 above: the law's η band narrowed from ±3.5 % to ±3.0 %).
+    let level = [0, 1].map(|c| {
+        let mut v: Vec<f64> = shared.iter().map(|b| b[c]).collect();
+        v.sort_by(f64::total_cmp);
+        REMAINDER_SHARED.sqrt() * v.get(v.len() / 2).copied().unwrap_or(0.0)
+    });
+    if level == [0.0, 0.0] {
+        return;
+    }
+    for pt in points.iter_mut() {
+        let b = level;
+        let with_second = !pt.second_order.is_empty();
+        pt.effects.extend([[b[0], 0.0], [0.0, b[1]]]);
+        if with_second {
+            pt.second_order.extend([[0.0, 0.0]; 2]);
+        }
+    }
+    priors.extend(SHARED_REMAINDER.map(|name| InputPrior {
+        name: name.to_string(),
+        rel_sd: 1.0,
+        at: 0.0,
+    }));
 }
 
 #[cfg(test)]
@@ -1804,6 +1877,53 @@ mod tests {
         }
     }
 
+    /// The remainder beyond second order is split half and half: each point keeps √½ of its
+    /// own, and two shared terms under unit priors shift every mode by √½ times the median
+    /// remainder; no points (a run without layered bands) and no remainder change nothing.
+    #[test]
+    fn the_remainder_beyond_second_order_is_split_between_own_and_shared() {
+        let point = |b: [f64; 2]| ModePoint {
+            freq_hz: 100.0,
+            found_at_hz: Complex64::new(100.0, 1.0),
+            core_shear_pa: Complex64::new(1e7, 5e6),
+            effects: vec![[0.1, 0.2]],
+            second_order: vec![[0.01, 0.02]],
+            noise: vec![
+                ("EMA pole".into(), [0.01, 0.02]),
+                (BEYOND_SECOND_ORDER.into(), b),
+            ],
+        };
+        let prior = InputPrior {
+            name: "face modulus".into(),
+            rel_sd: 0.01,
+            at: 0.0,
+        };
+        let mut points = vec![point([0.04, 0.3]), point([0.01, 0.02]), point([0.02, 0.1])];
+        let mut priors = vec![prior.clone()];
+        share_the_remainder(&mut points, &mut priors);
+        let names: Vec<&str> = priors.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["face modulus", SHARED_REMAINDER[0], SHARED_REMAINDER[1]]
+        );
+        assert!(priors[1..].iter().all(|p| p.rel_sd == 1.0 && p.at == 0.0));
+        let half = 0.5f64.sqrt();
+        for (pt, own) in points.iter().zip([[0.04, 0.3], [0.01, 0.02], [0.02, 0.1]]) {
+            assert_eq!(pt.noise[0].1, [0.01, 0.02]);
+            assert_eq!(pt.noise[1].1, own.map(|x| x * half));
+            // The medians: 0.02 in G', 0.1 in eta.
+            assert_eq!(pt.effects[1..], [[0.02 * half, 0.0], [0.0, 0.1 * half]]);
+            assert_eq!(pt.second_order.len(), 3);
+        }
+        let mut none: Vec<ModePoint> = Vec::new();
+        let mut priors = vec![prior.clone()];
+        share_the_remainder(&mut none, &mut priors);
+        assert_eq!(priors.len(), 1);
+        let mut exact = vec![point([0.0, 0.0])];
+        share_the_remainder(&mut exact, &mut priors);
+        assert_eq!((priors.len(), exact[0].effects.len()), (1, 1));
+    }
+
     /// A free plate whose faces, core and densities are drawn from their priors (1 % on the
     /// face modulus, 0.5 % on each thickness and density), 20 seeds ([`coverage`]): the truth
     /// lies inside the joint law's band at ≥ 90 % of the (mode, seed) pairs, in G' and in η,
@@ -1814,9 +1934,10 @@ mod tests {
         let make = |d: &[f64]| plate([d[0], d[1], d[2], d[3], d[4]]);
         let c = coverage(&make, &[0.01, 0.005, 0.005, 0.005, 0.005], &priors, 20, 0.0);
         let (rate, total) = (c.rate, c.pairs);
-        // Measured (80 pairs): per mode 87.5 % (G') and 90 % (eta), the first order falling a
-        // little short at half-widths of 12-17 %; joint 100 % and 97.5 %, with median
-        // half-widths of 2.5 % and 3.0 % against the per-mode 12 % and 17 %.
+        // Measured (80 pairs): per mode 90 % (G') and 90 % (eta), the first order falling a
+        // little short at half-widths of 16-17 %; joint 98.8 % and 96.3 % (100 % and 97.5 %
+        // before the remainder beyond second order was partly shared), with median
+        // half-widths of 2.3 % and 2.8 % against the per-mode 16 % and 17 %.
         assert!(total >= 70, "{total} pairs identified");
         assert!(
             rate[1][0] >= 0.9 && rate[1][1] >= 0.9,
@@ -1944,8 +2065,9 @@ mod tests {
             "per-mode coverage {:?}",
             c.rate
         );
-        // Measured: the joint band at 100 % (G') and 92.4 % (eta), median half-widths 1.9 % and
-        // 3.7 %. Before the fit was re-linearised at the inputs it finds ([`fit_law`]) it held
+        // Measured: the joint band at 100 % (G') and 97.5 % (eta), median half-widths 2.5 % and
+        // 5.5 % (92.4 %, 1.9 % and 3.7 % before the remainder beyond second order was partly
+        // shared, `share_the_remainder`). Before the fit was re-linearised at the inputs it finds ([`fit_law`]) it held
         // the truth at only 67 % and 77 %: the modes pin the shared support stiffness to about
         // ±1 %, through sensitivities taken at the nominal supports, which a 20 % draw leaves
         // far behind.

@@ -704,9 +704,11 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
             return;
         }
     };
+    // The shared remainder's two terms are no physical inputs (their unit is their prior's sd).
     let inputs: Vec<String> = law
         .inputs()
         .iter()
+        .filter(|p| !crate::layered::SHARED_REMAINDER.contains(&p.name.as_str()))
         .map(|p| {
             format!(
                 "{} {:+.2} % [{:+.2}, {:+.2}]",
@@ -796,7 +798,7 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
         rows,
     );
     html.table(
-        "The law's parameters and the inputs' relative changes, 95 % intervals (positive parameters and alpha: intervals of their logarithm or logit mapped back); correlations in result.json",
+        "The law's parameters and the inputs' relative changes, 95 % intervals (positive parameters and alpha: intervals of their logarithm or logit mapped back; the two terms 'inputs beyond second order, shared' in units of their unit prior); correlations in result.json",
         &["parameter", "value", "95% low", "95% high"],
         law.parameters
             .iter()
