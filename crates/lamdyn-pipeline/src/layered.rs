@@ -1422,7 +1422,7 @@ pub const SHARED_REMAINDER: [&str; 2] = [
 /// −15 … +5 %), so it is not all shared either.
 fn share_the_remainder(points: &mut [ModePoint], priors: &mut Vec<InputPrior>) {
     let own = (1.0 - REMAINDER_SHARED).sqrt();
-    let mut shared = Vec::with_capacity(points.len());
+    let mut remainders = Vec::with_capacity(points.len());
     for pt in points.iter_mut() {
         let mut b = [0.0; 2];
         for (name, sd) in &mut pt.noise {
@@ -1431,13 +1431,13 @@ fn share_the_remainder(points: &mut [ModePoint], priors: &mut Vec<InputPrior>) {
                 *sd = sd.map(|x| x * own);
             }
         }
-        shared.push(b);
+        remainders.push(b);
     }
     // One shift of every mode alike, of the median remainder: a shift whose size follows the
     // modes' own remainders is told apart from the law by the modes' pattern, and the fit
     // pins it (seed 6 above: the law's η band narrowed from ±3.5 % to ±3.0 %).
     let level = [0, 1].map(|c| {
-        let mut v: Vec<f64> = shared.iter().map(|b| b[c]).collect();
+        let mut v: Vec<f64> = remainders.iter().map(|b| b[c]).collect();
         v.sort_by(f64::total_cmp);
         REMAINDER_SHARED.sqrt() * v.get(v.len() / 2).copied().unwrap_or(0.0)
     });
@@ -1445,9 +1445,8 @@ fn share_the_remainder(points: &mut [ModePoint], priors: &mut Vec<InputPrior>) {
         return;
     }
     for pt in points.iter_mut() {
-        let b = level;
         let with_second = !pt.second_order.is_empty();
-        pt.effects.extend([[b[0], 0.0], [0.0, b[1]]]);
+        pt.effects.extend([[level[0], 0.0], [0.0, level[1]]]);
         if with_second {
             pt.second_order.extend([[0.0, 0.0]; 2]);
         }

@@ -147,8 +147,7 @@ pub struct ChainResult {
     /// for, or no layered mode with a band), or why it failed.
     pub core_law: Option<std::result::Result<lamdyn_fit::joint::CoreLawFit, String>>,
     /// The paper's route: the effective modulus fitted to the FRFs on the shell model; `None`
-    /// when its model or fit failed and the layered route went on alone
-    /// (`paper_route_error` says why).
+    /// when its fit failed and the layered route went on alone (`paper_route_error` says why).
     pub fit: Option<FitResult>,
     /// Why the paper's route has no result (its stage's error), if it has none.
     pub paper_route_error: Option<String>,
@@ -1037,6 +1036,8 @@ fn collect_warnings(
     if let Some(r) = fit {
         fit_warnings(ema, r, out);
     }
+    // Without a fit the run's warnings say once why the paper's route has no result.
+    let paper_route_ran = fit.is_some();
     for p in modal {
         if let Some(phi) = p.phi() {
             if phi > PHI_ACCURACY_LIMIT {
@@ -1046,8 +1047,6 @@ fn collect_warnings(
                 ));
             }
         }
-        // Without a fit the run's warnings say once why the paper's route has no result.
-        let paper_route_ran = fit.is_some();
         for (name, e) in [
             ("paper", p.paper.as_ref().err().filter(|_| paper_route_ran)),
             ("exact", p.exact.as_ref().err().filter(|_| paper_route_ran)),
