@@ -257,7 +257,7 @@ pub fn run(
         .take_while(|&m| plate.dofs(m).is_ok_and(|d| d <= settings.max_dofs))
         .collect();
     spinner.stage(&format!(
-        "stage 'layered inverse': coarsest layered model and its reduced basis, levels {} built alongside",
+        "stage 'layered inverse': coarsest layered model and its reduced basis, levels {} and the coarsest with {THROUGH} elements per layer through the thickness built alongside",
         ahead
             .iter()
             .map(|&m| plate.plan.level_label(m))
@@ -265,12 +265,29 @@ pub fn run(
             .join(", ")
     ));
     let (rest, largest) = ahead.split_at(ahead.len().saturating_sub(1));
-    let (largest, (coarsest, mut prebuilt)) = rayon::join(
+    // The coarsest mesh with two elements per layer through the thickness (the band's source
+    // 'through the thickness') goes after the largest level, on the lane that frees first.
+    let through_thickness = || {
+        let two = LayeredPlate {
+            elements_per_layer: THROUGH,
+            ..plate.clone()
+        };
+        if two.dofs(start).map_or(true, |d| d > settings.max_dofs) {
+            return None;
+        }
+        let (model, hit) = cached_model(cache, &two, start, g_ref, settings.modes, false).ok()?;
+        if !hit {
+            all_cached.store(false, std::sync::atomic::Ordering::Relaxed);
+        }
+        Some(model)
+    };
+    let ((largest, thick), (coarsest, mut prebuilt)) = rayon::join(
         || {
-            largest
+            let built = largest
                 .iter()
                 .map(|&m| (m, finer_level(m)))
-                .collect::<Vec<_>>()
+                .collect::<Vec<_>>();
+            (built, through_thickness())
         },
         || {
             let coarsest = cached_model(cache, &plate, start, g_ref, modes, true);
@@ -315,30 +332,8 @@ pub fn run(
         modal[k].layered = Some(m.as_ref().map(|m| m.core_shear_pa).map_err(Clone::clone));
         modal[k].layered_convergence = m.ok().copied();
     }
-    // Each mode's band on its own (in parallel; sequential inside, so the same bits), the
-    // coarsest mesh with two elements per layer through the thickness built alongside.
-    spinner.stage(&format!(
-        "stage 'layered inverse': {} with {THROUGH} elements per layer through the thickness",
-        plate.plan.level_label(start)
-    ));
-    let (moved, thick) = rayon::join(
-        || MovedBySd::build(&coarsest, &plate, &job.uncertainty),
-        || {
-            let two = LayeredPlate {
-                elements_per_layer: THROUGH,
-                ..plate.clone()
-            };
-            if two.dofs(start).map_or(true, |d| d > settings.max_dofs) {
-                return None;
-            }
-            let (model, hit) =
-                cached_model(cache, &two, start, g_ref, settings.modes, false).ok()?;
-            if !hit {
-                all_cached.store(false, std::sync::atomic::Ordering::Relaxed);
-            }
-            Some(model)
-        },
-    );
+    // Each mode's band on its own (in parallel; sequential inside, so the same bits).
+    let moved = MovedBySd::build(&coarsest, &plate, &job.uncertainty);
     let bands: Vec<_> = with_pole
         .par_iter()
         .zip(&out.modes)
