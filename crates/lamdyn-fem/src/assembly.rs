@@ -17,6 +17,26 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
+/// Each node's neighbours through `elements` (node lists): the nodes it shares an element with,
+/// itself included, sorted; empty for a node of no element. The node graph of a sparsity
+/// pattern (here and in the layered model's assembly).
+pub fn node_neighbours<'a>(
+    n_nodes: usize,
+    elements: impl IntoIterator<Item = &'a [usize]>,
+) -> Vec<Vec<usize>> {
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n_nodes];
+    for el in elements {
+        for &a in el {
+            adj[a].extend_from_slice(el);
+        }
+    }
+    for list in &mut adj {
+        list.sort_unstable();
+        list.dedup();
+    }
+    adj
+}
+
 /// The sparsity pattern of the global matrices and where each element writes into it.
 #[derive(Debug, Clone)]
 pub struct SystemPattern {
@@ -37,18 +57,11 @@ impl SystemPattern {
     /// Plans the pattern of a mesh.
     pub fn new(mesh: &Mesh) -> Self {
         let n_nodes = mesh.nodes().len();
-        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n_nodes];
-        for el in mesh.elements() {
-            for &a in el {
-                adj[a].extend_from_slice(el);
-            }
-        }
+        let adj = node_neighbours(n_nodes, mesh.elements());
         let mut node_ptr = Vec::with_capacity(n_nodes + 1);
         let mut node_adj = Vec::new();
         node_ptr.push(0);
-        for list in &mut adj {
-            list.sort_unstable();
-            list.dedup();
+        for list in &adj {
             node_adj.extend_from_slice(list);
             node_ptr.push(node_adj.len());
         }

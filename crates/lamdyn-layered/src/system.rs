@@ -49,22 +49,15 @@ struct LayerPattern {
 
 impl LayerPattern {
     fn new(mesh: &HexMesh, layer: usize) -> Self {
-        let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); mesh.nodes.len()];
-        for (conn, _) in mesh
+        let of_layer = mesh
             .elements
             .iter()
             .zip(&mesh.layer)
             .filter(|e| *e.1 == layer)
-        {
-            for &a in conn {
-                neighbours[a].extend_from_slice(conn);
-            }
+            .map(|(conn, _)| conn.as_slice());
+        Self {
+            neighbours: lamdyn_fem::assembly::node_neighbours(mesh.nodes.len(), of_layer),
         }
-        for nb in &mut neighbours {
-            nb.sort_unstable();
-            nb.dedup();
-        }
-        Self { neighbours }
     }
 
     /// Column pointers and row indices, with `per_direction` rows of each neighbour in each
