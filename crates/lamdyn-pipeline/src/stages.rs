@@ -1156,7 +1156,7 @@ fn falling_layered_storage(modal: &[CorePoint]) -> Vec<String> {
 /// at those modes by more than the pole's scatter says, the layered one most (d ln f / d ln G
 /// is a few per cent on a stiff interlayer). Measured: the in-band foam roof's pair at 20.1 and
 /// 20.5 Hz (0.17 of its half-widths apart) comes out 16 % and 24 % off from noise-free FRFs
-/// where its own poles give 2 % and 8 %; the damped sandwich's pair at 314 Hz (0.05) up to 25 %
+/// where its own poles give 2 % and 8 %; the damped sandwich's pair at 314 Hz (0.02) up to 25 %
 /// in η; the soft-core panel's poles at ζ 16–22 % 104–224 % in G'. On the demo roof, the
 /// in-band roof's other modes and the sandwich's single modes the nearest neighbours lie two
 /// or more half-widths apart.
