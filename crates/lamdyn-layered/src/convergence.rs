@@ -67,8 +67,9 @@ pub struct LadderSettings {
     pub tolerance: f64,
     /// Modes in each finer level's basis.
     pub modes: usize,
-    /// Largest level, in dofs, the ladder builds. A level's dofs are estimated before it is
-    /// built from the finest level built so far ([`estimated_dofs`]): a Gmsh plan of
+    /// Largest level, in dofs, the ladder builds. A level's dofs are counted before it is
+    /// built ([`Levels::dofs`]), or else estimated from the finest level built so far
+    /// ([`estimated_dofs`]): a Gmsh plan of
     /// thousands of quadrilaterals split 3 × 3 would otherwise run the machine out of memory
     /// with no word (the sparse Cholesky of the 67 509-dof level of the demo roof's ladder
     /// peaks near 1.8 GB with the rest of the run; memory grows a little faster than the dofs).
@@ -221,9 +222,57 @@ pub fn build_level(
     LayeredInverse::build_with_ratios(plate, elements, g_ref_pa, modes, &[1.0])
 }
 
+/// Where the ladder's finer levels come from ([`converge`]): their models, and their sizes
+/// where these are known before a build. A closure that builds a level is one, its sizes
+/// estimated ([`estimated_dofs`]); [`CountedLevels`] adds the exact count.
+pub trait Levels: Sync {
+    /// The model on `elements` elements ([`build_level`], or a cached copy of it).
+    ///
+    /// # Errors
+    /// Those of the build.
+    fn build(&self, elements: [usize; 2]) -> Result<LayeredInverse, LayeredError>;
+    /// The dofs of the model on `elements`, if known without building it.
+    fn dofs(&self, _elements: [usize; 2]) -> Option<usize> {
+        None
+    }
+}
+
+impl<F> Levels for F
+where
+    F: Fn([usize; 2]) -> Result<LayeredInverse, LayeredError> + Sync,
+{
+    fn build(&self, elements: [usize; 2]) -> Result<LayeredInverse, LayeredError> {
+        self(elements)
+    }
+}
+
+/// Levels built by `build` and counted by `dofs` (e.g. [`LayeredPlate::dofs`], which meshes
+/// the plan without assembling): the dof cap ([`LadderSettings::max_dofs`]) then compares
+/// exact sizes, where the estimate runs up to 10 % high near it.
+pub struct CountedLevels<B, C> {
+    /// Builds the model on the elements given.
+    pub build: B,
+    /// The dofs of the model on the elements given, `None` where unknown.
+    pub dofs: C,
+}
+
+impl<B, C> Levels for CountedLevels<B, C>
+where
+    B: Fn([usize; 2]) -> Result<LayeredInverse, LayeredError> + Sync,
+    C: Fn([usize; 2]) -> Option<usize> + Sync,
+{
+    fn build(&self, elements: [usize; 2]) -> Result<LayeredInverse, LayeredError> {
+        (self.build)(elements)
+    }
+    fn dofs(&self, elements: [usize; 2]) -> Option<usize> {
+        (self.dofs)(elements)
+    }
+}
+
 /// Runs the ladder (module docs): `coarsest` is the plate's model on `start` elements;
-/// `level` builds a finer level's model on the elements it is given ([`build_level`], or a
-/// cached copy of it); `targets` are the measured −p², `starts` the first guesses of G*.
+/// `level` builds a finer level's model on the elements it is given and counts its dofs
+/// where it can ([`Levels`]); `targets` are the measured −p², `starts` the first guesses of
+/// G*.
 ///
 /// # Errors
 /// [`LayeredError::Invalid`] for settings out of range or mismatched lengths; errors of the
@@ -233,7 +282,7 @@ pub fn build_level(
 pub fn converge(
     coarsest: &LayeredInverse,
     start: [usize; 2],
-    level: &(dyn Fn([usize; 2]) -> Result<LayeredInverse, LayeredError> + Sync),
+    level: &dyn Levels,
     targets: &[Complex64],
     starts: &[Complex64],
     settings: &LadderSettings,
@@ -243,10 +292,15 @@ pub fn converge(
     let mut meshes: Vec<[usize; 2]> = (0..3)
         .map(|k| level_mesh(start, settings.ratio, k))
         .collect();
-    let third = estimated_dofs(coarsest.size().0, start, meshes[2]);
+    // A level's size: exact where `level` knows it, else estimated from one built.
+    let size = |mesh: [usize; 2], built_dofs: usize, built: [usize; 2]| match level.dofs(mesh) {
+        Some(d) => (d, ""),
+        None => (estimated_dofs(built_dofs, built, mesh), "about "),
+    };
+    let (third, about) = size(meshes[2], coarsest.size().0, start);
     if third > settings.max_dofs {
         return Err(LayeredError::Invalid(format!(
-            "the ladder's third level, {} x {} elements, would have about {} dofs, above inverse.layered_max_dofs = {} (the coarsest has {}): start from a coarser mesh (inverse.layered_elements, inverse.layered_subdivisions or fewer quadrilaterals in the plan's Gmsh mesh) or raise inverse.layered_max_dofs if the memory allows",
+            "the ladder's third level, {} x {} elements, would have {about}{} dofs, above inverse.layered_max_dofs = {} (the coarsest has {}): start from a coarser mesh (inverse.layered_elements, inverse.layered_subdivisions or fewer quadrilaterals in the plan's Gmsh mesh) or raise inverse.layered_max_dofs if the memory allows",
             meshes[2][0],
             meshes[2][1],
             third,
@@ -256,7 +310,7 @@ pub fn converge(
     }
     let build = |m: [usize; 2]| {
         progress(&format!("layered level {} x {}", m[0], m[1]));
-        level(m)
+        level.build(m)
     };
     // Each target on the coarsest mesh alone: the start of every pass, once for all levels.
     // Modes in parallel: each is sequential inside, so the bits do not depend on the schedule.
@@ -292,7 +346,7 @@ pub fn converge(
             });
         }
         let next = level_mesh(start, settings.ratio, meshes.len());
-        let next_dofs = estimated_dofs(dofs[dofs.len() - 1], meshes[meshes.len() - 1], next);
+        let (next_dofs, about) = size(next, dofs[dofs.len() - 1], meshes[meshes.len() - 1]);
         let too_big = next_dofs > settings.max_dofs;
         if meshes.len() >= settings.max_levels || too_big {
             // Each mode that misses the tolerance fails alone and says how far it got; the
@@ -301,7 +355,7 @@ pub fn converge(
             let finest = dofs[dofs.len() - 1];
             let remedy = if too_big {
                 format!(
-                    "the next level, {} x {}, would have about {} dofs, above inverse.layered_max_dofs = {}: raise it if the memory allows, or inverse.tolerance",
+                    "the next level, {} x {}, would have {about}{} dofs, above inverse.layered_max_dofs = {}: raise it if the memory allows, or inverse.tolerance",
                     next[0], next[1], next_dofs, settings.max_dofs
                 )
             } else {
@@ -618,6 +672,38 @@ mod tests {
         assert!(
             e.contains("the ladder's third level, 5 x 5 elements, would have about"),
             "{e}"
+        );
+        // Exact counts (`CountedLevels`): a cap at the third level's own size, below its
+        // estimate from the coarsest, lets the ladder run its three levels, and the stop before
+        // the fourth names that level's exact size.
+        let exact_cap = LadderSettings {
+            max_dofs: out.dofs[2],
+            ..capped
+        };
+        assert!(estimated_dofs(out.dofs[0], start, [5, 5]) > exact_cap.max_dofs);
+        let e = run(&exact_cap).unwrap_err().to_string();
+        assert!(e.contains("would have about"), "{e}");
+        let counted = CountedLevels {
+            build: level,
+            dofs: |m: [usize; 2]| plate.dofs(m).ok(),
+        };
+        let out_counted = converge(
+            &coarsest,
+            start,
+            &counted,
+            &targets,
+            &starts,
+            &exact_cap,
+            &|_| {},
+        )
+        .unwrap();
+        assert_eq!(out_counted.meshes, out.meshes);
+        assert_eq!(out_counted.dofs, out.dofs);
+        let seven = plate.dofs([7, 7]).unwrap();
+        let text = out_counted.modes[0].as_ref().unwrap_err().to_string();
+        assert!(
+            text.contains(&format!("the next level, 7 x 7, would have {seven} dofs")),
+            "{text}"
         );
         // Settings out of range name what is wrong.
         let bad = LadderSettings {

@@ -36,6 +36,7 @@ mod error;
 pub mod hex20;
 pub mod inverse;
 pub mod mesh;
+pub mod ordering;
 pub mod plan;
 pub mod reduced;
 pub mod sensitivity;

@@ -218,9 +218,13 @@ impl ReducedModel {
         }
         let basis = m_orthonormal(&v, &sys.m);
         let project = |a: &SparseColMat<usize, f64>| project_on(&basis, a);
+        // Each layer projected once: the elastic layers' sum and the core's (K_c = Σ_j K_core,j).
         let mut k_elastic = Mat::<f64>::zeros(basis.ncols(), basis.ncols());
+        let mut k_core_projected = Mat::<f64>::zeros(basis.ncols(), basis.ncols());
         for (l, k) in sys.k_layers.iter().enumerate() {
-            if !core_layers.contains(&l) {
+            if core_layers.contains(&l) {
+                k_core_projected += project(k);
+            } else {
                 k_elastic += project(k);
             }
         }
@@ -237,7 +241,7 @@ impl ReducedModel {
             c_dampers,
             k_springs,
             elastic_loss: 0.0,
-            k_core: project(&k_core),
+            k_core: k_core_projected,
             mass: project(&sys.m),
             basis,
             derivatives: Vec::new(),
@@ -702,40 +706,65 @@ fn project_on(basis: &Mat<f64>, a: &SparseColMat<usize, f64>) -> Mat<f64> {
     seq::mul(basis.transpose(), av.as_ref())
 }
 
-/// The columns of `v` made M-orthonormal by modified Gram–Schmidt in the M inner product,
+/// The columns of `v` made M-orthonormal, in order, by Gram–Schmidt in the M inner product
 /// applied twice ("twice is enough", Giraud et al. 2005) after scaling each column to unit
 /// M-norm; a column whose M-norm falls below 1e-8 after projection is dependent and dropped.
+///
+/// Blocked [Stewart 2008]: each block of [`ORTHONORMAL_BLOCK`] columns is projected off the
+/// columns kept so far by two classical passes X ← X − Q (M Q)ᵀ X (dense products that read Q
+/// once per block), then column by column off the block's own kept columns, twice. M Q is
+/// kept beside Q, so each column costs one product with M after its scaling.
 fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
-    let n = v.nrows();
-    let mut kept: Vec<Mat<f64>> = Vec::new();
-    let mut m_kept: Vec<Mat<f64>> = Vec::new();
-    let m_norm = |x: &Mat<f64>| -> f64 {
+    let (n, width) = (v.nrows(), v.ncols());
+    let mut q = Mat::<f64>::zeros(n, width);
+    let mut mq = Mat::<f64>::zeros(n, width);
+    let mut kept = 0;
+    for first in (0..width).step_by(ORTHONORMAL_BLOCK) {
+        let b = ORTHONORMAL_BLOCK.min(width - first);
+        let mut x = v.subcols(first, b).to_owned();
         let mx = seq::sparse_mul(m, x.as_ref());
-        seq::mul(x.transpose(), mx.as_ref())[(0, 0)].max(0.0).sqrt()
-    };
-    for j in 0..v.ncols() {
-        let mut x = Mat::from_fn(n, 1, |i, _| v[(i, j)]);
-        let norm = m_norm(&x);
-        if norm == 0.0 || !norm.is_finite() {
-            continue;
+        for c in 0..b {
+            let norm = x.col(c).transpose() * mx.col(c);
+            let scale = if norm > 0.0 && norm.is_finite() {
+                1.0 / norm.sqrt()
+            } else {
+                0.0
+            };
+            // A zero or non-finite column is left as zeros: it is dropped below.
+            x.col_mut(c)
+                .iter_mut()
+                .for_each(|e| *e = if scale > 0.0 { *e * scale } else { 0.0 });
         }
-        x *= 1.0 / norm;
         for _ in 0..2 {
-            for (q, mq) in kept.iter().zip(&m_kept) {
-                let c = seq::mul(mq.transpose(), x.as_ref())[(0, 0)];
-                x -= q * c;
+            if kept > 0 {
+                let c = seq::mul(mq.subcols(0, kept).transpose(), x.as_ref());
+                x -= seq::mul(q.subcols(0, kept), c.as_ref());
             }
         }
-        let left = m_norm(&x);
-        if left < 1e-8 {
-            continue;
+        let block_start = kept;
+        for c in 0..b {
+            let mut col = x.col(c).to_owned();
+            for _ in 0..2 {
+                for k in block_start..kept {
+                    let coefficient = mq.col(k).transpose() * &col;
+                    col -= q.col(k) * coefficient;
+                }
+            }
+            let m_col = seq::sparse_mul(m, col.as_mat());
+            let left = (col.transpose() * m_col.col(0)).max(0.0).sqrt();
+            if left.is_nan() || left < 1e-8 {
+                continue;
+            }
+            q.col_mut(kept).copy_from(&col * (1.0 / left));
+            mq.col_mut(kept).copy_from(m_col.col(0) * (1.0 / left));
+            kept += 1;
         }
-        x *= 1.0 / left;
-        m_kept.push(seq::sparse_mul(m, x.as_ref()));
-        kept.push(x);
     }
-    Mat::from_fn(n, kept.len(), |i, j| kept[j][(i, 0)])
+    q.subcols(0, kept).to_owned()
 }
+
+/// Columns per block of [`m_orthonormal`].
+const ORTHONORMAL_BLOCK: usize = 16;
 
 /// The direct route: Z(ω) u = f by a sparse complex LU per line (without loss in the elastic
 /// layers and springs: the check of the reduction). K_e, K_c and M are laid on

@@ -43,7 +43,9 @@ use lamdyn_ema::identify::EmaResult;
 use lamdyn_fem::model::MeshSpec;
 use lamdyn_fit::joint::{CoreLaw, CoreLawFit, InputPrior, ModePoint, fit_core_law_shifted};
 use lamdyn_layered::LayeredError;
-use lamdyn_layered::convergence::{LadderSettings, build_level, converge, level_mesh};
+use lamdyn_layered::convergence::{
+    CountedLevels, LadderSettings, build_level, converge, level_mesh,
+};
 use lamdyn_layered::inverse::{BASIS_RATIOS, InverseLayer, LayeredInverse, LayeredPlate};
 use lamdyn_layered::plan::Plan;
 use lamdyn_layered::sensitivity::{Input, ModeSensitivity, log_parts, relative_parts};
@@ -267,19 +269,33 @@ pub fn run(
     let (rest, largest) = ahead.split_at(ahead.len().saturating_sub(1));
     // The coarsest mesh with two elements per layer through the thickness (the band's source
     // 'through the thickness') goes after the largest level, on the lane that frees first.
-    let through_thickness = || {
+    // Err: why there is none (above the dof cap, or its build failed), for the stage's line.
+    let through_thickness = || -> std::result::Result<_, String> {
         let two = LayeredPlate {
             elements_per_layer: THROUGH,
             ..plate.clone()
         };
-        if two.dofs(start).map_or(true, |d| d > settings.max_dofs) {
-            return None;
+        match two.dofs(start) {
+            Ok(d) if d > settings.max_dofs => {
+                return Err(format!(
+                    "the coarsest mesh with {THROUGH} elements per layer has {d} dofs, above inverse.layered_max_dofs"
+                ));
+            }
+            Err(e) => {
+                return Err(format!(
+                    "the coarsest mesh with {THROUGH} elements per layer: {e}"
+                ));
+            }
+            Ok(_) => {}
         }
-        let (model, hit) = cached_model(cache, &two, start, g_ref, settings.modes, false).ok()?;
+        let (model, hit) =
+            cached_model(cache, &two, start, g_ref, settings.modes, false).map_err(|e| {
+                format!("the model with {THROUGH} elements per layer was not built: {e:#}")
+            })?;
         if !hit {
             all_cached.store(false, std::sync::atomic::Ordering::Relaxed);
         }
-        Some(model)
+        Ok(model)
     };
     let ((largest, thick), (coarsest, mut prebuilt)) = rayon::join(
         || {
@@ -308,10 +324,14 @@ pub fn run(
         });
         ready.unwrap_or_else(|| finer_level(m))
     };
+    let levels = CountedLevels {
+        build: level,
+        dofs: |m: [usize; 2]| plate.dofs(m).ok(),
+    };
     let out = converge(
         &coarsest,
         start,
-        &level,
+        &levels,
         &targets,
         &first,
         &settings,
@@ -340,7 +360,7 @@ pub fn run(
         .map(|(&(k, target), m)| {
             let m = m.as_ref().ok()?;
             let scatter = pole_scatter(ema, checks, modal[k].freq_hz);
-            let models = (&coarsest, thick.as_ref());
+            let models = (&coarsest, thick.as_ref().ok());
             Some(band(models, &moved, m, target, scatter, supports_at))
         })
         .collect();
@@ -359,12 +379,9 @@ pub fn run(
     let met = out.modes.iter().filter(|m| m.is_ok()).count();
     let line = format!(
         "C3D20, one per layer through the thickness ({}), plan: {}; meshes {} extrapolated to a frequency error below {:.1e} at {met} of {} modes; coarsest basis at G_ref {:.4e} Pa ({build_s:.1} s{}); targets: the EMA poles",
-        if thick.is_some() {
-            format!("{THROUGH} on the coarsest mesh for the band's '{THROUGH_THICKNESS}'")
-        } else {
-            format!(
-                "the coarsest mesh with {THROUGH} above inverse.layered_max_dofs: '{THROUGH_THICKNESS}' not in the band"
-            )
+        match &thick {
+            Ok(_) => format!("{THROUGH} on the coarsest mesh for the band's '{THROUGH_THICKNESS}'"),
+            Err(why) => format!("{why}: '{THROUGH_THICKNESS}' not in the band"),
         },
         plate.plan.describe(),
         meshes.join(", "),
