@@ -23,48 +23,34 @@ pub fn nested_dissection(coordinates: &[[f64; 3]], neighbours: &[Vec<usize>]) ->
     debug_assert_eq!(coordinates.len(), neighbours.len());
     let n = coordinates.len();
     let mut order = Vec::with_capacity(n);
-    // `part[v]`: the id of the set v is in while it is split (usize::MAX once ordered).
+    // `part[v]`: the id of the set v is in while it waits to be split; a separator's nodes
+    // leave every set (usize::MAX).
     let mut part = vec![0usize; n];
     let mut next_id = 1;
-    // Explicit stack: (set, its id, whether its two halves are done and the separator is
-    // due). The separators of all open sets wait in `pending`, innermost last.
+    // Popped last in, first out: a set's left half, then its right half, then its separator.
     let mut stack: Vec<Task> = vec![Task::Split((0..n).collect(), 0)];
     while let Some(task) = stack.pop() {
         match task {
-            Task::Emit(separator) => {
-                for &v in &separator {
-                    part[v] = usize::MAX;
-                }
-                order.extend(separator);
-            }
-            Task::Split(set, _) if set.len() <= LEAF_NODES => {
-                for &v in &set {
-                    part[v] = usize::MAX;
-                }
-                order.extend(set);
-            }
+            Task::Emit(nodes) => order.extend(nodes),
+            Task::Split(set, _) if set.len() <= LEAF_NODES => order.extend(set),
             Task::Split(set, id) => {
                 let (left, right, separator) = bisect(&set, id, coordinates, neighbours, &part);
                 if left.is_empty() || right.is_empty() {
                     // No cut splits the set (all nodes at one coordinate): order it as is.
-                    for &v in &set {
-                        part[v] = usize::MAX;
-                    }
                     order.extend(set);
                     continue;
                 }
                 let (left_id, right_id) = (next_id, next_id + 1);
                 next_id += 2;
-                for &v in &left {
-                    part[v] = left_id;
+                for (nodes, id) in [
+                    (&left, left_id),
+                    (&right, right_id),
+                    (&separator, usize::MAX),
+                ] {
+                    for &v in nodes {
+                        part[v] = id;
+                    }
                 }
-                for &v in &right {
-                    part[v] = right_id;
-                }
-                for &v in &separator {
-                    part[v] = usize::MAX - 1;
-                }
-                // Popped in reverse: left, right, then the separator.
                 stack.push(Task::Emit(separator));
                 stack.push(Task::Split(right, right_id));
                 stack.push(Task::Split(left, left_id));
@@ -77,7 +63,7 @@ pub fn nested_dissection(coordinates: &[[f64; 3]], neighbours: &[Vec<usize>]) ->
 enum Task {
     /// Split this set (its id in `part`) or, if small, order it.
     Split(Vec<usize>, usize),
-    /// Append this separator to the order.
+    /// Append these nodes (a separator) to the order.
     Emit(Vec<usize>),
 }
 
@@ -111,8 +97,14 @@ fn bisect(
             .total_cmp(&coordinates[b][axis])
             .then(a.cmp(&b))
     });
+    // The median's coordinate; where half the set shares the lowest coordinate, the cut
+    // takes them all to the left.
     let cut = coordinates[by_coordinate[by_coordinate.len() / 2]][axis];
-    let is_left = |v: usize| coordinates[v][axis] < cut;
+    let lowest = coordinates[by_coordinate[0]][axis];
+    let is_left = |v: usize| {
+        let x = coordinates[v][axis];
+        x < cut || (cut == lowest && x == lowest)
+    };
     let in_set = |v: usize| part[v] == id;
     let touches = |v: usize, left: bool| {
         neighbours[v]
