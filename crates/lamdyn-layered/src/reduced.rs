@@ -751,8 +751,9 @@ fn m_orthonormal(v: &Mat<f64>, m: &SparseColMat<usize, f64>) -> Mat<f64> {
                 }
             }
             let m_col = seq::sparse_mul(m, col.as_mat());
+            // f64::max maps NaN to 0: a non-finite column is dropped here too.
             let left = (col.transpose() * m_col.col(0)).max(0.0).sqrt();
-            if left.is_nan() || left < 1e-8 {
+            if left < 1e-8 {
                 continue;
             }
             q.col_mut(kept).copy_from(&col * (1.0 / left));

@@ -364,16 +364,17 @@ impl SeqCholesky {
         let fail = |what: &str, e: &dyn std::fmt::Debug| {
             LayeredError::Solver(format!("sparse Cholesky, {what}: {e:?}"))
         };
-        let inverse = match elimination {
-            Some(order) => Some(inverse_permutation(order, a.nrows()).ok_or_else(|| {
-                LayeredError::Solver(format!(
-                    "sparse Cholesky: an elimination order of {} entries is not a permutation of {} dofs",
-                    order.len(),
-                    a.nrows()
-                ))
-            })?),
-            None => None,
-        };
+        let inverse = elimination
+            .map(|order| {
+                inverse_permutation(order, a.nrows()).ok_or_else(|| {
+                    LayeredError::Solver(format!(
+                        "sparse Cholesky: an elimination order of {} entries is not a permutation of {} dofs",
+                        order.len(),
+                        a.nrows()
+                    ))
+                })
+            })
+            .transpose()?;
         let ordering = match (elimination, &inverse) {
             (Some(fwd), Some(inv)) => {
                 SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, a.nrows()))
