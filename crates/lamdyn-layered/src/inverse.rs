@@ -453,6 +453,31 @@ impl LayeredInverse {
         None
     }
 
+    /// The pole nearest `guess` at core modulus `g_pa`: as [`Self::pole_eigenvalue`] (the
+    /// dashpots acting at the pole's own frequency, to 1e-9 or the solver's noise), but each
+    /// step the eigenvalue nearest the last by inverse iteration instead of all eigenvalues by
+    /// rank: a few dense LU solves instead of an eigendecomposition, for fits that evaluate a
+    /// mode many times near a known pole. A close pair's other member can be nearer than the
+    /// wanted one after a large change of `g_pa`: the caller checks the result by rank.
+    pub fn pole_near(&self, g_pa: Complex64, guess: Complex64) -> Option<Complex64> {
+        const SETTLED: f64 = 1e-9;
+        const STEPS: usize = 30;
+        let s = g_pa / self.g_assembled_pa;
+        let mut lambda = self.model.eigenvalue_near(s, guess.sqrt(), guess)?;
+        if !self.has_dashpots() {
+            return Some(lambda);
+        }
+        for _ in 0..STEPS {
+            let next = self.model.eigenvalue_near(s, lambda.sqrt(), lambda)?;
+            let step = (next - lambda).norm() / lambda.norm();
+            lambda = next;
+            if step <= SETTLED {
+                return Some(lambda);
+            }
+        }
+        Some(lambda)
+    }
+
     /// Whether the supports have dashpots (else λ does not depend on the frequency they act at).
     fn has_dashpots(&self) -> bool {
         self.model

@@ -10,7 +10,7 @@
 //! | model | the FE model's real modes projected on the channels (paper eqs. 3–4) | lamdyn-fem, lamdyn-fit |
 //! | fit | the laminate's E*(ω) so that synthesized FRFs match (eqs. 2–10) | lamdyn-fit |
 //! | inverse | G*(f) of the core by the paper's inverse (eqs. 33–45) and the exact one | lamdyn-material |
-//! | layered inverse | G* at each EMA pole through a layered solid model ([`layered`]) | lamdyn-testbench |
+//! | layered inverse | G* at each EMA pole through a layered solid model ([`layered`]); an overlapping pair fitted to the FRFs around it ([`pair_fit`]) | lamdyn-layered |
 //! | core law | the core's law fitted to all layered modes with the inputs shared; its band widths and what would narrow them ([`band_widths`]) | lamdyn-fit |
 //! | uncertainty | Monte Carlo over the stack and the fit's covariance ([`uncertainty`]) | here |
 //! | report | HTML with figures, CSV/JSON tables ([`report`]) into a results folder ([`output`]) | lamdyn-report |
@@ -53,6 +53,7 @@ pub mod job;
 pub mod layered;
 pub mod measurement;
 pub mod output;
+pub mod pair_fit;
 pub mod report;
 pub mod stages;
 pub mod uncertainty;

@@ -358,7 +358,7 @@ pub fn run_job(
             layered::run(
                 &job,
                 &base,
-                (&ema, &pole_checks),
+                (&measured.set, &ema, &pole_checks),
                 &mut modal,
                 &cache,
                 spinner,
@@ -379,7 +379,7 @@ pub fn run_job(
                 layered::run(
                     &moved,
                     &base,
-                    (&ema, &pole_checks),
+                    (&measured.set, &ema, &pole_checks),
                     &mut modal,
                     &cache,
                     spinner,
@@ -1179,7 +1179,7 @@ fn poles_beyond_the_ema(modes: &[lamdyn_ema::identify::Mode]) -> Vec<String> {
         let apart = w[1].freq_hz - w[0].freq_hz;
         if apart < widths {
             out.push(format!(
-                "EMA: the poles at {:.2} Hz and {:.2} Hz overlap ({apart:.3} Hz apart, {:.2} of their half-power half-widths): an EMA moves the poles of such a pair by more than their scatter shows (the in-band foam roof's pair at 20.1 / 20.5 Hz: G* 16-24 % off from noise-free FRFs), so the per-mode G* at both is less certain than its band; the law, fitted to all modes, weighs them by their bands",
+                "EMA: the poles at {:.2} Hz and {:.2} Hz overlap ({apart:.3} Hz apart, {:.2} of their half-power half-widths): an EMA moves the poles of such a pair by more than their scatter shows (the in-band foam roof's pair at 20.1 / 20.5 Hz: G* 16-24 % off from noise-free FRFs), so G* from each pole alone is less certain than its band: the layered route fits such a pair to the FRFs around it with both poles tied to its model instead (its line says how that went)",
                 w[0].freq_hz,
                 w[1].freq_hz,
                 apart / widths
