@@ -640,14 +640,7 @@ impl LayeredBand {
     /// The band with one more source of relative standard deviations `sd` (of G' and η).
     pub fn with_source(mut self, name: &str, sd: [f64; 2]) -> Self {
         self.sources.push((name.to_string(), sd));
-        self.half_width = [0, 1].map(|k| {
-            1.96 * self
-                .sources
-                .iter()
-                .map(|s| s.1[k].powi(2))
-                .sum::<f64>()
-                .sqrt()
-        });
+        self.half_width = half_width(&self.sources);
         self
     }
 
@@ -658,6 +651,12 @@ impl LayeredBand {
             .max_by(|a, b| a.1[part].total_cmp(&b.1[part]))
             .map_or("-", |s| s.0.as_str())
     }
+}
+
+/// The 95 % half-widths of ln G' and ln η of independent `sources` (relative standard
+/// deviations): 1.96 √(Σ σ²) per part ([`LayeredBand::half_width`]).
+fn half_width(sources: &[(String, [f64; 2])]) -> [f64; 2] {
+    [0, 1].map(|k| 1.96 * sources.iter().map(|s| s.1[k].powi(2)).sum::<f64>().sqrt())
 }
 
 /// The identifications beside the whole that a pole's scatter is read from (`pole_scatter`).
@@ -779,7 +778,7 @@ fn group_spread(found: &[[f64; 2]]) -> Option<[f64; 2]> {
 }
 
 /// Sample standard deviation (n − 1) of each part of `points` (n ≥ 2).
-fn sample_sd(points: &[[f64; 2]]) -> [f64; 2] {
+pub(crate) fn sample_sd(points: &[[f64; 2]]) -> [f64; 2] {
     let n = points.len() as f64;
     let sd = |k: usize| {
         let mean = points.iter().map(|p| p[k]).sum::<f64>() / n;
@@ -955,9 +954,8 @@ fn band(
         "discretization".into(),
         [mode.storage_band / 1.96, mode.loss_band / 1.96],
     ));
-    let total = |k: usize| 1.96 * sources.iter().map(|s| s.1[k].powi(2)).sum::<f64>().sqrt();
     Ok(LayeredBand {
-        half_width: [total(0), total(1)],
+        half_width: half_width(&sources),
         sources,
         inputs,
         second_order,
@@ -2141,10 +2139,7 @@ mod tests {
         let rb = ra + 1;
         let g_true = law().modulus(0.5 * (exact[ra].re.sqrt() + exact[rb].re.sqrt()));
         let truth = [ra, rb].map(|r| model.pole_eigenvalue(g_true, r, exact[r]).unwrap());
-        let pole = |l: Complex64| {
-            let p = Complex64::i() * l.sqrt();
-            if p.im < 0.0 { p.conj() } else { p }
-        };
+        let pole = crate::pair_fit::pole_of;
         let hz = |l: Complex64| l.re.sqrt() / (2.0 * PI);
         let freqs: Vec<f64> = (1..=2000).map(|k| 0.25 * k as f64).collect();
         let residues = |o: usize, i: usize| {

@@ -86,7 +86,7 @@ fn freq_and_zeta(l: Complex64) -> (f64, f64) {
 
 /// The pole p = i√λ of an eigenvalue λ = −p² with Im λ ≥ 0 (the targets' convention): the
 /// decaying one, positive imaginary part.
-fn pole_of(l: Complex64) -> Complex64 {
+pub(crate) fn pole_of(l: Complex64) -> Complex64 {
     let p = Complex64::i() * l.sqrt();
     if p.im < 0.0 { p.conj() } else { p }
 }
@@ -355,11 +355,7 @@ pub fn fit_pair(
             .iter()
             .map(|g| [g.re.ln(), (g.im / g.re).ln()])
             .collect();
-        fit.band_choice_sd = Some([0, 1].map(|k| {
-            let mean = logs.iter().map(|l| l[k]).sum::<f64>() / logs.len() as f64;
-            (logs.iter().map(|l| (l[k] - mean).powi(2)).sum::<f64>() / (logs.len() - 1) as f64)
-                .sqrt()
-        }));
+        fit.band_choice_sd = Some(crate::layered::sample_sd(&logs));
     }
     Ok(fit)
 }
