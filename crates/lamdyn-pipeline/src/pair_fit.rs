@@ -145,8 +145,9 @@ fn neighbours(ema: &EmaResult, targets: [Complex64; 2], band_hz: [f64; 2]) -> Ve
 /// ladder's results for them) to the measured FRFs of `set` (module docs).
 ///
 /// # Errors
-/// A message (for the layered line) when both poles matched one mode of the model, the band
-/// holds too few lines, the fit fails, or the fitted poles are not the two modes' by rank.
+/// A message (for the layered line) when a mode is lost, both poles matched one mode of the
+/// model and it has no neighbour or no ladder correction, the band holds too few lines, the
+/// fit fails or does not settle, or the fitted poles are not the two modes' by rank.
 pub fn fit_pair(
     coarsest: &LayeredInverse,
     set: &FrfSet,
@@ -204,6 +205,19 @@ pub fn fit_pair(
     } else {
         [modes[0].rank, modes[1].rank]
     };
+    // What every band's fit shares: the curves, and x = (ln G'/G'₀, ln η/η₀) from the mean of
+    // the two modes' own G*.
+    let freqs = set.freqs_hz();
+    let curves: Vec<&[Complex64]> = (0..set.responses().len())
+        .flat_map(|i| (0..set.references().len()).map(move |j| (i, j)))
+        .map(|(i, j)| set.curve(i, j))
+        .collect();
+    let quantity = set.quantity();
+    let eta0 = g0.im / g0.re;
+    let g_of = |x: &[f64]| {
+        let storage = g0.re * x[0].exp();
+        Complex64::new(storage, storage * eta0 * x[1].exp())
+    };
     // The fit over the lines within `half_widths` of the pair.
     let fit_with = |half_widths: f64| -> Result<PairFit> {
         let ((fa, za), (fb, zb)) = (freq_and_zeta(targets[0]), freq_and_zeta(targets[1]));
@@ -211,7 +225,6 @@ pub fn fit_pair(
             (fa * (1.0 - half_widths * za)).max(ema.band_hz[0]),
             (fb * (1.0 + half_widths * zb)).min(ema.band_hz[1]),
         ];
-        let freqs = set.freqs_hz();
         // The lines the residues are fitted on, also those the misfit is summed over.
         let lines = lamdyn_ema::band::positive_lines(freqs, band_hz);
         let others = neighbours(ema, targets, band_hz);
@@ -224,11 +237,6 @@ pub fn fit_pair(
                 band_hz[1]
             ));
         }
-        let curves: Vec<&[Complex64]> = (0..set.responses().len())
-            .flat_map(|i| (0..set.references().len()).map(move |j| (i, j)))
-            .map(|(i, j)| set.curve(i, j))
-            .collect();
-        let quantity = set.quantity();
         let residuals_for = |pair: [Complex64; 2]| -> Option<Vec<f64>> {
             let mut poles = vec![pole_of(pair[0]), pole_of(pair[1])];
             poles.extend(&others);
@@ -241,12 +249,6 @@ pub fn fit_pair(
                 }
             }
             Some(r)
-        };
-        // x = (ln G'/G'₀, ln η/η₀) from the mean of the two modes' own G*.
-        let eta0 = g0.im / g0.re;
-        let g_of = |x: &[f64]| {
-            let storage = g0.re * x[0].exp();
-            Complex64::new(storage, storage * eta0 * x[1].exp())
         };
         // Each pole tracked from its start (cheap); where that loses one or both land on one
         // mode (a nearly double pair), by rank (an eigendecomposition each).
