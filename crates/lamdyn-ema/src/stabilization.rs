@@ -302,7 +302,7 @@ mod tests {
     #[test]
     fn a_runaway_refinement_leaves_its_column() {
         let c = StabilityCriteria::default();
-        // Issue 17's cases: 75.0 Hz refined to 135.7 Hz at zeta 73 %; a pick at 66.5 Hz to
+        // The cases: 75.0 Hz refined to 135.7 Hz at zeta 73 %; a pick at 66.5 Hz to
         // 100.8 Hz at 72 %.
         let col = column([74.95, 75.05], [0.010, 0.012]);
         assert!(!col.holds(135.7, 0.73, &c));

@@ -614,7 +614,7 @@ fn polymax_separates_a_close_pair() {
     }
 }
 
-/// Issue 17.4: noisy receptance FRFs of a free plate (the paper-plate synthetic case at
+/// Noisy receptance FRFs of a free plate (the paper-plate synthetic case at
 /// 24 × 24 MITC4, 9 × 9 × 3 sensors, 0.25–80 Hz; additive noise of 1 % of each channel's
 /// accelerance RMS, then divided by −ω² to receptance, which magnifies it at low lines): the
 /// refinement once took a 75 Hz pole to 135.7 Hz at ζ = 73 %. Every mode must stay in its
@@ -684,7 +684,7 @@ fn refined_poles_stay_in_their_columns_on_noisy_receptance() {
     eprintln!("{} modes; replaced poles: {:?}", r.modes.len(), r.warnings);
 }
 
-/// Issue 17.2: on a long record (9 accelerance FRFs × 50 001 lines at 0.02 Hz, four modes of
+/// On a long record (9 accelerance FRFs × 50 001 lines at 0.02 Hz, four modes of
 /// 0.2–1 % damping, 40 dB noise) the refinement fitted on the poles' neighbourhoods and a
 /// thinned band gives the poles of the refinement on every line (measured: frequencies within
 /// 2.7e-7, damping within 2.6e-5 relative; asserted 1e-6 and 1e-3) and is as accurate.
@@ -761,7 +761,7 @@ fn long_records_refine_on_fewer_lines_to_the_same_poles() {
     }
 }
 
-/// Issue 17.4: a roving-hammer test (one accelerometer, the hammer at every point) gives shapes
+/// A roving-hammer test (one accelerometer, the hammer at every point) gives shapes
 /// over the references, matching the true shapes (MAC), with a note saying so.
 #[test]
 fn roving_hammer_shapes_are_over_the_references() {
@@ -814,7 +814,7 @@ fn roving_hammer_shapes_are_over_the_references() {
     );
 }
 
-/// Issue 17.3: two modes 0.14 % apart with different shapes ((1,2) and (2,1) of a square
+/// Two modes 0.14 % apart with different shapes ((1,2) and (2,1) of a square
 /// plate), seen by 81 outputs from one reference at 40 dB, come out as two modes of the
 /// automatic selection, each within 1e-4 in frequency and 5 % in damping; the isolated modes
 /// keep their accuracy.

@@ -254,11 +254,11 @@ impl ModelSpec {
             fields.push(("mesh", "length_y_m", rect.length_y_m, Quantity::Length));
         }
         for (context, field, value, quantity) in fields {
-            units::check(quantity, value).map_err(|requirement| FemError::InvalidParameter {
+            units::check(quantity, value).map_err(|why| FemError::InvalidParameter {
                 context: context.into(),
                 field: field.into(),
                 value: format!("{value}"),
-                requirement,
+                requirement: why.to_string(),
             })?;
         }
         Ok(())
@@ -283,7 +283,7 @@ fn check_span(mesh: &Mesh, thickness_m: f64) -> Result<(), FemError> {
         value: format!("{span} m"),
         requirement,
     };
-    units::check(Quantity::Length, span).map_err(invalid)?;
+    units::check(Quantity::Length, span).map_err(|why| invalid(why.to_string()))?;
     if span < 5.0 * thickness_m {
         return Err(invalid(format!(
             "must be at least 5 shell thicknesses ({thickness_m} m) for a shell model"

@@ -1,5 +1,5 @@
 //! The core's law fitted to every mode at once, jointly with the inputs known only within a
-//! tolerance (the faces' modulus, the thicknesses, the densities): issue 15.3.
+//! tolerance (the faces' modulus, the thicknesses, the densities).
 //!
 //! Each mode k brings the core's G*_k found by an inverse with the nominal inputs (ln G'_k,
 //! ln η_k), the signed sensitivities e_kj = ∂(ln G'_k, ln η_k)/∂ln θ_j of that result to each
@@ -405,6 +405,12 @@ pub struct CoreLawFit {
 /// The band source of the choice between laws that fit the modes alike
 /// ([`CoreLawFit::with_alternatives`]).
 pub const LAW_BETWEEN_MODES: &str = "the law between the modes";
+
+/// The band source of the part of a point's noise its stated sources do not name.
+pub const NOISE_FLOOR: &str = "noise floor";
+
+/// The band source of the points' scatter about the law beyond their stated noise.
+pub const SCATTER_ABOUT_THE_LAW: &str = "scatter about the law";
 
 /// Alternatives whose Akaike weight is below this are left out of the band
 /// ([`CoreLawFit::with_alternatives`]): their share of its sd is below a thousandth of their
@@ -1001,10 +1007,10 @@ fn row_sources(
                 .collect();
             let floor = stated_share - shares.iter().map(|x| x.1).sum::<f64>();
             if floor > 1e-9 {
-                shares.push(("noise floor".into(), floor));
+                shares.push((NOISE_FLOOR.into(), floor));
             }
             if 1.0 - stated_share > 1e-9 {
-                shares.push(("scatter about the law".into(), 1.0 - stated_share));
+                shares.push((SCATTER_ABOUT_THE_LAW.into(), 1.0 - stated_share));
             }
             rows.push(shares);
         }
@@ -1536,7 +1542,7 @@ mod tests {
         assert!(
             fit.at_modes
                 .iter()
-                .any(|p| p.dominant.iter().any(|d| d == "scatter about the law")),
+                .any(|p| p.dominant.iter().any(|d| d == SCATTER_ABOUT_THE_LAW)),
             "{:?}",
             fit.at_modes
         );

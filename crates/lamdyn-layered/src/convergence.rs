@@ -47,7 +47,7 @@
 //! (`inverse::tests::reduced_bases_match_the_full_model_over_the_range`: Rayleigh quotient
 //! iteration on the sparse complex LU, core loss factor 0.05–1.2, free and supported): the
 //! three-modulus basis within 1.3e-5 in λ over G_ref/4 … 4 G_ref, the finer levels' within
-//! 1.3e-5 up to G_ref, 3.5e-5 at 2 G_ref and 6e-4 at 4 G_ref. With one order, as before, the
+//! 1.3e-5 up to G_ref, 3.5e-5 at 2 G_ref and 6e-4 at 4 G_ref. With one order, the
 //! finer levels were off by 1e-4 to 5e-2 and put the roof's η 0.8 % high. Every level refuses
 //! a mode above 90 % of its basis's highest mode ([`crate::inverse::BASIS_COVER`]).
 

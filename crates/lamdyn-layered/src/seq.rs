@@ -2,7 +2,7 @@
 //!
 //! faer's operators (`&a * &b`, `.eigenvalues()`) use its global parallelism, by default every
 //! rayon thread, and a parallel kernel may split its sums by the thread count: the layered
-//! inverse then changed at 1e-6 in G between 1 and 2 threads (issue 15.6). These helpers fix
+//! inverse then changed at 1e-6 in G between 1 and 2 threads. These helpers fix
 //! the order of every sum, so the results are the same bits on any thread count; the
 //! parallelism lamdyn wants is across independent solves (rayon), not inside one.
 

@@ -343,7 +343,7 @@ const LANCZOS_TOLERANCE: f64 = 1e-9;
 
 /// A sparse LLᵀ factor computed and applied sequentially (`Par::Seq`): faer's default
 /// parallel supernodal kernels split the work by the thread count, and with it the rounding,
-/// which the layered inverse amplifies about thirtyfold into G (issue 15.6).
+/// which the layered inverse amplifies about thirtyfold into G.
 pub struct SeqCholesky {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,

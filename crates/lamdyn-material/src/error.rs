@@ -178,7 +178,8 @@ pub(crate) mod check {
         value: f64,
         quantity: crate::units::Quantity,
     ) -> Result<f64, MaterialError> {
-        crate::units::check(quantity, value).map_err(|why| invalid(context, field, value, &why))
+        crate::units::check(quantity, value)
+            .map_err(|why| invalid(context, field, value, &why.to_string()))
     }
 
     /// A Poisson ratio of an isotropic solid: in (-1, 0.5).

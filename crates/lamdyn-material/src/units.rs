@@ -17,7 +17,7 @@
 //! ```
 //! use lamdyn_material::units::{Quantity, check};
 //! assert!(check(Quantity::Thickness, 1.715e-3).is_ok());
-//! let hint = check(Quantity::Thickness, 1.715).unwrap_err();
+//! let hint = check(Quantity::Thickness, 1.715).unwrap_err().to_string();
 //! assert!(hint.contains("mm"));
 //! ```
 
@@ -64,26 +64,58 @@ impl Quantity {
     }
 }
 
+/// Why a value is not a plausible quantity in SI units ([`check`]); its text is the
+/// requirement and a hint at the unit probably meant, for the caller to put in its own error
+/// with the file and field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OutOfRange {
+    /// NaN or infinite.
+    NotFinite,
+    /// Zero or negative.
+    NotPositive,
+    /// Outside the quantity's plausible range [lo, hi].
+    Outside {
+        /// Lower end.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+        /// The unit probably meant.
+        hint: &'static str,
+    },
+}
+
+impl std::fmt::Display for OutOfRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotFinite => f.write_str("must be a finite number"),
+            Self::NotPositive => f.write_str("must be positive"),
+            Self::Outside { lo, hi, hint } => write!(f, "is outside [{lo:e}, {hi:e}]: {hint}"),
+        }
+    }
+}
+
+impl std::error::Error for OutOfRange {}
+
 /// Checks that `value` is finite and inside `quantity`'s range.
 ///
 /// # Errors
-/// The requirement and a hint at the unit probably meant, for the caller to put in its own
-/// error with the file and field.
-pub fn check(quantity: Quantity, value: f64) -> Result<f64, String> {
+/// [`OutOfRange`]: the requirement and a hint at the unit probably meant.
+pub fn check(quantity: Quantity, value: f64) -> Result<f64, OutOfRange> {
     let (lo, hi) = quantity.range();
     if !value.is_finite() {
-        return Err("must be a finite number".into());
+        return Err(OutOfRange::NotFinite);
     }
     if value <= 0.0 {
-        return Err("must be positive".into());
+        return Err(OutOfRange::NotPositive);
     }
     if value >= lo && value <= hi {
         Ok(value)
     } else {
-        Err(format!(
-            "is outside [{lo:e}, {hi:e}]: {}",
-            quantity.hint(value)
-        ))
+        Err(OutOfRange::Outside {
+            lo,
+            hi,
+            hint: quantity.hint(value),
+        })
     }
 }
 
@@ -101,7 +133,7 @@ mod tests {
             (Quantity::Modulus, 0.35, "MPa"),
         ];
         for (q, v, hint) in cases {
-            let e = check(q, v).unwrap_err();
+            let e = check(q, v).unwrap_err().to_string();
             assert!(e.contains(hint), "{q:?} {v}: {e}");
         }
     }
@@ -122,6 +154,10 @@ mod tests {
         ] {
             assert_eq!(check(q, v), Ok(v), "{q:?}");
         }
-        assert!(check(Quantity::Density, f64::NAN).is_err());
+        assert_eq!(
+            check(Quantity::Density, f64::NAN),
+            Err(OutOfRange::NotFinite)
+        );
+        assert_eq!(check(Quantity::Density, -1.0), Err(OutOfRange::NotPositive));
     }
 }

@@ -1,4 +1,4 @@
-//! Coverage of the layered route's 95 % bands through the whole chain (issue 15.4): the test
+//! Coverage of the layered route's 95 % bands through the whole chain: the test
 //! bench's small laminate (0.6 × 0.5 m, glass 3 / PVB-like 0.76 / glass 3 mm, free, 5 × 5
 //! sensors, FRFs to 240 Hz with noise at `snr_db`, a new noise seed each time, truth on a
 //! 36 × 36 graded mesh), its faces' modulus, thicknesses and densities drawn from the job's
@@ -7,7 +7,7 @@
 //! (mode, seed) pair it counts whether the truth lies inside the per-mode band and inside the
 //! law's band, and prints the median half-widths.
 //!
-//! Unlike the coverage tests of `lamdyn_pipeline::layered` (reduced model, no EMA, no ladder),
+//! Unlike the layered route's coverage tests (reduced model, no EMA, no ladder),
 //! every stage runs: simulation, EMA, shell fit, ladder, joint law.
 //!
 //! `cargo run --release -p lamdyn-pipeline --example chain_coverage -- [seeds = 20] [snr_db = 40]`
@@ -24,7 +24,7 @@
 //! damping drawn from the job's priors (20 % and 30 %, all blocks by one factor) and told to
 //! the job at nominal. `CHAIN_COVERAGE_FIRST_SEED` starts the seeds there (default 1).
 //! `CHAIN_COVERAGE_ROOF` runs the demo roof in place of the small
-//! laminate (issue 15's "same roof": 0.92 × 0.86 m, curved, glass 1.715 / PVB 0.42 / glass
+//! laminate (the "same roof": 0.92 × 0.86 m, curved, glass 1.715 / PVB 0.42 / glass
 //! 1.715 mm, free, five hammer hits with the demo's noise, a new noise seed each time, truth on
 //! the demo's 36 × 36 graded mesh); `snr_db` does not apply to it.
 
@@ -106,12 +106,7 @@ impl Drawn {
 
 /// With `CHAIN_COVERAGE_VERBOSE` set: a mode's band sources, and what its point's first order
 /// leaves of the error `err` (ln G', ln η against the truth) at the true inputs.
-fn explain(
-    band: &lamdyn_pipeline::layered::LayeredBand,
-    freq_hz: f64,
-    err: [f64; 2],
-    drawn: &Drawn,
-) {
+fn explain(band: &lamdyn_pipeline::band::LayeredBand, freq_hz: f64, err: [f64; 2], drawn: &Drawn) {
     let s: Vec<String> = band
         .sources
         .iter()
@@ -121,12 +116,12 @@ fn explain(
     let shift: [f64; 2] = [0, 1].map(|c| {
         band.inputs
             .iter()
-            .map(|(n, _, sens)| sens[c] * drawn.delta(n))
+            .map(|i| i.effect[c] * drawn.delta(i.input.name()))
             .sum::<f64>()
     });
     // The second order as the joint fit models it: one curvature along the combined shift.
-    let effects: Vec<[f64; 2]> = band.inputs.iter().map(|i| i.2).collect();
-    let sds: Vec<f64> = band.inputs.iter().map(|i| i.1).collect();
+    let effects: Vec<[f64; 2]> = band.inputs.iter().map(|i| i.effect).collect();
+    let sds: Vec<f64> = band.inputs.iter().map(|i| i.rel_sd).collect();
     let kappa = lamdyn_fit::joint::shared_curvature(&effects, &band.second_order, &sds);
     let second: [f64; 2] = [0, 1].map(|c| {
         let u: f64 = band
@@ -134,7 +129,7 @@ fn explain(
             .iter()
             .zip(&band.second_order)
             .filter(|(_, s)| **s != [0.0, 0.0])
-            .map(|((n, _, e), _)| e[c] * drawn.delta(n))
+            .map(|(i, _)| i.effect[c] * drawn.delta(i.input.name()))
             .sum();
         0.5 * kappa[c] * u * u
     });

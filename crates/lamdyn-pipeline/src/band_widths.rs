@@ -1,4 +1,4 @@
-//! How wide the layered route's 95 % bands are, and what would narrow them (issue 15.4).
+//! How wide the layered route's 95 % bands are, and what would narrow them.
 //!
 //! The report and `lamdyn run` state, after the law:
 //! - the median half-width of the law's band over the measured band (ln G' and ln η, from the
@@ -13,7 +13,9 @@
 //! A half-width h is that of ln x: the band is [x e^−h, x e^h], and h ≈ the relative half-width
 //! when small.
 
-use crate::stages::CorePoint;
+use crate::band::LayeredBand;
+pub use crate::band::what_would_narrow;
+use crate::chain::CorePoint;
 use lamdyn_fit::joint::CoreLawFit;
 use serde::Serialize;
 
@@ -70,65 +72,21 @@ pub struct BandWidths {
     pub undetermined: Vec<UndeterminedMode>,
 }
 
-/// What would narrow a band whose main source is `source` (the names of
-/// `lamdyn_pipeline::layered::LayeredBand::sources` and of the joint fit's rows).
-pub fn what_would_narrow(source: &str) -> String {
-    match source {
-        "face modulus" => "a measured face modulus (a coupon or a face's own resonance)".into(),
-        "face thickness" => "measured face thicknesses (a micrometer at several points)".into(),
-        "core thickness" => "a measured core thickness (the stack's total minus the faces')".into(),
-        "face density" | "core density" => "weighed layers (measured densities)".into(),
-        "support stiffness" => {
-            "softer supports (their resonances well below the first mode), or their stiffness measured"
-                .into()
-        }
-        "support damping" => {
-            "softer supports with less damping, or their damping measured".into()
-        }
-        "inputs beyond first order"
-        | "inputs beyond second order"
-        | "inputs beyond second order, shared (G')"
-        | "inputs beyond second order, shared (eta)" => {
-            "narrower priors on the inputs (a measured face modulus and thicknesses): the core then depends on them nearly linearly"
-                .into()
-        }
-        "EMA pole" | "noise floor" => {
-            "a better-identified pole: more averages, more hits, or a reference that excites the mode"
-                .into()
-        }
-        crate::layered::HITS_JACKKNIFE => {
-            "more hits, or cleaner ones (the identification moves when one hit is left out: check each hit for a double hit, an overload or a weak force)"
-                .into()
-        }
-        "discretization" => "a smaller inverse.tolerance (finer meshes in the ladder)".into(),
-        crate::layered::THROUGH_THICKNESS => {
-            "no setting yet: the ladder refines in plane and keeps one element per layer through the thickness, which a core thick against its faces needs more of (docs/run.md, 'Through the thickness')"
-                .into()
-        }
-        lamdyn_fit::joint::LAW_BETWEEN_MODES => {
-            "more modes between those identified (another hammer or response point that excites them), or a narrower measured band"
-                .into()
-        }
-        "scatter about the law" => {
-            "more modes, or a law that follows the modes (generalized Maxwell or a per-mode table)"
-                .into()
-        }
-        other => format!("a narrower prior on the {other}"),
-    }
-}
-
 /// The band widths of a run's per-mode layered points `modal` and its law `law` (module
 /// docs); `None` when neither has a band.
 pub fn band_widths(modal: &[CorePoint], law: Option<&CoreLawFit>) -> Option<BandWidths> {
-    let bands: Vec<(f64, &crate::layered::LayeredBand)> = modal
+    let bands: Vec<(f64, &LayeredBand)> = modal
         .iter()
         .filter_map(|p| Some((p.freq_hz, p.layered_band.as_ref()?.as_ref().ok()?)))
         .collect();
     let undetermined: Vec<UndeterminedMode> = bands
         .iter()
-        .filter_map(|(f, b)| undetermined(*f, b.half_width, [b.dominant(0), b.dominant(1)]))
+        .filter_map(|(f, b)| {
+            let dominant = [b.dominant_label(0), b.dominant_label(1)];
+            undetermined(*f, b.half_width, dominant)
+        })
         .collect();
-    let determined: Vec<(f64, &crate::layered::LayeredBand)> = bands
+    let determined: Vec<(f64, &LayeredBand)> = bands
         .iter()
         .filter(|(f, _)| !undetermined.iter().any(|u| u.freq_hz == *f))
         .copied()
@@ -215,13 +173,13 @@ fn widest_of_law(law: &CoreLawFit) -> Vec<WidestBand> {
 }
 
 /// Per part, the widest of the per-mode bands that determine the core.
-fn widest_of_modes(determined: &[(f64, &crate::layered::LayeredBand)]) -> Vec<WidestBand> {
+fn widest_of_modes(determined: &[(f64, &LayeredBand)]) -> Vec<WidestBand> {
     (0..2)
         .filter_map(|c| {
             let (f, b) = determined
                 .iter()
                 .max_by(|a, b| a.1.half_width[c].total_cmp(&b.1.half_width[c]))?;
-            let source = b.dominant(c).to_string();
+            let source = b.dominant_label(c).to_string();
             Some(WidestBand {
                 part: PARTS[c],
                 freq_hz: *f,
@@ -314,36 +272,18 @@ fn capitalise(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lamdyn_layered::sensitivity::Input;
 
     /// Every source a band can name gets advice of its own, not the fallback: the inputs, the
     /// per-mode sources and the joint fit's rows.
     #[test]
     fn every_band_source_has_its_own_advice() {
-        let mut names: Vec<&str> = Input::ALL.iter().map(|i| i.name()).collect();
-        names.extend([
-            "EMA pole",
-            "inputs beyond first order",
-            "inputs beyond second order",
-            "discretization",
-            "noise floor",
-            "scatter about the law",
-            lamdyn_fit::joint::LAW_BETWEEN_MODES,
-            crate::layered::HITS_JACKKNIFE,
-            crate::layered::THROUGH_THICKNESS,
-        ]);
-        names.extend(crate::layered::SHARED_REMAINDER);
-        for n in names {
-            let advice = what_would_narrow(n);
+        for s in crate::band::BandSource::all() {
+            let advice = what_would_narrow(s.label());
             assert!(
                 !advice.starts_with("a narrower prior on the"),
-                "{n}: {advice}"
+                "{s}: {advice}"
             );
         }
-        assert_eq!(
-            what_would_narrow("temperature"),
-            "a narrower prior on the temperature"
-        );
     }
 
     /// A band wider than the factor in either part, or NaN, is not determined by its mode,

@@ -4,7 +4,7 @@
 //!
 //! A fit job file has the layout of a `lamdyn run` job (`[measurement]`, `[model]` with `file`
 //! or `spec`, `[fit]` with `[fit.misfit]`), so one file serves both; the run job's other
-//! sections are accepted and not used. The layout before issue 19 (`model` as a path,
+//! sections are accepted and not used. The older layout (`model` as a path,
 //! top-level `modes`, `residual` and `[misfit]`) is still read, with a deprecation note.
 
 use crate::error::{Context, Result};
@@ -114,7 +114,7 @@ struct Resolved {
 impl FitJob {
     /// Reads the old spellings into the current layout, noting each; both spellings at once
     /// is an error.
-    fn resolve(&self) -> std::result::Result<Resolved, String> {
+    fn resolve(&self) -> Result<Resolved> {
         let mut notes = Vec::new();
         let mut model = match &self.model {
             toml::Value::String(p) => {
@@ -128,11 +128,11 @@ impl FitJob {
                     residual: true,
                 }
             }
-            v => ModelSource::deserialize(v.clone()).map_err(|e| format!("model: {e}"))?,
+            v => ModelSource::deserialize(v.clone()).map_err(|e| err!("model: {e}"))?,
         };
         if let Some(n) = self.modes {
             if model.modes.is_some() {
-                return Err("modes: give [model] modes only".into());
+                return Err(err!("modes: give [model] modes only"));
             }
             notes.push("deprecated: top-level modes; write it in [model]".into());
             model.modes = Some(n);
@@ -142,7 +142,7 @@ impl FitJob {
             model.residual = r;
         }
         let misfit = match (&self.misfit, &self.fit.misfit) {
-            (Some(_), Some(_)) => return Err("misfit: give [fit.misfit] only".into()),
+            (Some(_), Some(_)) => return Err(err!("misfit: give [fit.misfit] only")),
             (Some(m), None) => {
                 notes.push(
                     "deprecated: [misfit]; write [fit.misfit] (as in a lamdyn run job)".into(),
@@ -343,7 +343,7 @@ pub fn load_fit_job(path: &Path, progress: &dyn Reporter) -> Result<FitProblem> 
         model: source,
         misfit,
         notes,
-    } = job.resolve().map_err(in_job)?;
+    } = job.resolve().map_err(|e| in_job(e.to_string()))?;
     let prominence = job.fit.prominence;
     if !(prominence.is_finite() && prominence > 1.0) {
         return Err(in_job(format!(

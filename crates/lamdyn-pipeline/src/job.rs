@@ -5,8 +5,8 @@
 //! in GPa) or outside their physical range, naming the field.
 
 use crate::err;
-use crate::error::Result;
-use crate::measurement::ExcitationKind;
+use crate::error::{Context, Result};
+use crate::excitation::ExcitationKind;
 use lamdyn_fem::model::ModelSpec;
 use lamdyn_fit::fit::{Covariance, LawKind};
 use lamdyn_fit::misfit::{MisfitKind, MisfitSpec};
@@ -14,6 +14,17 @@ use lamdyn_layered::convergence::LadderSettings;
 use lamdyn_material::laminate::StackSpec;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
+
+/// The job's FE model as read ([`Job::model_file`]).
+#[derive(Debug, Clone)]
+pub struct ModelFile {
+    /// The model.
+    pub spec: ModelSpec,
+    /// The folder its paths are relative to (a Gmsh file's).
+    pub dir: PathBuf,
+    /// Where it came from: `model.file`'s path, or `[model.spec]`.
+    pub label: String,
+}
 
 /// A `lamdyn run` job.
 #[derive(Debug, Clone, Deserialize)]
@@ -455,6 +466,35 @@ impl Default for UncertaintyOptions {
 }
 
 impl Job {
+    /// The job's model: its spec, the folder its paths are relative to (a Gmsh file's), and
+    /// a label naming where it came from (`model.file`'s path or `[model.spec]`); `base` is
+    /// the job file's folder.
+    ///
+    /// # Errors
+    /// `model.file` cannot be read, or the job gives neither a file nor a spec.
+    pub fn model_file(&self, base: &Path) -> Result<ModelFile> {
+        Ok(match (&self.model.file, &self.model.spec) {
+            (Some(f), None) => {
+                let p = relative(base, f);
+                let spec: ModelSpec = crate::io::read_toml(&p).context("model.file")?;
+                let dir = p
+                    .parent()
+                    .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+                ModelFile {
+                    spec,
+                    dir,
+                    label: format!("'{}'", p.display()),
+                }
+            }
+            (None, Some(s)) => ModelFile {
+                spec: s.clone(),
+                dir: base.to_path_buf(),
+                label: "[model.spec]".to_string(),
+            },
+            _ => return Err(err!("model: give file or spec")),
+        })
+    }
+
     /// Reads and checks a job file: values (ranges, units) and that every file it names exists.
     ///
     /// # Errors
@@ -537,6 +577,17 @@ impl Job {
                 ));
             }
         }
+        self.check_measurement()?;
+        self.check_model()?;
+        self.check_stack()?;
+        self.check_ema_and_fit()?;
+        self.check_inverse()?;
+        self.check_uncertainty()
+    }
+
+    /// `[measurement]`: tolerances, hammer windows, the excitation's settings, and one source
+    /// of data.
+    fn check_measurement(&self) -> Result<()> {
         let m = &self.measurement;
         positive("measurement.tolerance_m", m.tolerance_m)?;
         if m.tolerance_m > 0.1 {
@@ -549,7 +600,7 @@ impl Job {
         fraction("measurement.min_coherence", m.min_coherence)?;
         non_negative("measurement.pretrigger_s", m.pretrigger_s)?;
         positive("measurement.force_window_s", m.force_window_s)?;
-        crate::measurement::Excitation::new(m.excitation, m.window, m.segment_s, m.overlap, None)
+        crate::excitation::Excitation::new(m.excitation, m.window, m.segment_s, m.overlap, None)
             .map_err(|e| err!("measurement.excitation: {e}"))?;
         match (&m.channels, &m.frf, m.time.is_empty(), &m.uff) {
             (Some(_), Some(_), true, None) | (Some(_), None, false, None) => {}
@@ -560,6 +611,11 @@ impl Job {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// `[model]`: a file or a spec, and enough modes.
+    fn check_model(&self) -> Result<()> {
         match (&self.model.file, &self.model.spec) {
             (Some(_), None) | (None, Some(_)) => {}
             _ => {
@@ -576,7 +632,11 @@ impl Job {
                 "model.modes: keep at least the 6 rigid-body modes and one elastic mode"
             ));
         }
-        self.check_stack()?;
+        Ok(())
+    }
+
+    /// `[ema]` and `[fit]`: bands, the model order, the peaks' prominence.
+    fn check_ema_and_fit(&self) -> Result<()> {
         if let Some([lo, hi]) = self.ema.band_hz {
             band("ema.band_hz", lo, hi)?;
         }
@@ -600,6 +660,11 @@ impl Job {
                 return Err(err!("inverse.freq_hz: give positive frequencies in Hz"));
             }
         }
+        Ok(())
+    }
+
+    /// `[inverse]`: frequencies, the layered model's mesh ladder and its supports.
+    fn check_inverse(&self) -> Result<()> {
         let inv = &self.inverse;
         if inv.layered_elements.iter().any(|n| !(2..=60).contains(n)) {
             return Err(err!(
@@ -646,6 +711,11 @@ impl Job {
         for (i, sup) in inv.supports.iter().enumerate() {
             sup.to_point().check(i).map_err(|e| err!("inverse.{e}"))?;
         }
+        Ok(())
+    }
+
+    /// `[uncertainty]`: the priors' standard deviations and the Monte Carlo's samples.
+    fn check_uncertainty(&self) -> Result<()> {
         let u = &self.uncertainty;
         for (name, v, below) in [
             ("face_modulus_rel_sd", u.face_modulus_rel_sd, 0.5),

@@ -10,7 +10,7 @@
 //! | model | the FE model's real modes projected on the channels (paper eqs. 3–4) | lamdyn-fem, lamdyn-fit |
 //! | fit | the laminate's E*(ω) so that synthesized FRFs match (eqs. 2–10) | lamdyn-fit |
 //! | inverse | G*(f) of the core by the paper's inverse (eqs. 33–45) and the exact one | lamdyn-material |
-//! | layered inverse | G* at each EMA pole through a layered solid model ([`layered`]); an overlapping pair fitted to the FRFs around it ([`pair_fit`]) | lamdyn-layered |
+//! | layered inverse | G* at each EMA pole through a layered solid model (`layered`); an overlapping pair fitted to the FRFs around it | lamdyn-layered |
 //! | core law | the core's law fitted to all layered modes with the inputs shared; its band widths and what would narrow them ([`band_widths`]) | lamdyn-fit |
 //! | uncertainty | Monte Carlo over the stack and the fit's covariance ([`uncertainty`]) | here |
 //! | report | HTML with figures, CSV/JSON tables ([`report`]) into a results folder ([`output`]) | lamdyn-report |
@@ -32,7 +32,9 @@
 //! ```
 //!
 //! - [`Job`] ([`job`]): the job file (TOML, SI units), read and checked before any work.
-//! - [`run_job`] ([`stages`]): the chain; [`ChainResult`] holds every stage's result.
+//! - [`run_job`]: the chain; [`ChainResult`] ([`result`]) holds every stage's
+//!   result, [`CorePoint`] ([`chain`]) the core found at one frequency by every route, with its
+//!   band ([`band`]).
 //! - [`report::build`]: the report's files; [`OutputDir`] writes them without destroying
 //!   anything lamdyn did not write.
 //! - [`demo`]: the virtual roof's simulated test and the chain on it.
@@ -42,29 +44,45 @@
 //!
 //! Errors are [`PipelineError`]s: each layer says what failed, the causes are its source chain
 //! ([`error::chain_text`] joins them into one line).
+//!
+//! `docs/architecture.md` maps the crates and this crate's modules, and says how to add a
+//! stage or a band source.
 
+#![deny(missing_docs)]
+
+pub mod band;
 pub mod band_widths;
 pub mod cache;
+pub mod chain;
 pub mod demo;
 pub mod error;
+pub mod excitation;
 pub mod fit_job;
 pub mod io;
 pub mod job;
-pub mod layered;
+mod layered;
 pub mod measurement;
 pub mod output;
-pub mod pair_fit;
 pub mod report;
-pub mod stages;
+pub mod result;
+mod stages;
+mod stats;
+mod text;
 pub mod uncertainty;
 
 pub use error::{PipelineError, Result};
+
+/// docs/architecture.md, whose code blocks are compiled and run as this crate's doc tests so
+/// that the map stays true to the code.
+#[cfg(doctest)]
+#[doc = include_str!("../../../docs/architecture.md")]
+pub struct ArchitectureDoc;
+pub use chain::{CorePoint, NoLayered, StageTime, Truth};
 pub use job::Job;
 pub use lamdyn_fem::eigen::{Progress, Silent};
 pub use output::OutputDir;
-pub use stages::{
-    ChainResult, CorePoint, RunOptions, StageTime, Truth, run_job, same_bits_on_any_thread_count,
-};
+pub use result::ChainResult;
+pub use stages::{RunOptions, check_job_path, run_job, same_bits_on_any_thread_count};
 
 /// Progress that may be reported from worker threads (the Monte Carlo runs on rayon).
 pub trait Reporter: Progress + Sync {}

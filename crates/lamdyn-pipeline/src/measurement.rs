@@ -4,6 +4,7 @@
 //! ([`read_measurement`]) with its coherence and the estimator's warnings.
 
 use crate::error::{Context, Result};
+pub use crate::excitation::{ContinuousOptions, Excitation, ExcitationKind};
 use crate::job::{Job, Measurement, relative};
 use crate::{bail, err};
 use lamdyn_ema::spectra::{Hit, Spectra, SpectraSettings, estimate};
@@ -87,106 +88,24 @@ fn read_time_file(
 
 /// How time data become FRFs: the estimator and the record settings (rate from the files).
 pub struct TimeOptions {
+    /// The FRF estimator.
     pub estimator: Estimator,
+    /// Hammer hits: the trigger level, a fraction of each hit's peak force.
     pub trigger: f64,
+    /// Hammer hits: kept before the trigger, s.
     pub pretrigger_s: f64,
+    /// Hammer hits: the force window's length, s.
     pub force_window_s: f64,
+    /// Hammer hits: each record's length after its start, s (`None`: the longest record every
+    /// hit holds).
     pub record_s: Option<f64>,
+    /// Hammer hits: the exponential window's time constant, s (`None`: no window).
     pub exp_tau_s: Option<f64>,
     /// Hammer hits (the trigger, force and exponential windows above), or continuous
     /// excitation by Welch averaging ([`lamdyn_ema::welch`]; the hammer settings unused).
     pub excitation: Excitation,
     /// What the responses are, for files without a `# quantity` line.
     pub quantity: Option<lamdyn_frf::Quantity>,
-}
-
-/// How the structure was excited, by name (`--excitation`, `measurement.excitation`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ExcitationKind {
-    /// Hammer hits: trigger, force window, exponential window.
-    #[default]
-    Impact,
-    /// Random noise (Hann window, overlapping segments by default).
-    Random,
-    /// Burst random: each burst dies out inside its segment.
-    Burst,
-    /// Periodic chirp or multisine: whole periods in a segment.
-    Periodic,
-    /// Swept sine starting and ending inside the record.
-    Sweep,
-}
-
-impl Excitation {
-    /// The estimator settings of an excitation kind: Welch with `window` (default Hann for
-    /// random noise, rectangular for the others), `segment_s` and `overlap` (default 0.5 with a
-    /// tapered window, 0 with the rectangular one) over every record; impact takes none of
-    /// them.
-    ///
-    /// # Errors
-    /// Welch settings given for impact, an overlap outside [0, 1), a non-positive segment.
-    pub fn new(
-        kind: ExcitationKind,
-        window: Option<lamdyn_ema::welch::Window>,
-        segment_s: Option<f64>,
-        overlap: Option<f64>,
-        band_hz: Option<[f64; 2]>,
-    ) -> Result<Self> {
-        use lamdyn_ema::welch::Window;
-        if kind == ExcitationKind::Impact {
-            if window.is_some() || segment_s.is_some() || overlap.is_some() {
-                bail!(
-                    "window, segment and overlap are for continuous excitation (random, burst, periodic, sweep), not impact"
-                );
-            }
-            return Ok(Self::Impact);
-        }
-        let window = window.unwrap_or(if kind == ExcitationKind::Random {
-            Window::Hann
-        } else {
-            Window::Rectangular
-        });
-        let overlap = overlap.unwrap_or(if window == Window::Rectangular {
-            0.0
-        } else {
-            0.5
-        });
-        if !(0.0..1.0).contains(&overlap) {
-            bail!("overlap {overlap} must be a fraction of a segment in [0, 1)");
-        }
-        if let Some(s) = segment_s.filter(|s| !(s.is_finite() && *s > 0.0)) {
-            bail!("segment {s} s must be a positive time");
-        }
-        Ok(Self::Continuous(ContinuousOptions {
-            window,
-            segment_s,
-            overlap,
-            band_hz,
-        }))
-    }
-}
-
-/// How the structure was excited.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Excitation {
-    /// Hammer hits, one per file.
-    Impact,
-    /// Random, burst random, periodic chirp or swept sine: each file a record, Welch-averaged.
-    Continuous(ContinuousOptions),
-}
-
-/// Welch settings in seconds.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContinuousOptions {
-    /// The window.
-    pub window: lamdyn_ema::welch::Window,
-    /// Segment length, s (None: each record whole with the rectangular window; else the power
-    /// of two of samples nearest 1/8 of the shortest record).
-    pub segment_s: Option<f64>,
-    /// Overlap of consecutive segments, fraction of a segment in [0, 1).
-    pub overlap: f64,
-    /// Band where the force must carry energy, Hz.
-    pub band_hz: Option<[f64; 2]>,
 }
 
 /// FRFs (the chosen estimator) from hit files and the channels table, with the spectra
@@ -367,8 +286,7 @@ pub fn read_frfs(
 ) -> Result<(FrfSet, String)> {
     match (uff, channels, frf) {
         (Some(u), _, _) => {
-            let file = lamdyn_uff::read_path(u, Default::default())
-                .map_err(crate::PipelineError::Invalid)?;
+            let file = lamdyn_uff::read_path(u, Default::default()).map_err(|e| err!("{e}"))?;
             let set =
                 lamdyn_uff::frf::to_frf_set(&file).map_err(|e| err!("'{}': {e}", u.display()))?;
             Ok((set, format!("UFF '{}'", u.display())))
@@ -453,75 +371,10 @@ pub fn read_measurement_section(
     path: &Path,
 ) -> Result<Measured> {
     let mut out = match (&m.channels, &m.frf, &m.uff) {
-        (Some(c), Some(f), None) => {
-            let (c, f) = (relative(base, c), relative(base, f));
-            let (responses, references) =
-                lamdyn_frf::csv::parse_channels(&c.display().to_string(), &read_text(&c)?)
-                    .context("measurement.channels")?;
-            let set = lamdyn_frf::csv::parse_frf(
-                &f.display().to_string(),
-                &read_text(&f)?,
-                responses,
-                references,
-            )
-            .with_context(|| {
-                format!(
-                    "measurement.frf ('{}', read against the channels of '{}')",
-                    f.display(),
-                    c.display()
-                )
-            })?;
-            Measured {
-                set,
-                source: format!("FRFs '{}', channels '{}'", f.display(), c.display()),
-                min_coherence: None,
-                warnings: vec![],
-                records: None,
-            }
-        }
+        (Some(c), Some(f), None) => csv_frfs(&relative(base, c), &relative(base, f))?,
         (Some(c), None, None) => {
-            let c = relative(base, c);
             let files: Vec<PathBuf> = m.time.iter().map(|t| relative(base, t)).collect();
-            let options = time_options(m, band_hz)?;
-            let context = || {
-                format!(
-                    "measurement.time (read against the channels of '{}')",
-                    c.display()
-                )
-            };
-            let records = read_records(&c, &files, &options).with_context(context)?;
-            let (set, spectra) = records
-                .frfs(&records.hits, &files, &options)
-                .with_context(context)?;
-            let hits = records.hits.len();
-            let jackknife = hits >= JACKKNIFE_HITS && m.excitation == ExcitationKind::Impact;
-            let band = band_hz.unwrap_or([0.0, f64::INFINITY]);
-            let min_coherence = spectra
-                .channels
-                .iter()
-                .map(|ch| {
-                    spectra
-                        .freqs_hz
-                        .iter()
-                        .zip(&ch.coherence)
-                        .filter(|(f, _)| **f >= band[0] && **f <= band[1])
-                        .map(|(_, g)| *g)
-                        .fold(1.0, f64::min)
-                })
-                .collect();
-            Measured {
-                set,
-                source: format!(
-                    "H1 from {hits} hammer hits ('{}'...), channels '{}'",
-                    files
-                        .first()
-                        .map_or(String::new(), |f| f.display().to_string()),
-                    c.display()
-                ),
-                min_coherence: Some(min_coherence),
-                warnings: spectra.warnings.clone(),
-                records: jackknife.then_some(records),
-            }
+            time_records(m, &relative(base, c), &files, band_hz)?
         }
         (None, None, Some(u)) => {
             let (set, source) =
@@ -559,4 +412,81 @@ pub fn read_measurement_section(
         out.set.quantity().unit()
     );
     Ok(out)
+}
+
+/// FRFs from the CSV files `f` with their channels `c`.
+fn csv_frfs(c: &Path, f: &Path) -> Result<Measured> {
+    let (responses, references) =
+        lamdyn_frf::csv::parse_channels(&c.display().to_string(), &read_text(c)?)
+            .context("measurement.channels")?;
+    let set = lamdyn_frf::csv::parse_frf(
+        &f.display().to_string(),
+        &read_text(f)?,
+        responses,
+        references,
+    )
+    .with_context(|| {
+        format!(
+            "measurement.frf ('{}', read against the channels of '{}')",
+            f.display(),
+            c.display()
+        )
+    })?;
+    Ok(Measured {
+        set,
+        source: format!("FRFs '{}', channels '{}'", f.display(), c.display()),
+        min_coherence: None,
+        warnings: vec![],
+        records: None,
+    })
+}
+
+/// FRFs estimated from the time files `files` with their channels `c`: their coherence's
+/// minimum per channel over `band_hz`, and the hits kept for the jackknife.
+fn time_records(
+    m: &Measurement,
+    c: &Path,
+    files: &[PathBuf],
+    band_hz: Option<[f64; 2]>,
+) -> Result<Measured> {
+    let options = time_options(m, band_hz)?;
+    let context = || {
+        format!(
+            "measurement.time (read against the channels of '{}')",
+            c.display()
+        )
+    };
+    let records = read_records(c, files, &options).with_context(context)?;
+    let (set, spectra) = records
+        .frfs(&records.hits, files, &options)
+        .with_context(context)?;
+    let hits = records.hits.len();
+    let jackknife = hits >= JACKKNIFE_HITS && m.excitation == ExcitationKind::Impact;
+    let band = band_hz.unwrap_or([0.0, f64::INFINITY]);
+    let min_coherence = spectra
+        .channels
+        .iter()
+        .map(|ch| {
+            spectra
+                .freqs_hz
+                .iter()
+                .zip(&ch.coherence)
+                .filter(|(f, _)| **f >= band[0] && **f <= band[1])
+                .map(|(_, g)| *g)
+                .fold(1.0, f64::min)
+        })
+        .collect();
+    Ok(Measured {
+        set,
+        source: format!(
+            "H1 from {hits} hammer hits ('{}'...), channels '{}'",
+            files
+                .first()
+                .map_or(String::new(), |f| f.display().to_string()),
+            c.display()
+        ),
+        min_coherence: Some(min_coherence),
+        warnings: spectra.warnings.clone(),
+        records: jackknife.then_some(records),
+    })
 }

@@ -1,4 +1,4 @@
-//! Writing results without destroying anything lamdyn did not write (issue 19).
+//! Writing results without destroying anything lamdyn did not write.
 //!
 //! **Folders** ([`OutputDir`]). A results folder holds a manifest, `.lamdyn-manifest`, listing
 //! the files lamdyn wrote there last time. A new run

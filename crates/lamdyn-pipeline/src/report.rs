@@ -567,14 +567,14 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
 }
 
 /// The layered inverse's columns of one modal point: its 95 % band (inputs, pole scatter and
-/// discretization, [`crate::layered::LayeredBand`]; the discretization residual alone when the
+/// discretization, [`crate::band::LayeredBand`]; the discretization residual alone when the
 /// band could not be made), the main sources, the finest mesh's errors, the residual, and the
 /// coarsest mesh's uncorrected G*.
 struct LayeredColumns {
     storage: Option<Band>,
     loss: Option<Band>,
     discretization_half_width: Option<[f64; 2]>,
-    /// 1.96 times the band's source [`crate::layered::THROUGH_THICKNESS`].
+    /// 1.96 times the band's source [`BandSource::ThroughThickness`](crate::band::BandSource::ThroughThickness).
     through_thickness_half_width: Option<[f64; 2]>,
     dominant: Option<String>,
     freq_error: Option<f64>,
@@ -605,10 +605,10 @@ impl LayeredColumns {
                 let s = b
                     .sources
                     .iter()
-                    .find(|s| s.0 == crate::layered::THROUGH_THICKNESS)?;
+                    .find(|s| s.0 == crate::band::BandSource::ThroughThickness)?;
                 Some(s.1.map(|v| 1.96 * v))
             }),
-            dominant: full.map(|b| format!("{}; {}", b.dominant(0), b.dominant(1))),
+            dominant: full.map(|b| format!("{}; {}", b.dominant_label(0), b.dominant_label(1))),
             freq_error: c.map(|c| c.freq_error),
             loss_error: c.map(|c| c.loss_error),
             residual: c.map(|c| c.residual_freq_error),
@@ -708,7 +708,12 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
     let inputs: Vec<String> = law
         .inputs()
         .iter()
-        .filter(|p| !crate::layered::SHARED_REMAINDER.contains(&p.name.as_str()))
+        .filter(|p| {
+            !matches!(
+                crate::band::BandSource::from_label(&p.name),
+                Some(crate::band::BandSource::SharedRemainder { .. })
+            )
+        })
         .map(|p| {
             format!(
                 "{} {:+.2} % [{:+.2}, {:+.2}]",
@@ -1062,7 +1067,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         "model": r.model_line,
         "fit": r.fit,
         "paper_route_error": r.paper_route_error,
-        "core_law": r.core_law.as_ref().map(|l| l.as_ref().map_err(String::as_str)),
+        "core_law": r.core_law.as_ref().map(|l| l.as_ref().map_err(ToString::to_string)),
         "ema_modes": r.ema.modes.iter().map(|m| serde_json::json!({"freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "mpc": m.mpc})).collect::<Vec<_>>(),
         "uncertainty": r.uncertainty,
         "band_widths": band_widths,

@@ -6,30 +6,32 @@
 //! ([`crate::cache`]). Every stage's error is a [`PipelineError::Stage`] naming it.
 
 use crate::cache::{Cache, Key};
+use crate::chain::{CorePoint, NoSandwichInverse, StageTime, Truth, nearest_within};
 use crate::error::{Context, Result};
-use crate::job::{Job, KinematicsChoice, relative};
+use crate::job::{Job, KinematicsChoice, ModelFile, relative};
 use crate::measurement::{Measured, read_measurement};
+use crate::result::ChainResult;
 use crate::{PipelineError, Reporter};
 use crate::{bail, err};
-use crate::{job, layered, uncertainty};
+use crate::{job, layered, text, uncertainty};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify_with};
 use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::{ModalParams, solve_modes};
-use lamdyn_fem::model::{MeshSpec, ModelSpec};
+use lamdyn_fem::model::MeshSpec;
+use lamdyn_fit::FitError;
 use lamdyn_fit::fit::{FitResult, FitSettings, fit};
 use lamdyn_fit::misfit::Objective;
 use lamdyn_fit::modes::{PeakComparison, compare_peaks};
 use lamdyn_fit::probe::{placement_line, probes_with};
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_frf::{Channel, FrfSet};
-use lamdyn_layered::convergence::ConvergedMode;
+use lamdyn_material::MaterialError;
 use lamdyn_material::causality::{CausalityParams, CausalityVerdict};
 use lamdyn_material::laminate::paper_inverse;
 use lamdyn_material::laminate::{
-    CoreEstimate, CoreShearFormula, FaceBending, FaceShear, Kinematics, PaperInverseOptions,
-    SandwichStack,
+    CoreShearFormula, FaceBending, FaceShear, Kinematics, PaperInverseOptions, SandwichStack,
 };
-use lamdyn_material::sandwich::{ExactCoreEstimate, exact_inverse};
+use lamdyn_material::sandwich::exact_inverse;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -40,175 +42,6 @@ use std::time::Instant;
 pub struct RunOptions {
     /// Cache folder (absent: no cache).
     pub cache_dir: Option<PathBuf>,
-}
-
-/// The inverse at one frequency, both ways.
-#[derive(Debug, Clone)]
-pub struct CorePoint {
-    /// Frequency, Hz.
-    pub freq_hz: f64,
-    /// The fitted laminate modulus E*, Pa (None: the paper's route failed).
-    pub e_eff_pa: Option<Complex64>,
-    /// Where the paper's fit failed: E* (Pa) the mode's own pole implies on the shell model
-    /// ([`lamdyn_fit::fit::pole_moduli`]), the layered inverse's start. None with a fit.
-    pub e_pole_pa: Option<Complex64>,
-    /// Delta-method standard deviations of E' (Pa) and η from the fit.
-    pub e_sd: Option<(f64, f64)>,
-    /// Paper eqs. 33–45.
-    pub paper: Result<CoreEstimate, String>,
-    /// Exact Mead–Markus inverse.
-    pub exact: Result<ExactCoreEstimate, String>,
-    /// The layered inverse at the mode's (real) frequency, Pa: found at its pole's complex
-    /// frequency and moved here by [`crate::layered::to_real_frequency`] (the value as found is
-    /// the band's `found_pa`). None: not run here.
-    pub layered: Option<Result<Complex64, String>>,
-    /// The layered inverse's convergence over its mesh ladder (with a layered result).
-    pub layered_convergence: Option<ConvergedMode>,
-    /// The layered result's 95 % band and what makes it, or why it has none (with a layered
-    /// result).
-    pub layered_band: Option<std::result::Result<crate::layered::LayeredBand, String>>,
-}
-
-impl CorePoint {
-    /// G* by the paper's inverse, if it has one.
-    pub fn paper_g(&self) -> Option<Complex64> {
-        self.paper.as_ref().ok().map(|c| c.core_shear_pa)
-    }
-    /// G* by the exact inverse, if it has one.
-    pub fn exact_g(&self) -> Option<Complex64> {
-        self.exact.as_ref().ok().map(|c| c.core_shear_pa)
-    }
-    /// G* by the layered inverse, if it has one.
-    pub fn layered_g(&self) -> Option<Complex64> {
-        self.layered.as_ref().and_then(|r| r.as_ref().ok()).copied()
-    }
-    /// E' of the fitted effective modulus, Pa (None: the paper's route failed).
-    pub fn e_storage_pa(&self) -> Option<f64> {
-        self.e_eff_pa.map(|e| e.re)
-    }
-    /// Loss factor E''/E' of the fitted effective modulus (None: the paper's route failed).
-    pub fn e_loss_factor(&self) -> Option<f64> {
-        self.e_eff_pa.map(|e| e.im / e.re)
-    }
-    /// |φ| of the paper's inverse (eq. 37).
-    pub fn phi(&self) -> Option<f64> {
-        self.paper.as_ref().ok().map(|c| c.phi.norm())
-    }
-}
-
-/// The core's known law of a virtual test, per line.
-#[derive(Debug, Clone)]
-pub struct Truth {
-    /// Where it came from.
-    pub source: String,
-    /// (f in Hz, G* in Pa), increasing.
-    pub lines: Vec<(f64, Complex64)>,
-}
-
-impl Truth {
-    /// G* at `f` Hz by linear interpolation (None outside the table).
-    pub fn at(&self, f: f64) -> Option<Complex64> {
-        let k = self.lines.partition_point(|(x, _)| *x < f);
-        if k == 0 {
-            return (self.lines.first()?.0 == f).then(|| self.lines[0].1);
-        }
-        let (x1, g1) = *self.lines.get(k)?;
-        let (x0, g0) = self.lines[k - 1];
-        Some(g0 + (g1 - g0) * ((f - x0) / (x1 - x0)))
-    }
-}
-
-/// One timed stage.
-#[derive(Debug, Clone)]
-pub struct StageTime {
-    /// Stage name.
-    pub name: &'static str,
-    /// Wall time, s.
-    pub seconds: f64,
-    /// Taken from the cache.
-    pub cached: bool,
-}
-
-/// Everything the chain found.
-pub struct ChainResult {
-    /// The job.
-    pub job: Job,
-    /// Its file.
-    pub job_path: PathBuf,
-    /// The measurement.
-    pub measured: Measured,
-    /// The modal identification.
-    pub ema: EmaResult,
-    /// A line describing the FE model.
-    pub model_line: String,
-    /// A line describing the layered inverse's model (None: not run).
-    pub layered_line: Option<String>,
-    /// The core's law fitted to all layered modes with the inputs shared (None: not asked
-    /// for, or no layered mode with a band), or why it failed.
-    pub core_law: Option<std::result::Result<lamdyn_fit::joint::CoreLawFit, String>>,
-    /// The paper's route: the effective modulus fitted to the FRFs on the shell model; `None`
-    /// when its fit failed and the layered route went on alone (`paper_route_error` says why).
-    pub fit: Option<FitResult>,
-    /// Why the paper's route has no result (its stage's error), if it has none.
-    pub paper_route_error: Option<String>,
-    /// Lines of the misfit.
-    pub fit_lines: Vec<usize>,
-    /// RMS FRF over the responses, measured and fitted, per line (paper Fig. 5).
-    pub measured_rms: Vec<f64>,
-    /// As `measured_rms`, from the fitted law.
-    pub fitted_rms: Vec<f64>,
-    /// Table 3: peaks of the RMS curves.
-    pub table3: Vec<PeakComparison>,
-    /// The sandwich of the paper's route; `None` for a stack of other than three layers,
-    /// which only the layered route takes.
-    pub stack: Option<SandwichStack>,
-    /// The inverse's kinematics.
-    pub kinematics: Kinematics,
-    /// The paper inverse's options.
-    pub paper_options: PaperInverseOptions,
-    /// The inverse at the modal frequencies ([`modal_frequencies`]: the fit's peaks and the
-    /// EMA modes no peak claims).
-    pub modal: Vec<CorePoint>,
-    /// The inverse on the curve grid.
-    pub curve: Vec<CorePoint>,
-    /// Kramers–Kronig verdicts on the curve grid: paper, exact.
-    pub causality: [Vec<Option<CausalityVerdict>>; 2],
-    /// Monte Carlo bands at the modal frequencies and on the curve grid.
-    pub uncertainty: Option<uncertainty::McResult>,
-    /// The truth of a virtual test.
-    pub truth: Option<Truth>,
-    /// Warnings for the report.
-    pub warnings: Vec<String>,
-    /// Stage timings.
-    pub timings: Vec<StageTime>,
-}
-
-impl ChainResult {
-    /// How wide the layered route's bands are and what would narrow them
-    /// ([`crate::band_widths`]); `None` without a layered band.
-    pub fn band_widths(&self) -> Option<crate::band_widths::BandWidths> {
-        crate::band_widths::band_widths(
-            &self.modal,
-            self.core_law.as_ref().and_then(|l| l.as_ref().ok()),
-        )
-    }
-
-    /// Frequencies (Hz) of the modes where no inverse found a core it can stand behind: no
-    /// exact and no layered result, and the paper's none or beyond its validity
-    /// (|φ| > [`PHI_ACCURACY_LIMIT`](lamdyn_material::laminate::PHI_ACCURACY_LIMIT)). The run
-    /// has no answer there, and the CLI exits 1.
-    pub fn modes_without_core(&self) -> Vec<f64> {
-        use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
-        self.modal
-            .iter()
-            .filter(|p| {
-                let paper_valid =
-                    p.paper_g().is_some() && p.phi().is_some_and(|phi| phi <= PHI_ACCURACY_LIMIT);
-                !paper_valid && p.exact_g().is_none() && p.layered_g().is_none()
-            })
-            .map(|p| p.freq_hz)
-            .collect()
-    }
 }
 
 /// Runs `f` as stage `name`: progress, timing, and "stage 'NAME' failed" on error.
@@ -261,173 +94,59 @@ pub fn run_job(
     same_bits_on_any_thread_count();
     let base = job::base_of(path);
     let cache = Cache::new(options.cache_dir.clone());
-    let mut timings = Vec::new();
+    let mut t = Timed {
+        spinner,
+        timings: Vec::new(),
+    };
     let mut warnings = Vec::new();
-    let measured = stage("measurement", spinner, &mut timings, || {
+    let measured = t.stage("measurement", || {
         Ok((read_measurement(&job, &base, path)?, false))
     })?;
     warnings.extend(measured.warnings.iter().cloned());
-    let ema = stage("ema", spinner, &mut timings, || {
-        run_ema(&job, &measured.set, &cache, spinner)
-    })?;
-    let pole_checks = if job.inverse.layered {
-        layered::PoleChecks {
-            groups: stage("ema by response group", spinner, &mut timings, || {
-                response_group_emas(&job, &measured.set, &cache, spinner)
-            })?,
-            orders: stage("ema at other model orders", spinner, &mut timings, || {
-                other_order_emas(&job, &measured.set, &cache, spinner)
-            })?,
-            // FRF or UFF data, or too few hits: no stage (and no timing row) at all.
-            hits: if measured.has_hits_to_leave_out() {
-                stage("ema without each hit", spinner, &mut timings, || {
-                    without_each_hit_emas(&job, &measured, &cache, spinner)
-                })?
-            } else {
-                Vec::new()
-            },
-        }
-    } else {
-        layered::PoleChecks::default()
-    };
+    let ema = t.stage("ema", || run_ema(&job, &measured.set, &cache, spinner))?;
+    let pole_checks = pole_checks(&mut t, &job, &measured, &cache)?;
     // The model stage stays fatal: it is where the measurement's channels are checked against
     // the part (a sensor off the plate, a wrong unit).
-    let (model, model_line) = stage("model", spinner, &mut timings, || {
+    let (model, model_line) = t.stage("model", || {
         build_model(&job, &base, &measured.set, &cache, spinner)
     })?;
-    let fitted = stage("fit", spinner, &mut timings, || {
-        Ok((run_fit(&job, &model, &measured.set)?, false))
-    });
-    let (fit_owned, objective_parts, paper_route_error) = match without_the_paper_route(
-        &job, &ema, fitted,
-    )? {
-        Ok((fit, parts)) => (Some(fit), parts, None),
-        Err(why) => {
-            warnings.push(format!(
-                    "the paper's route has no result ({why}); the layered route went on from the EMA's poles alone, each started from the modulus its pole implies on the shell model"
-                ));
-            (None, FitParts::default(), Some(why))
-        }
-    };
-    let fit_result = fit_owned.as_ref();
-    let (fit_lines, measured_rms, fitted_rms, table3) = objective_parts;
-    if let Some(f) = fit_result {
-        warnings.extend(f.warnings.iter().map(|w| format!("fit: {w}")));
-    }
-    let (stack, kinematics, paper_options) = stage("inverse setup", spinner, &mut timings, || {
-        let stack = match job.stack.layers.len() {
-            3 => Some(job.stack.to_sandwich().context("the job's [stack]")?),
-            _ => None,
-        };
-        let kin = match job.inverse.kinematics {
-            KinematicsChoice::Beam => Kinematics::Beam,
-            KinematicsChoice::Plate => Kinematics::Plate {
-                poisson: job.stack.layers[0].poisson,
-            },
-        };
-        let opts = PaperInverseOptions::new(
-            CoreShearFormula::Eq41,
-            FaceShear::Neglected,
-            FaceBending::CoreNeglected,
-            kin,
-        );
-        Ok(((stack, kin, opts), false))
-    })?;
+    let paper = paper_route(&mut t, &job, &ema, &model, &measured.set)?;
+    warnings.extend(paper.warnings());
+    let fit_result = paper.fit.as_ref();
+    let sandwich = t.stage("inverse setup", || Ok((inverse_setup(&job)?, false)))?;
     let modal_hz = modal_frequencies(fit_result, &ema);
     let curve_hz = fit_result.map_or_else(Vec::new, |f| curve_grid(&job, f, &measured.set));
-    let (modal, curve, causality) = stage("inverse", spinner, &mut timings, || {
-        let at = |f: &[f64]| {
-            f.iter()
-                .map(|&f| core_point(stack.as_ref(), &paper_options, fit_result, f))
-                .collect::<Vec<_>>()
-        };
-        let (modal, curve) = (at(&modal_hz), at(&curve_hz));
-        let kk = [
-            causality(&curve, CorePoint::paper_g)?,
-            causality(&curve, CorePoint::exact_g)?,
-        ];
-        Ok(((modal, curve, kk), false))
+    let (mut modal, curve, causality) = t.stage("inverse", || {
+        Ok((
+            inverses(&sandwich, fit_result, [&modal_hz, &curve_hz])?,
+            false,
+        ))
     })?;
-    let mut modal = modal;
     if fit_result.is_none() {
         starts_from_the_poles(&model, &ema, &mut modal);
     }
-    let (mut layered_line, mut coarsest) = (None, None);
-    if job.inverse.layered {
-        (layered_line, coarsest) = stage("layered inverse", spinner, &mut timings, || {
-            layered::run(
-                &job,
-                &base,
-                (&measured.set, &ema, &pole_checks),
-                &mut modal,
-                &cache,
-                spinner,
-                [0.0; 2],
-            )
-        })?;
-    }
-    let mut core_law = stage("core law", spinner, &mut timings, || {
-        Ok((layered::fit_law(&job, &modal, coarsest.as_ref()), false))
-    })?;
-    // Supports the law finds far from the job's: the ladder again at those.
-    if let Some((moved, at)) = layered::supports_found(&job, core_law.as_ref()) {
-        let (line, again) = stage(
-            "layered inverse at the supports found",
-            spinner,
-            &mut timings,
-            || {
-                layered::run(
-                    &moved,
-                    &base,
-                    (&measured.set, &ema, &pole_checks),
-                    &mut modal,
-                    &cache,
-                    spinner,
-                    at,
-                )
-            },
-        )?;
-        layered_line = line.map(|l| {
-            format!(
-                "{l}; run again at the supports the law found, stiffness x {:.3} and damping x {:.3} of the job's",
-                at[0].exp(),
-                at[1].exp()
-            )
-        });
-        core_law = stage(
-            "core law at the supports found",
-            spinner,
-            &mut timings,
-            || Ok((layered::fit_law(&moved, &modal, again.as_ref()), false)),
-        )?;
-    }
+    let data = layered::Observations {
+        frfs: &measured.set,
+        ema: &ema,
+        checks: &pole_checks,
+    };
+    let (layered_line, core_law) = layered_route(&mut t, (&job, &base), data, &mut modal, &cache)?;
     layered::to_real_frequency(&mut modal, core_law.as_ref());
-    if stack.is_none() && job.uncertainty.samples > 0 {
-        warnings.push(format!(
-            "uncertainty: the Monte Carlo of the paper's route skipped: the stack has {} layers, the paper's sandwich three; the layered route's bands hold the uncertainty",
-            job.stack.layers.len()
-        ));
+    if sandwich.stack.is_none() && job.uncertainty.samples > 0 {
+        warnings.push(text::monte_carlo_skipped(job.stack.layers.len()));
     }
-    let mc = match (fit_result, &stack) {
+    let mc = match (fit_result, &sandwich.stack) {
         (Some(fit), Some(_)) if job.uncertainty.samples > 0 => {
-            Some(stage("uncertainty", spinner, &mut timings, || {
-                let input = uncertainty::McInput {
-                    stack: &job.stack,
-                    fit,
-                    options: &job.uncertainty,
-                    kinematics: job.inverse.kinematics,
-                    paper: paper_options,
-                    freqs_hz: [modal_hz.as_slice(), curve_hz.as_slice()].concat(),
-                };
-                Ok((uncertainty::monte_carlo(&input, spinner)?, false))
+            Some(t.stage("uncertainty", || {
+                let freqs_hz = [modal_hz.as_slice(), curve_hz.as_slice()].concat();
+                let mc = monte_carlo(&job, fit, sandwich.paper, freqs_hz, spinner)?;
+                Ok((mc, false))
             })?)
         }
         _ => None,
     };
     let truth = match &job.truth {
-        Some(t) => Some(stage("truth", spinner, &mut timings, || {
-            Ok((read_truth(&relative(&base, t))?, false))
-        })?),
+        Some(path) => Some(t.stage("truth", || Ok((read_truth(&relative(&base, path))?, false)))?),
         None => None,
     };
     warnings.extend(cache.notes());
@@ -440,6 +159,7 @@ pub fn run_job(
         &causality,
         &mut warnings,
     );
+    let PaperRoute { fit, curves, error } = paper;
     Ok(ChainResult {
         job,
         job_path: path.to_path_buf(),
@@ -448,23 +168,247 @@ pub fn run_job(
         model_line,
         layered_line,
         core_law,
-        fit: fit_owned,
-        paper_route_error,
-        fit_lines,
-        measured_rms,
-        fitted_rms,
-        table3,
-        stack,
-        kinematics,
-        paper_options,
+        fit,
+        paper_route_error: error,
+        fit_lines: curves.lines,
+        measured_rms: curves.measured_rms,
+        fitted_rms: curves.fitted_rms,
+        table3: curves.table3,
+        stack: sandwich.stack,
+        kinematics: sandwich.kinematics,
+        paper_options: sandwich.paper,
         modal,
         curve,
         causality,
         uncertainty: mc,
         truth,
         warnings,
-        timings,
+        timings: t.timings,
     })
+}
+
+/// The paper's and the exact inverse at the modal frequencies and on the curve, and the
+/// Kramers–Kronig verdicts of both on the curve.
+type Inverses = (
+    Vec<CorePoint>,
+    Vec<CorePoint>,
+    [Vec<Option<CausalityVerdict>>; 2],
+);
+
+/// Stage "inverse": [`Inverses`] of the fitted law at `modal_hz` and `curve_hz`.
+fn inverses(
+    sandwich: &InverseSetup,
+    fit: Option<&FitResult>,
+    [modal_hz, curve_hz]: [&[f64]; 2],
+) -> Result<Inverses> {
+    let at = |f: &[f64]| {
+        f.iter()
+            .map(|&f| core_point(sandwich.stack.as_ref(), &sandwich.paper, fit, f))
+            .collect::<Vec<_>>()
+    };
+    let (modal, curve) = (at(modal_hz), at(curve_hz));
+    let kk = [
+        causality(&curve, CorePoint::paper_g)?,
+        causality(&curve, CorePoint::exact_g)?,
+    ];
+    Ok((modal, curve, kk))
+}
+
+/// Stage "uncertainty": the paper's route's Monte Carlo over the stack's priors and the fit's
+/// covariance at `freqs_hz`.
+fn monte_carlo(
+    job: &Job,
+    fit: &FitResult,
+    paper: PaperInverseOptions,
+    freqs_hz: Vec<f64>,
+    spinner: &dyn Reporter,
+) -> Result<uncertainty::McResult> {
+    let input = uncertainty::McInput {
+        stack: &job.stack,
+        fit,
+        options: &job.uncertainty,
+        kinematics: job.inverse.kinematics,
+        paper,
+        freqs_hz,
+    };
+    uncertainty::monte_carlo(&input, spinner)
+}
+
+/// The stages' progress and timings as they run.
+struct Timed<'a> {
+    spinner: &'a dyn Reporter,
+    timings: Vec<StageTime>,
+}
+
+impl Timed<'_> {
+    /// Runs `f` as stage `name` ([`stage`]).
+    fn stage<T>(&mut self, name: &'static str, f: impl FnOnce() -> Result<(T, bool)>) -> Result<T> {
+        stage(name, self.spinner, &mut self.timings, f)
+    }
+}
+
+/// The identifications beside the whole that the layered route reads each pole's scatter
+/// from (none without the layered route): by response group, at other model orders, and
+/// without each hammer hit (FRF or UFF data, or too few hits: no stage at all).
+fn pole_checks(
+    t: &mut Timed,
+    job: &Job,
+    measured: &Measured,
+    cache: &Cache,
+) -> Result<layered::PoleChecks> {
+    if !job.inverse.layered {
+        return Ok(layered::PoleChecks::default());
+    }
+    let spinner = t.spinner;
+    let set = &measured.set;
+    Ok(layered::PoleChecks {
+        groups: t.stage("ema by response group", || {
+            response_group_emas(job, set, cache, spinner)
+        })?,
+        orders: t.stage("ema at other model orders", || {
+            other_order_emas(job, set, cache, spinner)
+        })?,
+        hits: if measured.has_hits_to_leave_out() {
+            t.stage("ema without each hit", || {
+                without_each_hit_emas(job, measured, cache, spinner)
+            })?
+        } else {
+            Vec::new()
+        },
+    })
+}
+
+/// The paper's route as run: the effective modulus fitted to the FRFs on the shell model, or
+/// why it has no result.
+struct PaperRoute {
+    /// The fit; `None` when it failed and the layered route went on alone.
+    fit: Option<FitResult>,
+    /// Its misfit's lines and RMS curves.
+    curves: FitCurves,
+    /// Why it has no result.
+    error: Option<String>,
+}
+
+impl PaperRoute {
+    /// The warnings it leaves for the report.
+    fn warnings(&self) -> Vec<String> {
+        match (&self.fit, &self.error) {
+            (Some(f), _) => f.warnings.iter().map(|w| format!("fit: {w}")).collect(),
+            (None, Some(why)) => vec![text::paper_route_failed(why)],
+            (None, None) => Vec::new(),
+        }
+    }
+}
+
+/// Stage "fit" ([`run_fit`]) and whether the chain goes on without it
+/// ([`without_the_paper_route`]).
+fn paper_route(
+    t: &mut Timed,
+    job: &Job,
+    ema: &EmaResult,
+    model: &ModalModel,
+    set: &FrfSet,
+) -> Result<PaperRoute> {
+    let fitted = t.stage("fit", || Ok((run_fit(job, model, set)?, false)));
+    Ok(match without_the_paper_route(job, ema, fitted)? {
+        Ok((fit, curves)) => PaperRoute {
+            fit: Some(fit),
+            curves,
+            error: None,
+        },
+        Err(e) => PaperRoute {
+            fit: None,
+            curves: FitCurves::default(),
+            error: Some(crate::error::chain_text(&e)),
+        },
+    })
+}
+
+/// What the paper's and the exact inverse take from the job.
+struct InverseSetup {
+    /// The sandwich; `None` for a stack of other than three layers, which only the layered
+    /// route takes.
+    stack: Option<SandwichStack>,
+    /// The inverses' kinematics.
+    kinematics: Kinematics,
+    /// The paper inverse's options.
+    paper: PaperInverseOptions,
+}
+
+/// The job's [`InverseSetup`].
+///
+/// # Errors
+/// A three-layer stack that is no sandwich.
+fn inverse_setup(job: &Job) -> Result<InverseSetup> {
+    let stack = match job.stack.layers.len() {
+        3 => Some(job.stack.to_sandwich().context("the job's [stack]")?),
+        _ => None,
+    };
+    let kinematics = match job.inverse.kinematics {
+        KinematicsChoice::Beam => Kinematics::Beam,
+        KinematicsChoice::Plate => Kinematics::Plate {
+            poisson: job.stack.layers[0].poisson,
+        },
+    };
+    let paper = PaperInverseOptions::new(
+        CoreShearFormula::Eq41,
+        FaceShear::Neglected,
+        FaceBending::CoreNeglected,
+        kinematics,
+    );
+    Ok(InverseSetup {
+        stack,
+        kinematics,
+        paper,
+    })
+}
+
+/// The law fitted to the layered modes, or why it failed; `None` when not asked for.
+type LawResult = Option<std::result::Result<lamdyn_fit::joint::CoreLawFit, FitError>>;
+
+/// The layered route (when `inverse.layered`): stage "layered inverse" on the job's
+/// [`layered::LayeredSetup`], then "core law"; where the law finds the supports far from the
+/// job's, the ladder and the law again at those. Its line and the law.
+fn layered_route(
+    t: &mut Timed,
+    (job, base): (&Job, &Path),
+    data: layered::Observations,
+    modal: &mut [CorePoint],
+    cache: &Cache,
+) -> Result<(Option<String>, LawResult)> {
+    let spinner = t.spinner;
+    let (mut line, mut coarsest, mut setup) = (None, None, None);
+    if job.inverse.layered {
+        let (s, outcome) = t.stage("layered inverse", || {
+            let s = layered::LayeredSetup::resolve(job, base)?;
+            let outcome = layered::run(&s, data, modal, cache, spinner)?;
+            let cached = outcome.all_cached;
+            Ok(((s, outcome), cached))
+        })?;
+        (line, coarsest, setup) = (Some(outcome.line), outcome.coarsest, Some(s));
+    }
+    let law = t.stage("core law", || {
+        let law = layered::fit_law(job.inverse.core_law, modal, coarsest.as_ref());
+        Ok((law, false))
+    })?;
+    let Some((setup, at)) = setup
+        .as_ref()
+        .and_then(|s| Some((s, layered::supports_found(s, law.as_ref())?)))
+    else {
+        return Ok((line, law));
+    };
+    let moved = setup.at_supports(at);
+    let again = t.stage("layered inverse at the supports found", || {
+        let outcome = layered::run(&moved, data, modal, cache, spinner)?;
+        let cached = outcome.all_cached;
+        Ok((outcome, cached))
+    })?;
+    line = Some(text::rerun_at_supports(&again.line, at));
+    let law = t.stage("core law at the supports found", || {
+        let law = layered::fit_law(moved.core_law, modal, again.coarsest.as_ref());
+        Ok((law, false))
+    })?;
+    Ok((line, law))
 }
 
 /// The EMA band: the job's, else the fit's, else every line.
@@ -644,23 +588,6 @@ fn run_ema_to_order(
     Ok((r, false))
 }
 
-/// The job's model: its spec, the folder its paths are relative to (a Gmsh file's), and a
-/// label naming where it came from (`model.file`'s path or `[model.spec]`).
-pub(crate) fn model_spec(job: &Job, base: &Path) -> Result<(ModelSpec, PathBuf, String)> {
-    Ok(match (&job.model.file, &job.model.spec) {
-        (Some(f), None) => {
-            let p = relative(base, f);
-            let spec: ModelSpec = crate::io::read_toml(&p).context("model.file")?;
-            let dir = p
-                .parent()
-                .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-            (spec, dir, format!("'{}'", p.display()))
-        }
-        (None, Some(s)) => (s.clone(), base.to_path_buf(), "[model.spec]".to_string()),
-        _ => bail!("model: give file or spec"),
-    })
-}
-
 /// The modal model of the FE model on the measured channels, cached.
 fn build_model(
     job: &Job,
@@ -669,7 +596,11 @@ fn build_model(
     cache: &Cache,
     spinner: &dyn Reporter,
 ) -> Result<((ModalModel, String), bool)> {
-    let (spec, spec_dir, label) = model_spec(job, base)?;
+    let ModelFile {
+        spec,
+        dir: spec_dir,
+        label,
+    } = job.model_file(base)?;
     if !spec.supports.is_empty() {
         bail!(
             "model: {label} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and keep the support resonances out of the fit band",
@@ -742,7 +673,18 @@ fn build_model(
     Ok(((model, text), false))
 }
 
-type FitParts = (Vec<usize>, Vec<f64>, Vec<f64>, Vec<PeakComparison>);
+/// The paper's fit's misfit lines and RMS curves (paper Fig. 5, Table 3).
+#[derive(Debug, Clone, Default)]
+struct FitCurves {
+    /// Lines of the misfit.
+    lines: Vec<usize>,
+    /// RMS FRF over the responses, measured, per line (paper Fig. 5).
+    measured_rms: Vec<f64>,
+    /// As `measured_rms`, from the fitted law.
+    fitted_rms: Vec<f64>,
+    /// Table 3: peaks of the RMS curves.
+    table3: Vec<PeakComparison>,
+}
 
 /// The paper's route's fit as run: its result, or, when the layered route is on and can go on
 /// alone, why it failed. The layered route does not need the fit: it reads the EMA's poles and
@@ -758,7 +700,7 @@ fn without_the_paper_route<T>(
     job: &Job,
     ema: &EmaResult,
     route: Result<T>,
-) -> Result<std::result::Result<T, String>> {
+) -> Result<std::result::Result<T, PipelineError>> {
     let e = match route {
         Ok(t) => return Ok(Ok(t)),
         Err(e) if !job.inverse.layered => return Err(e),
@@ -766,7 +708,7 @@ fn without_the_paper_route<T>(
     };
     let damped = damped_beyond(&ema.modes, MAX_DAMPING_ALONE);
     if damped.is_empty() {
-        return Ok(Err(crate::error::chain_text(&e)));
+        return Ok(Err(e));
     }
     Err(e).context(format!(
         "the paper's route failed, and the layered route cannot go on from the poles alone: {} of {} poles are damped more than {:.0} % ({}{}), where the EMA's poles are not to be trusted without a fit to the FRFs",
@@ -795,7 +737,7 @@ fn damped_beyond(modes: &[lamdyn_ema::identify::Mode], limit: f64) -> Vec<String
 pub const MAX_DAMPING_ALONE: f64 = 0.10;
 
 /// The fit and its RMS curves and Table 3.
-fn run_fit(job: &Job, model: &ModalModel, set: &FrfSet) -> Result<(FitResult, FitParts)> {
+fn run_fit(job: &Job, model: &ModalModel, set: &FrfSet) -> Result<(FitResult, FitCurves)> {
     let mut settings = FitSettings::new(job.fit.law, job.fit.misfit.clone());
     settings.covariance = job.fit.covariance;
     settings.prominence = job.fit.prominence;
@@ -819,15 +761,13 @@ fn run_fit(job: &Job, model: &ModalModel, set: &FrfSet) -> Result<(FitResult, Fi
         objective.lines(),
         settings.prominence,
     );
-    Ok((
-        r,
-        (
-            objective.lines().to_vec(),
-            objective.measured_rms().to_vec(),
-            fitted,
-            table3,
-        ),
-    ))
+    let curves = FitCurves {
+        lines: objective.lines().to_vec(),
+        measured_rms: objective.measured_rms().to_vec(),
+        fitted_rms: fitted,
+        table3,
+    };
+    Ok((r, curves))
 }
 
 /// The modal frequencies, Hz, increasing: the fit's RMS peaks (paper Table 3) and every EMA
@@ -856,16 +796,6 @@ pub fn modal_frequencies(r: Option<&FitResult>, ema: &EmaResult) -> Vec<f64> {
         .collect();
     hz.sort_by(f64::total_cmp);
     hz
-}
-
-/// The EMA mode nearest `f` Hz within the relative distance `within`, if any.
-pub(crate) fn nearest_within(ema: &EmaResult, f: f64, within: f64) -> Option<usize> {
-    ema.modes
-        .iter()
-        .enumerate()
-        .filter(|(_, m)| (m.freq_hz / f - 1.0).abs() < within)
-        .min_by(|a, b| (a.1.freq_hz - f).abs().total_cmp(&(b.1.freq_hz - f).abs()))
-        .map(|(k, _)| k)
 }
 
 /// Lines of the curves: the job's, else 40 log-spaced lines over the modal frequencies
@@ -910,12 +840,8 @@ fn core_point(
         e_eff_pa: e,
         e_pole_pa: None,
         e_sd: sd,
-        paper: sandwich_inverse(stack, e, |s, e| {
-            paper_inverse(s, w, e, options).map_err(|e| e.to_string())
-        }),
-        exact: sandwich_inverse(stack, e, |s, e| {
-            exact_inverse(s, w, e, options.kinematics).map_err(|e| e.to_string())
-        }),
+        paper: sandwich_inverse(stack, e, |s, e| paper_inverse(s, w, e, options)),
+        exact: sandwich_inverse(stack, e, |s, e| exact_inverse(s, w, e, options.kinematics)),
         layered: None,
         layered_convergence: None,
         layered_band: None,
@@ -948,19 +874,14 @@ fn starts_from_the_poles(model: &ModalModel, ema: &EmaResult, modal: &mut [CoreP
 fn sandwich_inverse<T>(
     stack: Option<&SandwichStack>,
     e: Option<Complex64>,
-    invert: impl FnOnce(&SandwichStack, Complex64) -> std::result::Result<T, String>,
-) -> std::result::Result<T, String> {
+    invert: impl FnOnce(&SandwichStack, Complex64) -> std::result::Result<T, MaterialError>,
+) -> std::result::Result<T, NoSandwichInverse> {
     match (stack, e) {
-        (_, None) => Err(NO_EFFECTIVE_MODULUS.to_string()),
-        (None, _) => {
-            Err("the stack is not a three-layer sandwich: only the layered route".to_string())
-        }
-        (Some(s), Some(e)) => invert(s, e),
+        (_, None) => Err(NoSandwichInverse::NoEffectiveModulus),
+        (None, _) => Err(NoSandwichInverse::NotASandwich),
+        (Some(s), Some(e)) => invert(s, e).map_err(NoSandwichInverse::Inverse),
     }
 }
-
-/// Why a point has no paper or exact inverse when the paper's route failed.
-const NO_EFFECTIVE_MODULUS: &str = "no effective modulus: the paper's route failed";
 
 /// Kramers–Kronig verdicts of one inverse's G*(f) on the curve (where it exists).
 fn causality(
@@ -1047,10 +968,13 @@ fn collect_warnings(
                 ));
             }
         }
+        let sandwich =
+            |e: Option<&NoSandwichInverse>| e.filter(|_| paper_route_ran).map(ToString::to_string);
+        let layered = p.layered.as_ref().and_then(|l| l.as_ref().err());
         for (name, e) in [
-            ("paper", p.paper.as_ref().err().filter(|_| paper_route_ran)),
-            ("exact", p.exact.as_ref().err().filter(|_| paper_route_ran)),
-            ("layered", p.layered.as_ref().and_then(|l| l.as_ref().err())),
+            ("paper", sandwich(p.paper.as_ref().err())),
+            ("exact", sandwich(p.exact.as_ref().err())),
+            ("layered", layered.map(ToString::to_string)),
         ] {
             if let Some(e) = e {
                 out.push(format!("{:.2} Hz: no {name} inverse: {e}", p.freq_hz));
@@ -1209,8 +1133,8 @@ mod tests {
             e_eff_pa: None,
             e_pole_pa: None,
             e_sd: None,
-            paper: Err("not used".into()),
-            exact: Err("not used".into()),
+            paper: Err(NoSandwichInverse::NotASandwich),
+            exact: Err(NoSandwichInverse::NotASandwich),
             layered: Some(Ok(g)),
             layered_convergence: Some(ConvergedMode::exact(g, g, rank)),
             layered_band: None,
@@ -1224,7 +1148,7 @@ mod tests {
         let banded = |freq_hz: f64, g: f64, h: f64| {
             let mut p = point(freq_hz, 0);
             p.layered = Some(Ok(Complex64::new(g, 0.5 * g)));
-            p.layered_band = Some(Ok(crate::layered::LayeredBand {
+            p.layered_band = Some(Ok(crate::band::LayeredBand {
                 sources: Vec::new(),
                 half_width: [h, h],
                 inputs: Vec::new(),
@@ -1232,7 +1156,10 @@ mod tests {
                 inputs_at: Vec::new(),
                 found_at_hz: Complex64::new(freq_hz, 0.0),
                 found_pa: Complex64::new(g, 0.5 * g),
-                coarse: (0, Complex64::new(0.0, 0.0)),
+                coarse: crate::band::CoarsePole {
+                    rank: 0,
+                    eigenvalue: Complex64::new(0.0, 0.0),
+                },
             }));
             p
         };

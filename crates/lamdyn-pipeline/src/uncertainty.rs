@@ -1,4 +1,4 @@
-//! Monte Carlo uncertainty of the recovered core (issue 8): the inputs the inverse cannot know
+//! Monte Carlo uncertainty of the recovered core: the inputs the inverse cannot know
 //! exactly are drawn from normal distributions — the faces' Young's modulus (one draw for both
 //! faces: one glass), the thickness and density of the faces (one draw for both: the paper's
 //! eq. 41 needs identical faces) and of the core, and the law's parameters from the

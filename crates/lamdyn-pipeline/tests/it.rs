@@ -4,9 +4,12 @@
 //! EMA and the layered model from the cache, bad job files name the field, and a failed stage
 //! is named and leaves the earlier report alone.
 
+use lamdyn_pipeline::chain::NoSandwichInverse;
 use lamdyn_pipeline::demo::{DemoSampling, run_demo};
 use lamdyn_pipeline::error::chain_text;
-use lamdyn_pipeline::{ChainResult, Job, OutputDir, RunOptions, Silent, report, run_job};
+use lamdyn_pipeline::{
+    ChainResult, Job, NoLayered, OutputDir, RunOptions, Silent, report, run_job,
+};
 use lamdyn_testbench::description::Description;
 use lamdyn_testkit::TempDir;
 use std::collections::BTreeSet;
@@ -46,12 +49,12 @@ fn demo(dir: &Path, samples: usize) -> (ChainResult, PathBuf) {
 }
 
 /// The demo's modal points (at least three) with their layered bands, after checking that the
-/// layered G* lies within issue 15's 2 % (G') and 3 % (eta) of the truth and inside its band.
+/// layered G* lies within 2 % (G') and 3 % (eta) of the truth and inside its band.
 fn layered_recovers_the_truth(
     result: &ChainResult,
 ) -> Vec<(
     &lamdyn_pipeline::CorePoint,
-    &lamdyn_pipeline::layered::LayeredBand,
+    &lamdyn_pipeline::band::LayeredBand,
 )> {
     let truth = result
         .truth
@@ -149,7 +152,7 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
     ] {
         assert!(html.contains(text), "'{text}' missing from the report");
     }
-    // Issue 19.8: the report leads with the answer (the layered inverse), before the
+    // The report leads with the answer (the layered inverse), before the
     // warnings and the reference methods, and no table is as wide as the old 23 columns.
     let first_heading = html.split("<h2>").nth(1).unwrap_or("");
     assert!(
@@ -162,7 +165,7 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         let header = &table[..table.find("</tr>").unwrap()];
         assert!(header.matches("<th>").count() <= 12, "{header}");
     }
-    // The core at each modal frequency against the truth, within issue 15's 2 % (G') and 3 %
+    // The core at each modal frequency against the truth, within 2 % (G') and 3 %
     // (eta); measured 0.54 % and 2.2 %. The layered inverse is converged over its mesh ladder,
     // its points moved from their poles' complex frequencies to the real axis, and the truth is
     // a finer graded mesh, so what is left is the identification's error and the truth's own
@@ -179,7 +182,7 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         // faces dominate a stiff core (sensitivities of -10 to -60), to first order or, where
         // the mode's G' is far from linear in them (the 103 Hz mode: -5.4 to first order, a
         // second difference of 11 % at 1 sd of the face modulus), beyond it.
-        let names: Vec<&str> = band.sources.iter().map(|s| s.0.as_str()).collect();
+        let names: Vec<&str> = band.sources.iter().map(|s| s.0.label()).collect();
         for n in [
             "face modulus",
             "face thickness",
@@ -190,13 +193,13 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         ] {
             assert!(names.contains(&n), "{names:?}");
         }
-        let dominant = band.dominant(0);
+        let dominant = band.dominant_label(0);
         assert!(
             dominant.starts_with("face") || dominant.starts_with("inputs beyond"),
             "{band:?}"
         );
     }
-    // Issue 15.3: the fractional Zener law fitted to all modes at once with the inputs shared.
+    // The fractional Zener law fitted to all modes at once with the inputs shared.
     // Against the truth (a finer, graded mesh) between the first and the last mode: G' within
     // 2 %, eta within 3 % (measured: 0.55 % and 1.7 %, with the per-mode points 1.1 % and 2.2 %
     // off; the points scatter 2.9x beyond their stated noise, and before that excess was given
@@ -238,7 +241,7 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
     assert!(html.contains("The core&#39;s law over all modes"));
     let law_csv = std::fs::read_to_string(report.join("core_law.csv")).unwrap();
     assert_eq!(law_csv.lines().count(), 61);
-    // Issue 15.4: the report states the band widths (the law's median half-width over its 60
+    // The report states the band widths (the law's median half-width over its 60
     // lines, recomputed here from core_law.csv) and what would narrow the widest band.
     let widths = result.band_widths().expect("band widths");
     let mut halves: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
@@ -289,7 +292,7 @@ fn five_layers() -> Description {
     d
 }
 
-/// Issue 15.1: a stack of five layers, two of them viscoelastic with one law, goes the layered
+/// A stack of five layers, two of them viscoelastic with one law, goes the layered
 /// route alone: the paper's and the exact inverse say why they have no answer, the Monte
 /// Carlo of the paper's route is skipped with a warning, and the layered inverse recovers the
 /// core at every mode within 2 % (G') and 3 % (eta) of the truth (a finer graded mesh),
@@ -322,14 +325,18 @@ fn a_five_layer_laminate_goes_the_layered_route_alone() {
     );
     for (p, _) in layered_recovers_the_truth(&result) {
         let why = p.paper.as_ref().expect_err("no paper inverse");
-        assert!(why.contains("not a three-layer sandwich"), "{why}");
+        assert_eq!(*why, NoSandwichInverse::NotASandwich);
+        assert!(
+            why.to_string().contains("not a three-layer sandwich"),
+            "{why}"
+        );
         assert!(p.exact_g().is_none());
     }
     let html = std::fs::read_to_string(dir.join("report/report.html")).unwrap();
     assert!(html.contains("The core&#39;s law over all modes"));
 }
 
-/// Issue 15.1: the small laminate's job with its model a Gmsh file of the plan (35
+/// The small laminate's job with its model a Gmsh file of the plan (35
 /// unstructured 9-node quadrilaterals, nodes of degree 3 to 5, coordinates in mm, written by
 /// Gmsh: `lamdyn-layered/testdata/gmsh`) in place of the structured rectangle. The shell model
 /// is that mesh, and the layered model extrudes it through the stack, splitting it 1, 2, 3 …
@@ -404,7 +411,7 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
     };
     assert_eq!(layered(&r), layered(&first));
     // A dof cap below the layered model's coarsest mesh: nothing is built, and every mode and
-    // the layered line say why (issue 15's "clear errors").
+    // the layered line say why.
     let capped = dir.join("input/capped.toml");
     let capped_text = std::fs::read_to_string(&job_path).unwrap().replace(
         "tolerance = 1e-4\n",
@@ -421,7 +428,11 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
     for p in &r.modal {
         let why = p.layered.as_ref().and_then(|l| l.as_ref().err());
         assert!(
-            why.is_some_and(|w| w.contains("layered_max_dofs") || w.contains("no EMA pole")),
+            why.is_some_and(|w| match w {
+                NoLayered::Stage(why) => why.contains("layered_max_dofs"),
+                NoLayered::NoPole { .. } => w.to_string().starts_with("no EMA pole"),
+                _ => false,
+            }),
             "{why:?}"
         );
     }
@@ -545,7 +556,7 @@ fn bad_job_files_name_the_field() {
         good.replace("[inverse]\n", "[inverse]\nlayered_subdivisions = 0\n"),
         "inverse.layered_subdivisions: 0 must lie in 1..=8",
     );
-    // A five-layer stack (issue 15.1): the layered route takes it, the paper's route alone
+    // A five-layer stack: the layered route takes it, the paper's route alone
     // does not; a stack whose every layer has young_pa has no core.
     let layers_at = good.find("[[stack.layers]]").unwrap();
     let layers = &good[layers_at..];
@@ -567,7 +578,7 @@ fn bad_job_files_name_the_field() {
         format!("{}{glass}\n{glass}\n{glass}\n{glass}\n", &good[..layers_at]),
         "at least one core (without): 4 layers, 0 without young_pa",
     );
-    // A support of the layered model outside the plate (issue 15's error list).
+    // A support of the layered model outside the plate.
     check(
         "support.toml",
         good.replace(
@@ -576,7 +587,7 @@ fn bad_job_files_name_the_field() {
         ),
         "inverse.supports[0].xy_fraction = [1.2, 0.5]: the support lies outside the plate",
     );
-    // The layered ladder's tolerance and levels (issue 15.2).
+    // The layered ladder's tolerance and levels.
     check(
         "tolerance.toml",
         good.replace("tolerance = 1e-4\n", "tolerance = 0.0\n"),
@@ -598,7 +609,7 @@ fn bad_job_files_name_the_field() {
         ),
         "inverse.layered_max_dofs: 10 is below 1000 dofs",
     );
-    // Priors of the layered band and the Monte Carlo (issue 15.4): a negative or non-finite
+    // Priors of the layered band and the Monte Carlo: a negative or non-finite
     // standard deviation, each named.
     for (field, value, expect) in [
         (
@@ -676,7 +687,7 @@ fn bad_job_files_name_the_field() {
         e.contains("measurement.frf ('") && e.contains("read against the channels of"),
         "{e}"
     );
-    // Issue 19.6: a missing FRF file was reported as "does not match the geometry"; it is
+    // A missing FRF file was reported as "does not match the geometry"; it is
     // refused when the job is read, naming the field and the file.
     let missing = input.join("missing.toml");
     std::fs::write(
@@ -741,7 +752,7 @@ fn a_job_measures_a_swept_sine() {
     }
 }
 
-/// Issue 15.6: the chain gives the same bits on one and on two threads: the law's parameters,
+/// The chain gives the same bits on one and on two threads: the law's parameters,
 /// the EMA's poles, G* per mode by the layered, the paper's and the exact inverse, and the core
 /// law fitted to all modes with its bands (the
 /// layered inverse differed by 3e-6 in G' before faer's kernels were made sequential).

@@ -112,7 +112,7 @@ fn run(
     force: bool,
 ) -> PyResult<String> {
     py.detach(|| {
-        lamdyn_pipeline::stages::check_job_path(&job).map_err(py_err)?;
+        lamdyn_pipeline::check_job_path(&job).map_err(py_err)?;
         let j = Job::read(&job)
             .and_then(|j| j.with_overrides(samples, seed))
             .map_err(py_err)?;

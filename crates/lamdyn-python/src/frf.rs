@@ -143,7 +143,7 @@ fn read_file(path: &Path, lenient: bool) -> PyResult<lamdyn_uff::UffFile> {
     let options = lamdyn_uff::ReadOptions {
         lenient_counts: lenient,
     };
-    lamdyn_uff::read_path(path, options).map_err(py_msg)
+    lamdyn_uff::read_path(path, options).map_err(|e| py_msg(e.to_string()))
 }
 
 /// The FRFs (datasets 58 of function type 4) of a UFF file as one set.

@@ -501,7 +501,7 @@ mod tests {
         );
     }
 
-    /// Issue 19.8: a band far wider than the estimates (eta bands to 6 for values 0.3-0.7)
+    /// A band far wider than the estimates (eta bands to 6 for values 0.3-0.7)
     /// set the axis; now the estimates set it, the band is clipped and its legend says so.
     #[test]
     fn bands_do_not_set_the_axis_and_say_when_clipped() {

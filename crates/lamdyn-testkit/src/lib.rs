@@ -6,6 +6,8 @@
 
 #![deny(missing_docs)]
 
+pub mod modules;
+
 use num_complex::Complex64;
 
 /// Relative error |a − b| / |b| of two complex numbers (absolute when b = 0).

@@ -20,6 +20,22 @@ pub enum UffError {
     /// Data that does not convert to the requested form (e.g. FRFs with different axes).
     #[error("{0}")]
     Convert(String),
+    /// A file that cannot be opened.
+    #[error("cannot open '{path}': {reason}")]
+    Open {
+        /// The file.
+        path: String,
+        /// The system's reason.
+        reason: String,
+    },
+    /// An error in a named file.
+    #[error("'{path}' {source}")]
+    InFile {
+        /// The file.
+        path: String,
+        /// The error, naming the line.
+        source: Box<UffError>,
+    },
 }
 
 pub(crate) fn syntax(line: usize, reason: impl Into<String>) -> UffError {

@@ -34,6 +34,7 @@ mod fields;
 pub mod frf;
 pub mod geometry;
 pub mod meta;
+mod record7;
 pub mod scan;
 pub mod time;
 pub mod vtu;
@@ -177,12 +178,20 @@ pub fn read_with<R: BufRead>(input: R, options: ReadOptions) -> Result<UffFile, 
 /// Reads a UFF file from disk; errors name the file.
 ///
 /// # Errors
-/// A message `'path' line N: ...` for malformed content or `'path': ...` for I/O errors.
-pub fn read_path(path: &std::path::Path, options: ReadOptions) -> Result<UffFile, String> {
-    let f =
-        std::fs::File::open(path).map_err(|e| format!("cannot open '{}': {e}", path.display()))?;
-    read_with(std::io::BufReader::with_capacity(1 << 16, f), options)
-        .map_err(|e| format!("'{}' {e}", path.display()))
+/// [`UffError::Open`] for a file that cannot be opened, [`UffError::InFile`] (`'path' line N:
+/// ...`) for malformed content.
+pub fn read_path(path: &std::path::Path, options: ReadOptions) -> Result<UffFile, UffError> {
+    let path_text = || path.display().to_string();
+    let f = std::fs::File::open(path).map_err(|e| UffError::Open {
+        path: path_text(),
+        reason: e.to_string(),
+    })?;
+    read_with(std::io::BufReader::with_capacity(1 << 16, f), options).map_err(|e| {
+        UffError::InFile {
+            path: path_text(),
+            source: Box::new(e),
+        }
+    })
 }
 
 /// One dataset of a listing.

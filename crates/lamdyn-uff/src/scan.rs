@@ -291,7 +291,7 @@ impl<R: BufRead> Scanner<R> {
         let data_line = self.line + 1;
         let mut bytes = h.bytes;
         if self.lenient {
-            if let Some(layout) = crate::d58::layout_bytes(&ds.lines) {
+            if let Some(layout) = crate::record7::layout_bytes(&ds.lines) {
                 if layout != h.bytes {
                     ds.notice = Some(format!(
                         "line {}: dataset 58b header gives {} bytes, its records 6-7 {layout}: read {layout}",

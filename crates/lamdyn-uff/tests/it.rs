@@ -42,7 +42,9 @@ fn every_conformance_file_reads() {
     for p in &files {
         let name = p.file_name().unwrap().to_string_lossy();
         if name == "dataset_milestone_in_header.uff" {
-            let e = read_path(p, ReadOptions::default()).unwrap_err();
+            let e = read_path(p, ReadOptions::default())
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("line 20") && e.contains("2508876"), "{e}");
             let f = read_path(
                 p,

@@ -2,7 +2,7 @@
 //!
 //! Neither stdout nor stderr is locked for the whole program: progress is drawn on stderr from
 //! worker threads (rayon), and a lock held by the main thread while it waits for those workers
-//! would deadlock them (issue 19: `lamdyn demo` hung in a terminal). Each write takes the lock
+//! would deadlock them (`lamdyn demo` hung in a terminal). Each write takes the lock
 //! for its own duration only.
 
 use std::process::ExitCode;

@@ -406,7 +406,7 @@ fn text_cell(cell: &Cell, col: &Column) -> String {
 mod tests {
     use super::*;
 
-    /// Issue 19.6: a garbage fit's t0 = 1.15e169 s printed as 170 digits in a fixed column.
+    /// A garbage fit's t0 = 1.15e169 s printed as 170 digits in a fixed column.
     #[test]
     fn huge_values_in_fixed_columns_print_in_scientific_notation() {
         let col = Column::new("t0_s", "t0", "s", Fmt::Fixed(3));

@@ -96,10 +96,63 @@ struct RawMesh {
     boundary: Vec<(usize, Vec<i64>, Vec<i64>)>,
 }
 
+/// What is wrong with one node or element of a Gmsh file (the reader adds the file and line).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum EntityError {
+    /// A node tag given twice.
+    NodeTwice { tag: i64 },
+    /// Quadrilaterals of another order than the first ones (at `first_line`).
+    MixedOrder {
+        nodes: usize,
+        first: usize,
+        first_line: usize,
+    },
+    /// Triangles.
+    Triangles,
+    /// 8-node quadrilaterals.
+    Serendipity,
+    /// A volume element.
+    Volume { etype: i64 },
+    /// Another element type.
+    Unsupported { etype: i64 },
+    /// An element with the wrong number of nodes for its type.
+    NodeCount { etype: i64, want: usize, got: usize },
+}
+
+impl std::fmt::Display for EntityError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Self::NodeTwice { tag } => write!(f, "node tag {tag} appears twice"),
+            Self::MixedOrder {
+                nodes,
+                first,
+                first_line,
+            } => write!(
+                f,
+                "a {nodes}-node quadrilateral after {first}-node ones (line {first_line}): one file must hold one element order"
+            ),
+            Self::Triangles => f.write_str(
+                "triangles are not supported: recombine the mesh into quadrilaterals (Mesh.RecombineAll = 1)",
+            ),
+            Self::Serendipity => f.write_str(
+                "8-node (serendipity) quadrilaterals are not supported: mesh with Mesh.SecondOrderIncomplete = 0 for 9-node ones",
+            ),
+            Self::Volume { etype } => write!(
+                f,
+                "volume element type {etype}: lamdyn meshes shells (2D quadrilaterals) only"
+            ),
+            Self::Unsupported { etype } => write!(f, "unsupported element type {etype}"),
+            Self::NodeCount { etype, want, got } => {
+                write!(f, "element type {etype} needs {want} nodes, got {got}")
+            }
+        }
+    }
+}
+
 impl RawMesh {
-    fn add_node(&mut self, tag: i64, p: V3) -> Result<(), String> {
+    fn add_node(&mut self, tag: i64, p: V3) -> Result<(), EntityError> {
         if self.node_tags.insert(tag, self.nodes.len()).is_some() {
-            return Err(format!("node tag {tag} appears twice"));
+            return Err(EntityError::NodeTwice { tag });
         }
         self.nodes.push(p);
         Ok(())
@@ -111,26 +164,26 @@ impl RawMesh {
         nodes: Vec<i64>,
         physicals: Vec<i64>,
         line: usize,
-    ) -> Result<(), String> {
+    ) -> Result<(), EntityError> {
         match etype {
             3 | 10 => {
                 if let Some((first, _, first_line)) = self.quads.first()
                     && first.len() != nodes.len()
                 {
-                    return Err(format!(
-                        "a {}-node quadrilateral after {}-node ones (line {first_line}): one file must hold one element order",
-                        nodes.len(),
-                        first.len()
-                    ));
+                    return Err(EntityError::MixedOrder {
+                        nodes: nodes.len(),
+                        first: first.len(),
+                        first_line: *first_line,
+                    });
                 }
                 self.quads.push((nodes, physicals, line));
             }
             15 => self.boundary.push((0, nodes, physicals)),
             1 | 8 => self.boundary.push((1, nodes, physicals)),
-            2 | 9 => return Err("triangles are not supported: recombine the mesh into quadrilaterals (Mesh.RecombineAll = 1)".into()),
-            16 => return Err("8-node (serendipity) quadrilaterals are not supported: mesh with Mesh.SecondOrderIncomplete = 0 for 9-node ones".into()),
-            4..=7 | 11..=14 | 17..=19 => return Err(format!("volume element type {etype}: lamdyn meshes shells (2D quadrilaterals) only")),
-            t => return Err(format!("unsupported element type {t}")),
+            2 | 9 => return Err(EntityError::Triangles),
+            16 => return Err(EntityError::Serendipity),
+            4..=7 | 11..=14 | 17..=19 => return Err(EntityError::Volume { etype }),
+            t => return Err(EntityError::Unsupported { etype: t }),
         }
         Ok(())
     }
@@ -395,7 +448,7 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
                 )));
             }
             raw.add_node(v[0] as i64, [v[1] * scale, v[2] * scale, v[3] * scale])
-                .map_err(|m| self.err(m))?;
+                .map_err(|m| self.err(m.to_string()))?;
         }
         self.expect_end("$Nodes")
     }
@@ -434,7 +487,7 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
                     )));
                 }
                 raw.add_node(tag, [v[0] * scale, v[1] * scale, v[2] * scale])
-                    .map_err(|m| self.err(m))?;
+                    .map_err(|m| self.err(m.to_string()))?;
             }
             total += count;
         }
@@ -456,7 +509,7 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
             }
             let (etype, ntags) = (v[1], v[2] as usize);
             let nodes = v[3 + ntags..].to_vec();
-            check_node_count(etype, nodes.len()).map_err(|m| self.err(m))?;
+            check_node_count(etype, nodes.len()).map_err(|m| self.err(m.to_string()))?;
             let physical = if ntags > 0 && v[3] != 0 {
                 vec![v[3]]
             } else {
@@ -493,7 +546,7 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
                 if v.is_empty() {
                     return Err(self.err("$Elements: empty element line"));
                 }
-                check_node_count(etype, v.len() - 1).map_err(|m| self.err(m))?;
+                check_node_count(etype, v.len() - 1).map_err(|m| self.err(m.to_string()))?;
                 let line = self.line;
                 raw.add_element(etype, v[1..].to_vec(), phys.clone(), line)
                     .map_err(|m| self.err(format!("element {}: {m}", v[0])))?;
@@ -510,7 +563,7 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
     }
 }
 
-fn check_node_count(etype: i64, n: usize) -> Result<(), String> {
+fn check_node_count(etype: i64, n: usize) -> Result<(), EntityError> {
     let want = match etype {
         15 => 1,
         1 => 2,
@@ -521,7 +574,11 @@ fn check_node_count(etype: i64, n: usize) -> Result<(), String> {
         _ => return Ok(()),
     };
     if n != want {
-        return Err(format!("element type {etype} needs {want} nodes, got {n}"));
+        return Err(EntityError::NodeCount {
+            etype,
+            want,
+            got: n,
+        });
     }
     Ok(())
 }

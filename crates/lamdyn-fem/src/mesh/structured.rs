@@ -260,7 +260,7 @@ impl RectangleSpec {
                 .map(|i| 0.5 * l * graded(2.0 * i as f64 / n as f64 - 1.0, self.grading))
                 .collect()
         } else {
-            axis_coordinates(n, l, self.edge_layers, self.edge_layer_m).map_err(|requirement| {
+            axis_coordinates(n, l, self.edge_layers, self.edge_layer_m).map_err(|why| {
                 FemError::InvalidParameter {
                     context: "rectangle".into(),
                     field: "edge_layers".into(),
@@ -268,19 +268,98 @@ impl RectangleSpec {
                         "{} layers from {} m along {name} ({n} elements over {l} m)",
                         self.edge_layers, self.edge_layer_m
                     ),
-                    requirement,
+                    requirement: why.to_string(),
                 }
             })?
         };
         let protected = self.edge_layers;
-        snap_lines(coords, through, protected).map_err(|requirement| FemError::InvalidParameter {
+        snap_lines(coords, through, protected).map_err(|why| FemError::InvalidParameter {
             context: "rectangle".into(),
             field: format!("lines_{name}_m"),
             value: format!("{through:?}"),
-            requirement,
+            requirement: why.to_string(),
         })
     }
 }
+
+/// Why element edges cannot be graded or moved as asked ([`axis_coordinates`],
+/// [`snap_lines`]); its text is the requirement, for the caller's error naming the field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GridError {
+    /// Fewer elements along a side than the edge layers at both ends and an interior need.
+    TooFewElements {
+        /// Layers at each edge.
+        layers: usize,
+    },
+    /// The first layer is already as wide as a uniform element.
+    FirstLayerTooWide {
+        /// The first layer's width, m.
+        first_m: f64,
+        /// A uniform element's width, m.
+        uniform_m: f64,
+    },
+    /// No geometric growth of the layers fits the side.
+    NoGrowth,
+    /// A coordinate outside the side or on its edge.
+    Outside {
+        /// The coordinate, m.
+        at_m: f64,
+        /// The side's ends, m.
+        side_m: [f64; 2],
+    },
+    /// No interior edge is left to move.
+    NoMovableEdge,
+    /// Two coordinates need the same element edge.
+    EdgeTaken {
+        /// The coordinate, m.
+        at_m: f64,
+        /// The edge, m.
+        edge_m: f64,
+    },
+    /// A coordinate more than half an element from the nearest movable edge.
+    TooFar {
+        /// The coordinate, m.
+        at_m: f64,
+        /// The edge, m.
+        edge_m: f64,
+    },
+    /// The moved edges would cross.
+    Crossing,
+}
+
+impl std::fmt::Display for GridError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Self::TooFewElements { layers } => write!(
+                f,
+                "needs more than {} elements along the side for {layers} layers at each edge and an interior",
+                2 * layers
+            ),
+            Self::FirstLayerTooWide { first_m, uniform_m } => write!(
+                f,
+                "the first layer ({first_m} m) must be thinner than a uniform element ({uniform_m} m)"
+            ),
+            Self::NoGrowth => f.write_str("no geometric growth fits the side"),
+            Self::Outside { at_m, side_m } => write!(
+                f,
+                "{at_m} m lies outside the side ({} m to {} m) or on its edge",
+                side_m[0], side_m[1]
+            ),
+            Self::NoMovableEdge => f.write_str("no interior element edge is left to move"),
+            Self::EdgeTaken { at_m, edge_m } => write!(
+                f,
+                "{at_m} m needs the same element edge ({edge_m} m) as another coordinate: use more elements"
+            ),
+            Self::TooFar { at_m, edge_m } => write!(
+                f,
+                "{at_m} m is more than half an element from the nearest movable edge ({edge_m} m): use more elements"
+            ),
+            Self::Crossing => f.write_str("moved edges would cross: use more elements"),
+        }
+    }
+}
+
+impl std::error::Error for GridError {}
 
 /// Moves element edges onto the coordinates `through`: each goes to the nearest edge that is
 /// not a boundary, not among the `protected` edge layers at either end, and not taken by
@@ -288,9 +367,13 @@ impl RectangleSpec {
 /// moves into, so that no element shrinks below half its width and the order is kept.
 ///
 /// # Errors
-/// A sentence for a coordinate outside the side, two coordinates that need the same edge (the
+/// [`GridError`]: a coordinate outside the side, two coordinates that need the same edge (the
 /// mesh is too coarse for the grid), or a move that would squeeze an element to under half.
-pub fn snap_lines(mut x: Vec<f64>, through: &[f64], protected: usize) -> Result<Vec<f64>, String> {
+pub fn snap_lines(
+    mut x: Vec<f64>,
+    through: &[f64],
+    protected: usize,
+) -> Result<Vec<f64>, GridError> {
     let n = x.len() - 1;
     let (lo, hi) = (x[0], x[n]);
     let first = 1 + protected;
@@ -299,21 +382,22 @@ pub fn snap_lines(mut x: Vec<f64>, through: &[f64], protected: usize) -> Result<
     let original = x.clone();
     for &c in through {
         if !(c.is_finite() && c > lo && c < hi) {
-            return Err(format!(
-                "{c} m lies outside the side ({lo} m to {hi} m) or on its edge"
-            ));
+            return Err(GridError::Outside {
+                at_m: c,
+                side_m: [lo, hi],
+            });
         }
         if first > last {
-            return Err("no interior element edge is left to move".into());
+            return Err(GridError::NoMovableEdge);
         }
         let k = (first..=last)
             .min_by(|&a, &b| (original[a] - c).abs().total_cmp(&(original[b] - c).abs()))
             .unwrap_or(first);
         if taken[k] {
-            return Err(format!(
-                "{c} m needs the same element edge ({} m) as another coordinate: use more elements",
-                original[k]
-            ));
+            return Err(GridError::EdgeTaken {
+                at_m: c,
+                edge_m: original[k],
+            });
         }
         let room = if c >= original[k] {
             0.5 * (original[k + 1] - original[k])
@@ -321,16 +405,16 @@ pub fn snap_lines(mut x: Vec<f64>, through: &[f64], protected: usize) -> Result<
             0.5 * (original[k] - original[k - 1])
         };
         if (c - original[k]).abs() > room + 1e-12 * (hi - lo) {
-            return Err(format!(
-                "{c} m is more than half an element from the nearest movable edge ({} m): use more elements",
-                original[k]
-            ));
+            return Err(GridError::TooFar {
+                at_m: c,
+                edge_m: original[k],
+            });
         }
         taken[k] = true;
         x[k] = c;
     }
     if x.windows(2).any(|w| w[1] <= w[0]) {
-        return Err("moved edges would cross: use more elements".into());
+        return Err(GridError::Crossing);
     }
     Ok(x)
 }
@@ -341,30 +425,32 @@ pub fn snap_lines(mut x: Vec<f64>, through: &[f64], protected: usize) -> Result<
 /// smoothly, w_0 q^layers = h, with 2 Σ w_k + (n − 2 layers) h = l (found by bisection).
 ///
 /// # Errors
-/// A sentence when the layers do not fit: fewer than one interior element, or a first layer
+/// [`GridError`] when the layers do not fit: fewer than one interior element, or a first layer
 /// already as wide as a uniform element (no refinement to make).
-pub fn axis_coordinates(n: usize, l: f64, layers: usize, first_m: f64) -> Result<Vec<f64>, String> {
+pub fn axis_coordinates(
+    n: usize,
+    l: f64,
+    layers: usize,
+    first_m: f64,
+) -> Result<Vec<f64>, GridError> {
     if 2 * layers >= n {
-        return Err(format!(
-            "needs more than {} elements along the side for {layers} layers at each edge and an interior",
-            2 * layers
-        ));
+        return Err(GridError::TooFewElements { layers });
     }
     let interior = (n - 2 * layers) as f64;
     let layer_sum = |q: f64| (0..layers).map(|k| first_m * q.powi(k as i32)).sum::<f64>();
     // Mismatch between the next layer's width and the interior width.
     let mismatch = |q: f64| first_m * q.powi(layers as i32) - (l - 2.0 * layer_sum(q)) / interior;
     if mismatch(1.0) >= 0.0 {
-        return Err(format!(
-            "the first layer ({first_m} m) must be thinner than a uniform element ({} m)",
-            l / n as f64
-        ));
+        return Err(GridError::FirstLayerTooWide {
+            first_m,
+            uniform_m: l / n as f64,
+        });
     }
     let (mut lo, mut hi) = (1.0, 2.0);
     while mismatch(hi) < 0.0 {
         hi *= 2.0;
         if hi > 1e6 {
-            return Err("no geometric growth fits the side".into());
+            return Err(GridError::NoGrowth);
         }
     }
     for _ in 0..200 {

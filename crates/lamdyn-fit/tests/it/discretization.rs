@@ -1,4 +1,4 @@
-//! The model's discretization error in the fit's intervals (issue 16.4).
+//! The model's discretization error in the fit's intervals.
 //!
 //! The measurement: the paper's plate (Table 1 footprint, 3.85 mm glass, free) on 24 × 24
 //! MITC9 elements with 3 edge layers (within 6e-5 of the Reissner–Mindlin reference in its

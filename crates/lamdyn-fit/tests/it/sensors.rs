@@ -1,4 +1,4 @@
-//! Sensors between nodes (issue 16.5): a fit whose model mesh misses the sensor grid by half an
+//! Sensors between nodes: a fit whose model mesh misses the sensor grid by half an
 //! element must be as accurate as one whose nodes lie on it.
 //!
 //! The measurement: the paper's plate (Table 1 footprint, 3.85 mm glass, free) on a fine mesh
@@ -9,7 +9,7 @@
 //! (coarse node coordinates 3i + 1), grid B half-way between coarse node lines in x and in y
 //! (3i + 1.5): for MITC4 the element centres, where bilinear interpolation is least accurate,
 //! for MITC9 a quarter of an element from its nearest node line. Both grids are nodes of the
-//! fine truth. Issue 16 saw η 7–114 % off with sensors mapped to nearest nodes up to 14 mm
+//! fine truth. A fit saw η 7–114 % off with sensors mapped to nearest nodes up to 14 mm
 //! away.
 
 use super::common::{GLASS, solve};
@@ -150,7 +150,7 @@ fn grids_apart(order: ElementOrder, coarse_elements: usize) -> (usize, f64, f64,
     (a.peaks.len(), worst_e, worst_eta, nearest_eta)
 }
 
-/// The fits agree within 0.05 % in E' and 1 % in η (issue 16), and the nearest node does not
+/// The fits agree within 0.05 % in E' and 1 % in η, and the nearest node does not
 /// (η over 3 % off), so the test tells the two mappings apart.
 fn assert_between_nodes_as_good((peaks, worst_e, worst_eta, nearest_eta): (usize, f64, f64, f64)) {
     assert!(peaks >= 5, "{peaks} peaks");

@@ -157,7 +157,7 @@ fn check_modulus_units(
             context: loc.to_string(),
             field: field.to_string(),
             value: format!("{at_10_hz:.4e} Pa at 10 Hz"),
-            requirement: why,
+            requirement: why.to_string(),
         }
     })?;
     Ok(())

@@ -112,7 +112,7 @@ fn e756_errors_name_the_problem() {
     assert!(m.starts_with("sandwich reduction, mode 1: A = "), "{m}");
 }
 
-/// Issue 19.3: a beam thickness in mm (1.5 for 1.5 mm) used to give G1 = 2915 MPa; now refused.
+/// A beam thickness in mm (1.5 for 1.5 mm) used to give G1 = 2915 MPa; now refused.
 #[test]
 fn e756_refuses_millimetres_and_gigapascals() {
     let e = UniformBeam::new(0.2, 1.5, 7850.0).unwrap_err().to_string();

@@ -144,7 +144,7 @@ fn sandwich_spec_errors() {
     assert!(parse(&no_core_law).to_sandwich().is_ok());
 }
 
-/// Issue 19.3: mm, MPa and g/cm³ written into SI fields are refused with the unit meant.
+/// Mm, MPa and g/cm³ written into SI fields are refused with the unit meant.
 #[test]
 fn units_other_than_si_are_refused() {
     let mm = ROOF.replacen("thickness_m = 0.42e-3", "thickness_m = 0.42", 1);

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 /// Runs `lamdyn run`.
 pub fn run(args: &RunArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
-    lamdyn_pipeline::stages::check_job_path(&args.job)?;
+    lamdyn_pipeline::check_job_path(&args.job)?;
     let job = Job::read(&args.job)?.with_overrides(args.samples, args.seed)?;
     let base = base_of(&args.job);
     let mut inputs: Vec<PathBuf> = job.input_files(&base).into_iter().map(|(_, p)| p).collect();

@@ -323,7 +323,7 @@ fn bad_time_data() {
     }
 }
 
-/// Issue 19.3 and 19.6: a hit file without its '# quantity' line was read as receptance (a
+/// A hit file without its '# quantity' line was read as receptance (a
 /// loss factor of 1e-64, exit 0), and a time column in ms gave "0 lines in [5, 100] Hz".
 /// Both are errors that say what is wrong.
 #[test]
@@ -368,7 +368,7 @@ fn time_files_without_quantity_or_in_ms_are_refused() {
     );
 }
 
-/// Issue 19.7: `ema` showed no progress during the refinement, even in a terminal. Piped, its
+/// `ema` showed no progress during the refinement, even in a terminal. Piped, its
 /// stderr carries plain progress lines for the diagram and the refinement.
 #[test]
 fn ema_reports_its_steps_as_plain_lines_when_piped() {

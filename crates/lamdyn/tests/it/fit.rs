@@ -225,7 +225,7 @@ fn bad_inputs_give_clear_errors() {
         job_with(&sub, &[("model.toml", model)], ""),
         "exclude their resonance bands",
     ));
-    // Issue 19.3b: frequencies x1000 used to fit to E0 = 1.48e16 Pa with exit 0.
+    // Frequencies x1000 used to fit to E0 = 1.48e16 Pa with exit 0.
     let khz: Vec<String> = frf
         .lines()
         .map(|l| match l.split_once(',') {
@@ -312,7 +312,7 @@ fn uff_measurement_gives_the_csv_result() {
     );
 }
 
-/// Issue 19.9: `uff convert --to csv` wrote a channels table that `ema` and `fit` rejected
+/// `uff convert --to csv` wrote a channels table that `ema` and `fit` rejected
 /// ("channel '1+Z' was already defined"). Round trip: the example's FRFs as UFF, converted to
 /// CSV, fitted again: the same result as the CSV files they came from.
 #[test]
@@ -404,7 +404,7 @@ fn uff_converted_to_csv_feeds_fit_and_ema() {
     assert_eq!(code, 0, "{err}");
 }
 
-/// Issue 19.9: one layout and one vocabulary. A `lamdyn run` job is a `lamdyn fit` job; the
+/// One layout and one vocabulary. A `lamdyn run` job is a `lamdyn fit` job; the
 /// old fit layout (`model` as a path, `[misfit]`) and the old flag spellings still work, each
 /// with a deprecation note; the job file's spellings work on the command line without one.
 #[test]
@@ -458,7 +458,7 @@ fn run_jobs_and_old_spellings_are_read_by_fit() {
     }
 }
 
-/// `--poles` (issue 16.5): the example's FRFs through `lamdyn ema`, its modes.csv into the fit.
+/// `--poles`: the example's FRFs through `lamdyn ema`, its modes.csv into the fit.
 /// The mode-wise estimate then uses the identified poles instead of the RMS FRF's peaks (which
 /// sit up to 0.3 % below the poles in frequency on this plate, so E' = E_ref (f/f_FE)² came
 /// out up to 0.5 % low), and η = 2ζ of each pole (the half-power bandwidth is not resolved at

@@ -153,7 +153,7 @@ fn bad_models_name_the_field() {
         .join("../lamdyn-fem/testdata/gmsh/plate-v41.msh");
     std::fs::copy(plate, dir.join("plate.msh")).unwrap();
     let cases = [
-        // Issue 19.3: mm, GPa and a metre mesh read as mm are refused with the unit meant.
+        // Mm, GPa and a metre mesh read as mm are refused with the unit meant.
         (
             write(
                 "mm.toml",
@@ -241,7 +241,7 @@ fn bad_models_name_the_field() {
     );
 }
 
-/// Issue 19.3b: `--elements 2000x2000` (inside the documented range) aborted with "memory
+/// `--elements 2000x2000` (inside the documented range) aborted with "memory
 /// allocation of 10371456288 bytes failed" (rc 134); the memory is estimated first and the
 /// model refused with the figure.
 #[test]

@@ -128,7 +128,7 @@ fn binary_exit_codes() {
     assert_eq!(usage.status.code(), Some(2));
 }
 
-/// Issue 19.6: `--help` printed some defaults twice (in the doc text and by clap). Each
+/// `--help` printed some defaults twice (in the doc text and by clap). Each
 /// option's block of every command's help states its default at most once.
 #[test]
 fn help_states_each_default_once() {
@@ -169,7 +169,7 @@ fn help_states_each_default_once() {
     }
 }
 
-/// Issue 19.10: the README says how to put `lamdyn` on the PATH, with a path that holds the
+/// The README says how to put `lamdyn` on the PATH, with a path that holds the
 /// binary's package, and does not send readers to files the repository lacks without saying so.
 #[test]
 fn readme_install_command_names_the_binary_package() {

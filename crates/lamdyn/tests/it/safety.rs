@@ -1,4 +1,4 @@
-//! Issue 19: lamdyn never destroys what it did not write, checks its outputs and inputs before
+//! Lamdyn never destroys what it did not write, checks its outputs and inputs before
 //! the work, and trusts no cache entry blindly. Each test failed on the main of 2026-11-23.
 
 use super::common::{lamdyn, run_into, small_demo, temp_dir};

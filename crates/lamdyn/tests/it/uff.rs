@@ -140,7 +140,7 @@ fn lenient_reads_a_record_cut_short() {
     assert!(err.contains("kept 42"), "{err}");
 }
 
-/// Issue 19.6: `uff info` on a non-UFF binary file dumped its bytes to the terminal; the
+/// `uff info` on a non-UFF binary file dumped its bytes to the terminal; the
 /// message says it is not a universal file and shows an escaped excerpt.
 #[test]
 fn a_binary_file_is_named_not_dumped() {
