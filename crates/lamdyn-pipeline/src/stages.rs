@@ -388,7 +388,11 @@ fn layered_route(
         (line, coarsest, setup) = (Some(outcome.line), outcome.coarsest, Some(s));
     }
     let law = t.stage("core law", || {
-        let law = layered::fit_law(job.inverse.core_law, modal, coarsest.as_ref());
+        let tuning = setup
+            .as_ref()
+            .map(|s| s.tuning.law.clone())
+            .unwrap_or_default();
+        let law = layered::fit_law(job.inverse.core_law, &tuning, modal, coarsest.as_ref());
         Ok((law, false))
     })?;
     let Some((setup, at)) = setup
@@ -405,7 +409,8 @@ fn layered_route(
     })?;
     line = Some(text::rerun_at_supports(&again.line, at));
     let law = t.stage("core law at the supports found", || {
-        let law = layered::fit_law(moved.core_law, modal, again.coarsest.as_ref());
+        let tuning = &moved.tuning.law;
+        let law = layered::fit_law(moved.core_law, tuning, modal, again.coarsest.as_ref());
         Ok((law, false))
     })?;
     Ok((line, law))

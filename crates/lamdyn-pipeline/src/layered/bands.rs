@@ -16,7 +16,6 @@
 //!   elements per layer finds at the same pole, |ln G*₂ − ln G*₁| to first order through the
 //!   mode's sensitivity, as one standard deviation; the ladder refines in plane only).
 
-use super::law::WIDE_PRIOR;
 use super::pole_scatter::PoleScatter;
 use crate::band::{BandSource, CoarsePole, InputEffect, LayeredBand, half_width};
 use crate::job::UncertaintyOptions;
@@ -48,7 +47,7 @@ fn input_rel_sd(input: Input, plate: &LayeredPlate, priors: &UncertaintyOptions)
 }
 
 /// Each input's prior and the coarsest model moved by ±1 sd of each input with a prior below
-/// [`WIDE_PRIOR`], built once for every mode's band ([`band`], [`second_order`]): neither
+/// `wide_prior` ([`LawTuning::wide_prior`](super::tuning::LawTuning::wide_prior)), built once for every mode's band ([`band`], [`second_order`]): neither
 /// depends on the mode.
 pub struct MovedBySd {
     /// Per input: its prior's relative sd ([`input_rel_sd`]) and the models at +1 sd and
@@ -62,13 +61,14 @@ impl MovedBySd {
         coarsest: &LayeredInverse,
         plate: &LayeredPlate,
         priors: &UncertaintyOptions,
+        wide_prior: f64,
     ) -> Self {
         let models = coarsest
             .inputs()
             .into_par_iter()
             .map(|input| {
                 let sd = input_rel_sd(input, plate, priors);
-                let moved = (sd > 0.0 && sd < WIDE_PRIOR)
+                let moved = (sd > 0.0 && sd < wide_prior)
                     .then(|| {
                         let at = |sign: f64| coarsest.with_inputs_moved(&[(input, sign * sd)]).ok();
                         Some([at(1.0)?, at(-1.0)?])
@@ -214,7 +214,7 @@ fn through_thickness_eigenvalue(
 
 /// The second order of the inputs' effect on a mode's core, per input: ∂²ln x/∂(ln θ_j)² for
 /// x = G' and η (the "inputs beyond first order" of [`LayeredBand`]). Each input j with a prior
-/// s_j below [`WIDE_PRIOR`] (the wide ones are re-linearised by [`super::law::fit_law`] instead) is moved
+/// s_j below the wide prior (the wide ones are re-linearised by [`super::law::fit_law`] instead) is moved
 /// by ±s_j on the coarsest model (once for all modes, [`MovedBySd`]) and the mode's coarse
 /// eigenvalue inverted there: the second
 /// difference d_j = ln x₊ + ln x₋ − 2 ln x₀ gives d_j/s_j². On a glass laminate the core found

@@ -5,6 +5,7 @@
 //! its pole's complex frequency to its real one ([`to_real_frequency`]).
 
 use super::setup::LayeredSetup;
+use super::tuning::LawTuning;
 use crate::band::{BandSource, CoarsePole, LayeredBand};
 use crate::chain::CorePoint;
 use crate::job::CoreLawChoice;
@@ -31,17 +32,13 @@ pub(super) fn core_laws(choice: CoreLawChoice) -> Vec<CoreLaw> {
 /// sit (offset in their spacing, [`lamdyn_fit::joint::prony_relaxation_times_shifted`]).
 pub(super) type Candidate = (CoreLaw, f64);
 
-/// The offsets of a generalized Maxwell law's relaxation times tried ([`fit_law`]): a quarter
-/// of their spacing apart, which the modes cannot choose between where they lie far apart.
-const PRONY_OFFSETS: [f64; 4] = [0.0, 0.25, 0.5, 0.75];
-
 /// The candidates of a job's law choice ([`core_laws`], each generalized Maxwell law on every
-/// offset of [`PRONY_OFFSETS`]).
-pub(super) fn candidates(choice: CoreLawChoice) -> Vec<Candidate> {
+/// offset of `prony_offsets`).
+pub(super) fn candidates(choice: CoreLawChoice, prony_offsets: &[f64]) -> Vec<Candidate> {
     core_laws(choice)
         .into_iter()
         .flat_map(|law| match law {
-            CoreLaw::GeneralizedMaxwell => PRONY_OFFSETS.iter().map(|&o| (law, o)).collect(),
+            CoreLaw::GeneralizedMaxwell => prony_offsets.iter().map(|&o| (law, o)).collect(),
             _ => vec![(law, 0.0)],
         })
         .collect()
@@ -98,7 +95,7 @@ pub(super) fn lowest_akaike(
 /// favours is chosen on the modes' own noise (`Weights::Shape`) and fitted again with the
 /// inputs beyond second order as each point's noise too (`Weights::Law`).
 ///
-/// With the `coarsest` model and an input with a wide prior ([`WIDE_PRIOR`]: the supports')
+/// With the `coarsest` model and an input with a wide prior ([`LawTuning::wide_prior`]: the supports')
 /// the fit is re-linearised (Gauss–Newton on the inputs): the sensitivities are first order
 /// at the nominal inputs, and an input the modes pin far from nominal (a support's stiffness
 /// known to 20 % moves G' by 2–6 times its own change on a mode mixed with the bounce) leaves
@@ -107,22 +104,24 @@ pub(super) fn lowest_akaike(
 /// and its sensitivities taken there; the mode's point
 /// moves by the ratio of the two coarse solutions, and the fit runs again with the priors
 /// still about nominal ([`InputPrior::at`]), until the inputs move by less than 5 % of their
-/// prior sd (at most [`RELINEARISATIONS`] times; a mode the moved model cannot match ends
+/// prior sd (at most [`LawTuning::relinearisations`] times; a mode the moved model cannot match ends
 /// the iteration at the last fit).
 pub fn fit_law(
     core_law: CoreLawChoice,
+    tuning: &LawTuning,
     modal: &[CorePoint],
     coarsest: Option<&LayeredInverse>,
 ) -> Option<std::result::Result<CoreLawFit, FitError>> {
-    let candidates = candidates(core_law);
+    let candidates = candidates(core_law, &tuning.prony_offsets);
+    let fit_with = |c: Candidate, weights| fit_law_with(c, tuning, modal, coarsest, weights);
     if candidates.len() < 2 {
         let law = *candidates.first()?;
-        return fit_law_with(law, modal, coarsest, Weights::Law);
+        return fit_with(law, Weights::Law);
     }
     // The choice on the modes' own noise, the law's values and bands with all of it.
     let shapes: Vec<_> = candidates
         .into_iter()
-        .filter_map(|c| Some((c, fit_law_with(c, modal, coarsest, Weights::Shape)?)))
+        .filter_map(|c| Some((c, fit_with(c, Weights::Shape)?)))
         .collect();
     let (chosen, why) = match lowest_akaike(&shapes)? {
         Ok(c) => c,
@@ -134,11 +133,11 @@ pub fn fit_law(
     let others: Vec<(f64, CoreLawFit)> = (0..shapes.len())
         .filter(|&k| k != chosen && criterion(k) - own < akaike_reach())
         .filter_map(|k| {
-            let fit = fit_law_with(shapes[k].0, modal, coarsest, Weights::Law)?.ok()?;
+            let fit = fit_with(shapes[k].0, Weights::Law)?.ok()?;
             Some((criterion(k), fit))
         })
         .collect();
-    let fit = fit_law_with(shapes[chosen].0, modal, coarsest, Weights::Law)?;
+    let fit = fit_with(shapes[chosen].0, Weights::Law)?;
     Some(fit.map(|f| {
         let mut f = f.with_alternatives(own, others);
         if let Some(why) = why {
@@ -166,7 +165,7 @@ pub(super) enum Weights {
 
 /// How far (ln stiffness, ln damping) the joint law moved the supports of `setup` from the job
 /// file's, when it moved the supports' stiffness or damping significantly: by more
-/// than [`SUPPORTS_RERUN`] and beyond its 95 % interval about the job's value. The mesh ladder
+/// than [`LawTuning::supports_rerun`] and beyond its 95 % interval about the job's value. The mesh ladder
 /// then runs again there ([`LayeredSetup::at_supports`]): re-linearising the fit on the coarsest model
 /// cannot bring back a mode the ladder lost at the job's supports (the mixed modes of a part
 /// on foam lie elsewhere when the foam is 20 % stiffer).
@@ -188,43 +187,23 @@ pub fn supports_found(
         found(Input::SupportStiffness).unwrap_or((0.0, false)),
         found(Input::SupportDamping).unwrap_or((0.0, false)),
     );
-    let moved = |(d, significant): (f64, bool)| significant && d.abs() > SUPPORTS_RERUN;
+    let rerun = setup.tuning.law.supports_rerun;
+    let moved = |(d, significant): (f64, bool)| significant && d.abs() > rerun;
     if !(moved(k) || moved(c)) {
         return None;
     }
     Some([k.0, c.0])
 }
 
-/// The smallest change (ln) of the supports' stiffness or damping found by the joint law that
-/// runs the mesh ladder again at the supports found ([`supports_found`]); below it the
-/// re-linearised fit holds it.
-pub const SUPPORTS_RERUN: f64 = 0.05;
-
-/// The smallest prior standard deviation (relative) of an input that makes the joint fit
-/// re-linearise ([`fit_law`]): the supports' (20 %, 30 % by default). With the faces' priors
-/// alone (1 %, a few per cent on a thickness) the first order holds and the fit is not
-/// re-linearised: on the pipeline test's free plate, whose points scatter 2.9x beyond their
-/// noise (the truth's own mesh error), re-linearising dragged the poorly determined core
-/// thickness from +0.2 % to +1.7 % over four steps, chasing that scatter, and the law's η band
-/// missed the truth at 78 Hz. Moving only the supports' inputs, not the faces', left the
-/// supported coverage test's joint η band at 87 % (all inputs: 92 %).
-pub const WIDE_PRIOR: f64 = 0.05;
-
-/// The re-linearisation stops when no input moved by more than this fraction of its prior's
-/// standard deviation since the last ([`fit_law`]).
-pub const SETTLED: f64 = 0.05;
-
-/// Most re-linearisations of the joint fit ([`fit_law`]).
-pub const RELINEARISATIONS: usize = 4;
-
 /// [`fit_law`] with the law given.
 pub(super) fn fit_law_with(
     (law, prony_offset): Candidate,
+    tuning: &LawTuning,
     modal: &[CorePoint],
     coarsest: Option<&LayeredInverse>,
     weights: Weights,
 ) -> Option<std::result::Result<CoreLawFit, FitError>> {
-    let (index, points, priors) = mode_points(modal, weights);
+    let (index, points, priors) = mode_points(modal, weights, tuning.remainder_shared);
     if points.is_empty() {
         return None;
     }
@@ -238,7 +217,7 @@ pub(super) fn fit_law_with(
     // Only where some input has a wide prior (the faces' first order holds over theirs).
     if priors
         .iter()
-        .all(|p| p.rel_sd < WIDE_PRIOR || Input::named(&p.name).is_none())
+        .all(|p| p.rel_sd < tuning.wide_prior || Input::named(&p.name).is_none())
     {
         return Some(Ok(fit));
     }
@@ -249,13 +228,13 @@ pub(super) fn fit_law_with(
     // Where the points were taken (the model's own inputs), and where the fit stands now.
     let base: Vec<f64> = priors.iter().map(|p| p.at).collect();
     let mut at = base.clone();
-    for _ in 0..RELINEARISATIONS {
+    for _ in 0..tuning.relinearisations {
         let found: Vec<f64> = fit.inputs().iter().map(|p| p.value).collect();
         let settled = found
             .iter()
             .zip(&at)
             .zip(&priors)
-            .all(|((d, a), p)| (d - a).abs() < SETTLED * p.rel_sd);
+            .all(|((d, a), p)| (d - a).abs() < tuning.settled * p.rel_sd);
         if settled {
             break;
         }
@@ -339,7 +318,8 @@ pub fn to_real_frequency(
     modal: &mut [CorePoint],
     law: Option<&std::result::Result<CoreLawFit, FitError>>,
 ) {
-    let (index, points, _) = mode_points(modal, Weights::Law);
+    // The shared remainder moves no point's G*: its share does not matter here.
+    let (index, points, _) = mode_points(modal, Weights::Law, 0.0);
     let moved: Vec<Complex64> = match law {
         Some(Ok(fit)) if fit.real_frequency_factors.len() == points.len() => fit
             .real_frequency_factors
@@ -364,6 +344,7 @@ pub fn to_real_frequency(
 pub(super) fn mode_points(
     modal: &[CorePoint],
     weights: Weights,
+    remainder_shared: f64,
 ) -> (Vec<usize>, Vec<ModePoint>, Vec<InputPrior>) {
     let mut index = Vec::new();
     let mut points: Vec<ModePoint> = Vec::new();
@@ -428,14 +409,10 @@ pub(super) fn mode_points(
         pt.second_order = kept(&pt.second_order);
     }
     if weights == Weights::Law {
-        share_the_remainder(&mut points, &mut priors);
+        share_the_remainder(&mut points, &mut priors, remainder_shared);
     }
     (index, points, priors)
 }
-
-/// The part of each point's "inputs beyond second order" that all modes share: the square of
-/// the correlation between two modes' remainders (`share_the_remainder`).
-pub const REMAINDER_SHARED: f64 = 0.5;
 
 /// The joint fit's two terms for the inputs' remainder beyond second order that the modes
 /// share (G', η).
@@ -447,15 +424,19 @@ pub const SHARED_REMAINDER: [BandSource; 2] = [
 /// Splits each point's "inputs beyond second order" b_k (G', η) into a part of its own noise,
 /// √(1 − ρ) b_k, and a part all modes share, √ρ b_k times one term per quantity under a unit
 /// prior (two more "inputs" of the joint fit: [`SHARED_REMAINDER`]), with ρ =
-/// [`REMAINDER_SHARED`]; the variance per mode stays b_k². The remainder is a function of the
+/// `shared` ([`LawTuning::remainder_shared`]); the variance per mode stays b_k². The remainder is a function of the
 /// inputs every mode shares, so taken as independent noise it averaged down over the modes
 /// while the modes' errors moved together: on the demo roof with the faces drawn from their
 /// priors (`chain_coverage`, 20 seeds) the law's η band held the truth at 85 % of the pairs,
 /// the law 2.8–4.3 % low in η at every mode of two seeds and 13–25 % high at three; split
 /// like this, at 94.7 % (G': 97.9 → 100 %). Its sign differs between modes in G' (seed 9:
 /// −15 … +5 %), so it is not all shared either.
-pub(super) fn share_the_remainder(points: &mut [ModePoint], priors: &mut Vec<InputPrior>) {
-    let own = (1.0 - REMAINDER_SHARED).sqrt();
+pub(super) fn share_the_remainder(
+    points: &mut [ModePoint],
+    priors: &mut Vec<InputPrior>,
+    shared: f64,
+) {
+    let own = (1.0 - shared).sqrt();
     let mut remainders = Vec::with_capacity(points.len());
     for pt in points.iter_mut() {
         let mut b = [0.0; 2];
@@ -473,7 +454,7 @@ pub(super) fn share_the_remainder(points: &mut [ModePoint], priors: &mut Vec<Inp
     let level = [0, 1].map(|c| {
         let mut v: Vec<f64> = remainders.iter().map(|b| b[c]).collect();
         v.sort_by(f64::total_cmp);
-        REMAINDER_SHARED.sqrt() * v.get(v.len() / 2).copied().unwrap_or(0.0)
+        shared.sqrt() * v.get(v.len() / 2).copied().unwrap_or(0.0)
     });
     if level == [0.0, 0.0] {
         return;

@@ -30,6 +30,7 @@ mod pole_scatter;
 mod setup;
 #[cfg(test)]
 mod tests;
+mod tuning;
 
 pub use law::{fit_law, supports_found, to_real_frequency};
 pub use pole_scatter::PoleChecks;
@@ -133,7 +134,8 @@ pub fn run(
         Ok(o) => o,
         Err(e) => return Ok(no_layered(modal, &targets, "not converged", e.to_string())),
     };
-    let pairs = fit_overlapping_pairs((&coarsest, &finer), data.frfs, data.ema, &targets, &mut out);
+    let models = (&coarsest, finer.as_slice());
+    let pairs = fit_overlapping_pairs(models, &setup.tuning.pair_fit, data, &targets, &mut out);
     record_modes(modal, &targets, &out);
     let thick = through_thickness.as_ref().ok();
     let bands = mode_bands(
@@ -198,7 +200,8 @@ fn mode_bands(
     pair_bands: &[Option<PairBand>],
 ) -> Vec<Option<std::result::Result<LayeredBand, lamdyn_layered::LayeredError>>> {
     use crate::band::BandSource;
-    let moved = MovedBySd::build(models.0, &setup.plate, &setup.priors);
+    let wide = setup.tuning.law.wide_prior;
+    let moved = MovedBySd::build(models.0, &setup.plate, &setup.priors, wide);
     targets
         .par_iter()
         .zip(&out.modes)

@@ -28,6 +28,7 @@
 //! ([`BandSource::PairFit`](crate::band::BandSource::PairFit)) and the spread over the fitted
 //! band's width ([`BandSource::PairFitLines`](crate::band::BandSource::PairFitLines)).
 
+use super::tuning::PairFitTuning;
 use crate::err;
 use crate::error::Result;
 use lamdyn_ema::identify::EmaResult;
@@ -39,20 +40,6 @@ use lamdyn_layered::inverse::LayeredInverse;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
-
-/// Half-widths each side of the pair whose lines the fit uses.
-pub const HALF_WIDTHS: f64 = 3.0;
-
-/// The other bands the fit is repeated on, in half-widths each side of the pair: their spread
-/// is the band's source `PairFitLines`.
-pub const OTHER_HALF_WIDTHS: [f64; 2] = [2.0, 4.0];
-
-/// How far (|ln G'/G'₀|, |ln η/η₀|) the fit may move from its start, the mean of the two
-/// modes' own G*: a factor 2, within the coarsest basis's G_ref/4 … 4 G_ref about a start
-/// that lies within √2 of G_ref. Beyond it the reduced model is not checked, and a pair
-/// whose modes barely feel the core (a hump the residues can follow) let the fit wander to a
-/// G' of 0.5 % and an η of 10⁷ of the start.
-const REACH: f64 = std::f64::consts::LN_2;
 
 /// An overlapping pair's fit.
 #[derive(Debug, Clone, PartialEq)]
@@ -70,8 +57,8 @@ pub struct PairFit {
     pub lines: usize,
     /// √(S/Σ|H|²) with the identification's two poles and with the fitted ones.
     pub misfit: [f64; 2],
-    /// The sample standard deviations of ln G' and ln η over the fits on [`HALF_WIDTHS`] and
-    /// [`OTHER_HALF_WIDTHS`] (those that succeed; `None` if only the first did).
+    /// The sample standard deviations of ln G' and ln η over the fits on the tuning's half-widths
+    /// and its other half-widths (those that succeed; `None` if only the first did).
     pub band_choice_sd: Option<[f64; 2]>,
 }
 
@@ -144,7 +131,7 @@ pub type Correction<'a> =
 
 /// Fits the pair (`targets`, the identification's eigenvalues −p² of its two modes, and the
 /// ladder's results for them) to the measured FRFs of `set` (module docs): on the lines within
-/// [`HALF_WIDTHS`] of the pair, and again within [`OTHER_HALF_WIDTHS`] for the spread.
+/// `tuning.half_widths` of the pair, and again within `tuning.other_half_widths` for the spread.
 ///
 /// # Errors
 /// A message (for the layered line) when a mode is lost, both poles matched one mode of the
@@ -152,6 +139,7 @@ pub type Correction<'a> =
 /// fit fails or does not settle, or the fitted poles are not the two modes' by rank.
 pub fn fit_pair(
     coarsest: &LayeredInverse,
+    tuning: &PairFitTuning,
     set: &FrfSet,
     ema: &EmaResult,
     targets: [Complex64; 2],
@@ -165,11 +153,12 @@ pub fn fit_pair(
     // weigh differently), a source of its own in the band. Side by side, each sequential
     // inside: the same bits on any thread count.
     let (main, others) = rayon::join(
-        || pair.fit(&data, HALF_WIDTHS),
+        || pair.fit(&data, tuning.half_widths, tuning.reach),
         || {
-            OTHER_HALF_WIDTHS
+            tuning
+                .other_half_widths
                 .par_iter()
-                .map(|&h| pair.fit(&data, h))
+                .map(|&h| pair.fit(&data, h, tuning.reach))
                 .collect::<Vec<_>>()
         },
     );
@@ -376,12 +365,12 @@ impl<'a> Pair<'a> {
         Some(r)
     }
 
-    /// The fit over the lines within `half_widths` of the pair.
-    fn fit(&self, data: &Data, half_widths: f64) -> Result<PairFit> {
+    /// The fit over the lines within `half_widths` of the pair, x within `reach` of 0.
+    fn fit(&self, data: &Data, half_widths: f64, reach: f64) -> Result<PairFit> {
         let band = self.band(data, half_widths)?;
         let residuals = |x: &[f64]| {
-            // Within the basis's range about the start ([`REACH`]).
-            if x.iter().any(|v| v.abs() > REACH) {
+            // Within the basis's range about the start ([`PairFitTuning::reach`]).
+            if x.iter().any(|v| v.abs() > reach) {
                 return None;
             }
             self.residuals(data, &band, self.model_pair(self.g_of(x))?)

@@ -4,9 +4,8 @@
 
 use super::pair_fit::{fit_pair, overlapping_pairs};
 use super::setup::ModeTarget;
+use super::tuning::PairFitTuning;
 use crate::text;
-use lamdyn_ema::identify::EmaResult;
-use lamdyn_frf::FrfSet;
 use lamdyn_layered::convergence::{Converged, correction};
 use lamdyn_layered::inverse::LayeredInverse;
 use num_complex::Complex64;
@@ -39,8 +38,8 @@ pub struct PairsFitted {
 /// pair's G* into `out` for both.
 pub fn fit_overlapping_pairs(
     (coarsest, finer): (&LayeredInverse, &[LayeredInverse]),
-    set: &FrfSet,
-    ema: &EmaResult,
+    tuning: &PairFitTuning,
+    data: super::Observations,
     targets: &[ModeTarget],
     out: &mut Converged,
 ) -> PairsFitted {
@@ -57,8 +56,9 @@ pub fn fit_overlapping_pairs(
         .map(|&[a, b]| match (&out.modes[a], &out.modes[b]) {
             (Ok(ma), Ok(mb)) => Some(fit_pair(
                 coarsest,
-                set,
-                ema,
+                tuning,
+                data.frfs,
+                data.ema,
                 [eigenvalues[a], eigenvalues[b]],
                 [ma, mb],
                 &correct,

@@ -10,6 +10,7 @@
 //! homogenization of the whole stack at the fitted (or pole-implied) laminate modulus, else
 //! the core layer's `shear_pa` or 10 MPa (1 + 0.5i); the start also picks the mode branch.
 
+use super::tuning::LayeredTuning;
 use crate::chain::{CorePoint, nearest_within};
 use crate::error::{Context, Result};
 use crate::job::{CoreLawChoice, Job, ModelFile, UncertaintyOptions};
@@ -46,6 +47,8 @@ pub struct LayeredSetup {
     pub supports_at: [f64; 2],
     /// The supports as the job file gives them.
     pub job_supports: Vec<PointSupport>,
+    /// The steps' tuning (defaults: [`LayeredTuning::default`]).
+    pub tuning: LayeredTuning,
 }
 
 impl LayeredSetup {
@@ -78,6 +81,7 @@ impl LayeredSetup {
             core_law: job.inverse.core_law,
             supports_at: [0.0; 2],
             job_supports,
+            tuning: LayeredTuning::default(),
         })
     }
 

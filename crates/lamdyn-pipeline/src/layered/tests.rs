@@ -7,6 +7,7 @@ use super::law::{
     share_the_remainder, supports_found, to_real_frequency,
 };
 use super::pole_scatter::{PoleScatter, group_spread, hit_jackknife, order_spread};
+use super::tuning::{LawTuning, LayeredTuning, PairFitTuning};
 use super::*;
 use crate::band::BandSource;
 use crate::job::Job;
@@ -134,7 +135,7 @@ fn coverage(
         &Input::ALL,
     )
     .unwrap();
-    let moved = MovedBySd::build(&nominal, &nominal_plate, priors);
+    let moved = MovedBySd::build(&nominal, &nominal_plate, priors, WIDE);
     let (sd_f_rel, sd_zeta) = (2e-4, 2e-4);
     let mut rng = Normal::new(2026);
     let mut inside = [[0usize; 2]; 2];
@@ -186,6 +187,7 @@ fn coverage(
         }
         let joint = fit_law_with(
             (CoreLaw::FractionalZener, 0.0),
+            &LawTuning::default(),
             &modal,
             Some(&nominal),
             Weights::Law,
@@ -325,13 +327,16 @@ fn auto_keeps_the_law_the_modes_favour() {
     };
     type Fits = Vec<(Candidate, std::result::Result<CoreLawFit, FitError>)>;
     let fits = |pts: &[ModePoint]| -> Fits {
-        candidates(crate::job::CoreLawChoice::Auto)
-            .into_iter()
-            .map(|c| {
-                let fit = fit_core_law_shifted(pts, &[], c.0, c.1);
-                (c, fit)
-            })
-            .collect()
+        candidates(
+            crate::job::CoreLawChoice::Auto,
+            &LawTuning::default().prony_offsets,
+        )
+        .into_iter()
+        .map(|c| {
+            let fit = fit_core_law_shifted(pts, &[], c.0, c.1);
+            (c, fit)
+        })
+        .collect()
     };
     let chosen = |fits: &Fits| {
         let (k, why) = lowest_akaike(fits).unwrap().unwrap();
@@ -419,6 +424,10 @@ fn the_ladder_reruns_at_supports_found_far_off() {
     assert!(supports_found(&free, Some(&far)).is_none());
 }
 
+/// The default wide prior and shared remainder ([`LawTuning`]).
+const WIDE: f64 = 0.05;
+const SHARED: f64 = 0.5;
+
 /// A failed law fit, for the choice between laws.
 fn no_fit(why: &str) -> FitError {
     FitError::Inconsistent {
@@ -441,6 +450,7 @@ fn setup_of(job: &Job) -> LayeredSetup {
         core_law: job.inverse.core_law,
         supports_at: [0.0; 2],
         job_supports: p.supports.clone(),
+        tuning: LayeredTuning::default(),
     }
 }
 
@@ -479,7 +489,7 @@ fn the_remainder_beyond_second_order_is_split_between_own_and_shared() {
     };
     let mut points = vec![point([0.04, 0.3]), point([0.01, 0.02]), point([0.02, 0.1])];
     let mut priors = vec![prior.clone()];
-    share_the_remainder(&mut points, &mut priors);
+    share_the_remainder(&mut points, &mut priors, SHARED);
     let names: Vec<&str> = priors.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(
         names,
@@ -500,10 +510,10 @@ fn the_remainder_beyond_second_order_is_split_between_own_and_shared() {
     }
     let mut none: Vec<ModePoint> = Vec::new();
     let mut priors = vec![prior.clone()];
-    share_the_remainder(&mut none, &mut priors);
+    share_the_remainder(&mut none, &mut priors, SHARED);
     assert_eq!(priors.len(), 1);
     let mut exact = vec![point([0.0, 0.0])];
-    share_the_remainder(&mut exact, &mut priors);
+    share_the_remainder(&mut exact, &mut priors, SHARED);
     assert_eq!((priors.len(), exact[0].effects.len()), (1, 1));
 }
 
@@ -555,7 +565,7 @@ fn band_is_taken_where_the_coarsest_inverse_maps_back() {
     let nominal =
         LayeredInverse::build_with_inputs(&plate, [6, 5], 8e6, 20, &BASIS_RATIOS, &Input::ALL)
             .unwrap();
-    let moved = MovedBySd::build(&nominal, &plate, &faces_priors());
+    let moved = MovedBySd::build(&nominal, &plate, &faces_priors(), WIDE);
     let mut checked = 0;
     for target in poles(&nominal, 8, false) {
         let start = law().modulus(target.re.sqrt());
@@ -670,6 +680,7 @@ fn a_pair_fit_to_the_frfs_recovers_the_core_its_poles_miss() {
     };
     let fit = super::pair_fit::fit_pair(
         &model,
+        &PairFitTuning::default(),
         &set,
         &ema,
         given,
@@ -710,7 +721,7 @@ fn through_thickness_is_the_inverse_on_two_elements_per_layer() {
         LayeredInverse::build_with_inputs(&plate, [6, 5], 8e6, 20, &BASIS_RATIOS, &Input::ALL)
             .unwrap();
     let two = build_level(&two_plate, [6, 5], 8e6, 20).unwrap();
-    let moved = MovedBySd::build(&one, &plate, &faces_priors());
+    let moved = MovedBySd::build(&one, &plate, &faces_priors(), WIDE);
     let (mut checked, mut largest) = (0, 0.0f64);
     for target in poles(&two, 6, true) {
         let start = law().modulus(target.re.sqrt());

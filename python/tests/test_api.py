@@ -1,0 +1,55 @@
+"""The package's public names and their signatures, pinned: a rename, a removed name or a
+changed parameter fails here, and an intended change updates this table with a note for
+users (docs/python.md)."""
+
+import inspect
+
+import lamdyn
+import lamdyn.batch
+
+#: Each public function's signature as ``inspect.signature`` prints it; ``None`` for a class
+#: or a constant.
+PUBLIC = {
+    'LamdynError': None,
+    'FrfData': None,
+    'version': "() -> 'str'",
+    'read_uff': "(path: 'PathLike', lenient: 'bool' = False) -> 'FrfData'",
+    'read_uff_functions': "(path: 'PathLike', lenient: 'bool' = False) -> 'list'",
+    'write_uff': "(path: 'PathLike', freqs_hz: 'Any', frf: 'Any', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, quantity: 'str' = 'accelerance', binary: 'bool' = False) -> 'None'",
+    'ema': "(freqs_hz: 'Any', frf: 'Any', quantity: 'str' = 'accelerance', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, band_hz: 'Optional[Sequence[float]]' = None, orders: 'Sequence[int]' = (2, 60, 2), near_hz: 'Optional[Sequence[float]]' = None, reject_hz: 'Optional[Sequence[float]]' = None, window_hz: 'float' = 1.0, polymax: 'bool' = True, refine: 'bool' = True, driving: 'Optional[int]' = None, cmif_prominence: 'float' = 2.0) -> 'dict'",
+    'modes': "(model: 'Union[dict, PathLike]', n_modes: 'Optional[int]' = None) -> 'dict'",
+    'fit': "(freqs_hz: 'Any', frf: 'Any', responses: 'Sequence[Any]', references: 'Sequence[Any]', model: 'Union[dict, PathLike]', quantity: 'str' = 'accelerance', law: 'str' = 'per_mode', band_hz: 'Optional[Sequence[float]]' = None, misfit: 'str' = 'log_rms', reference: 'int' = 0, exclude_hz: 'Optional[Sequence[Sequence[float]]]' = None, covariance: 'str' = 'robust_hc3', n_modes: 'Optional[int]' = None, residual: 'bool' = True, tolerance_m: 'float' = 0.001, sensor_mapping: 'str' = 'surface') -> 'dict'",
+    'fit_job': "(job: 'PathLike') -> 'dict'",
+    'core_inverse': "(freqs_hz: 'Any', e_storage_pa: 'Any', e_loss_factor: 'Any', stack: 'Union[dict, PathLike]', kinematics: 'str' = 'beam', core_formula: 'str' = 'eq41', face_shear: 'str' = 'neglect', bending: 'str' = 'faces') -> 'dict'",
+    'run': "(job: 'PathLike', out: 'Optional[PathLike]' = None, cache: 'Union[PathLike, None, str]' = 'beside', samples: 'Optional[int]' = None, seed: 'Optional[int]' = None, force: 'bool' = False) -> 'dict'",
+    'write_demo_job': "(out: 'PathLike', temperature_k: 'Optional[float]' = None, c1: 'float' = 12.0, c2_k: 'float' = 90.0, samples: 'int' = 0, seed: 'int' = 1, force: 'bool' = False) -> 'str'",
+    'master_curve': "(results: 'Optional[Sequence[dict]]' = None, *, temperature_k: 'Any' = None, freq_hz: 'Any' = None, storage_pa: 'Any' = None, loss_factor: 'Any' = None, reference_temperature_k: 'float' = 293.15, shift: 'str' = 'wlf', inverse: 'str' = 'layered', curve_freqs_hz: 'Any' = None, curve_temperatures_k: 'Any' = None) -> 'dict'",
+    'DEMO_WLF': None,
+}
+
+#: The same for :mod:`lamdyn.batch`.
+BATCH = {
+    'BatchResult': None,
+    'run_batch': "(jobs: 'Sequence[PathLike]', *, out: 'Optional[PathLike]' = None, cache: 'Union[PathLike, None, str]' = 'shared', client: 'Any' = None, address: 'Optional[str]' = None, n_workers: 'int' = 2, samples: 'Optional[int]' = None, seed: 'Optional[int]' = None, force: 'bool' = False, progress: 'Union[bool, Callable[[str], None]]' = True) -> 'BatchResult'",
+    'job_names': "(jobs: 'Sequence[PathLike]') -> 'list'",
+}
+
+
+def check(module, table):
+    assert sorted(module.__all__) == sorted(table), "public names changed"
+    for name, want in table.items():
+        obj = getattr(module, name)
+        if want is None:
+            assert not inspect.isfunction(obj), name
+        else:
+            assert str(inspect.signature(obj)) == want, name
+            assert obj.__doc__, f"{name} has no docstring"
+
+
+def test_the_package_s_public_names_and_signatures_are_pinned():
+    check(lamdyn, PUBLIC)
+
+
+def test_the_batch_module_s_public_names_and_signatures_are_pinned():
+    check(lamdyn.batch, BATCH)
+
