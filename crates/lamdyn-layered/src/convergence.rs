@@ -1,55 +1,36 @@
 //! Convergence control of the layered inverse: a ladder of meshes, Richardson extrapolation of
 //! each mode's complex eigenvalue, and the core's G* of the extrapolated model.
 //!
-//! For a glass laminate with a stiff interlayer d ln f / d ln G ≈ 0.03: a model that is
-//! 0.03 % too stiff in frequency puts G about 1 % too low. No affordable mesh is that close,
-//! so the inverse does not trust one mesh. It builds the model on a ladder of in-plane meshes
-//! n_k = round(n_0 r^k) (r = [`LadderSettings::ratio`], h_k = 1/√(n_x n_y)) and, at each mode's
-//! G*, reads the same mode's eigenvalue λ_k(G*) on every level: its pole, with any dashpots
-//! acting at that level's own frequency ([`LayeredInverse::pole_eigenvalue`]), as the coarsest
-//! level's inverse takes them. With λ_k = λ_∞ + C h_k^p the
-//! last three levels a, b, c give the order p from
+//! For a glass laminate with a stiff interlayer d ln f / d ln G ≈ 0.03, a model 0.03 % too
+//! stiff in frequency puts G about 1 % too low, closer than any affordable mesh. So the model
+//! is built on a ladder of in-plane meshes n_k = round(n_0 r^k) (r = [`LadderSettings::ratio`],
+//! h_k = 1/√(n_x n_y)), and at each mode's G* the same mode's eigenvalue λ_k(G*) is read on
+//! every level (its pole, dashpots at that level's own frequency:
+//! [`LayeredInverse::pole_eigenvalue`]). With λ_k = λ_∞ + C h_k^p, the last three levels a, b,
+//! c give the order p from
 //!
 //!   (λ_a − λ_b)/(λ_b − λ_c) = (h_a^p − h_b^p)/(h_b^p − h_c^p)   (real parts, bisection on p),
 //!
-//! and the extrapolated eigenvalue λ_∞ = λ_c + (λ_c − λ_b) h_c^p/(h_b^p − h_c^p) (Richardson);
-//! the imaginary part (the loss, which converges more slowly) gets its own order the same way.
-//! The model used is the coarsest level corrected by δ = λ_∞/λ_0: G* solves λ_0(G*) = λ_meas/δ,
-//! i.e. λ_∞(G*) = λ_meas; two passes re-evaluate δ at the new G*.
+//! and λ_∞ = λ_c + (λ_c − λ_b) h_c^p/(h_b^p − h_c^p) (Richardson); the imaginary part gets its
+//! own order. The model used is the coarsest level corrected by δ = λ_∞/λ_0: G* solves
+//! λ_0(G*) = λ_meas/δ; two passes re-evaluate δ at the new G*.
 //!
-//! What is reported per mode: the finest level's relative error in frequency √(Re λ_c/Re λ_∞) − 1
-//! and in loss factor η_c/η_∞ − 1 (η = Im λ/Re λ); the change in G* from the coarsest
-//! mesh's uncorrected answer; and the error left in the extrapolated model. That residual is
-//! taken as a quarter of the finest level's error (the safety factor 1.25 of Roache's grid
-//! convergence index over a three-grid study: the band on the fine value is 1.25 times the
-//! Richardson estimate, so the extrapolated value's own error is bounded by the extra 0.25),
-//! and it decides when the ladder stops. The band of G* is wider: Roache's grid convergence
-//! index of the finest level, 1.25 |λ_c/λ_∞ − 1| per part, its effect on G* found by solving
-//! again with the target moved by it. On the demo roof against truths on 36 × 36 and 48 × 48
-//! graded meshes (example roof_ladder) the extrapolated loss factor looked 0.6–1 % off where a
-//! quarter of the finest error claimed 0.2 %; against a 64 × 64 truth it is within 0.12 % (η)
-//! and 0.23 % (G'), so most of that was the coarser truths' own error. The band stays the
-//! grid convergence index, which holds both: the extrapolation of a part converging at
-//! p ≈ 2.5 is not trusted beyond the correction it makes. The ladder
-//! grows until every mode's residual frequency error is at most [`LadderSettings::tolerance`],
-//! or stops at [`LadderSettings::max_levels`]; a mode that then still misses the tolerance is a
-//! [`LayeredError::Tolerance`] saying how far it got, the others stand. Where the three levels
-//! do not converge monotonically in a part (p undefined), or converge at an observed order below
-//! [`MIN_ORDER`] (outside the asymptotic range, where Richardson's factor h_c^p/(h_b^p − h_c^p)
-//! grows to 6.5 at p = 0.5 and extrapolates the noise of a slow, irregular sequence), that
-//! part is extrapolated with p = 2 and its residual is half its last difference λ_c/λ_b − 1;
-//! the frequency's residual is that of the real part alone (a loss that wobbles at the 1e-4
-//! level on a mode that barely shears the core does not hold the frequency back).
+//! Per mode: the finest level's error in frequency √(Re λ_c/Re λ_∞) − 1 and in loss factor
+//! η_c/η_∞ − 1; the residual error of the extrapolated model, a quarter of the finest level's
+//! (the 0.25 beyond 1 of Roache's grid convergence index, GCI, over three grids), which stops
+//! the ladder at [`LadderSettings::tolerance`] (or [`LadderSettings::max_levels`]: a mode still
+//! beyond it is a [`LayeredError::Tolerance`] saying how far it got); and the band of G*, the
+//! GCI of the finest level, 1.25 |λ_c/λ_∞ − 1| per part, mapped to G* by solving again. A part
+//! that is not monotone over the three levels, or converges below [`MIN_ORDER`] (outside the
+//! asymptotic range, where Richardson's factor extrapolates noise), is extrapolated with p = 2
+//! and a residual of half its last difference; the frequency's residual is the real part's.
 //!
-//! The coarsest level is the caller's [`LayeredInverse`] (its basis spans G_ref/4 … 4 G_ref);
-//! the finer levels have a basis at G_ref alone with three orders of its core sensitivities
-//! ([`crate::inverse::krylov_orders`]). Both are checked against the full, unreduced model
-//! (`inverse::tests::reduced_bases_match_the_full_model_over_the_range`: Rayleigh quotient
-//! iteration on the sparse complex LU, core loss factor 0.05–1.2, free and supported): the
-//! three-modulus basis within 1.3e-5 in λ over G_ref/4 … 4 G_ref, the finer levels' within
-//! 1.3e-5 up to G_ref, 3.5e-5 at 2 G_ref and 6e-4 at 4 G_ref. With one order, the
-//! finer levels were off by 1e-4 to 5e-2 and put the roof's η 0.8 % high. Every level refuses
-//! a mode above 90 % of its basis's highest mode ([`crate::inverse::BASIS_COVER`]).
+//! The coarsest level is the caller's [`LayeredInverse`] (basis over G_ref/4 … 4 G_ref); the
+//! finer levels have a basis at G_ref with three orders of its core sensitivities
+//! ([`crate::inverse::krylov_orders`]); every level refuses a mode above
+//! [`crate::inverse::BASIS_COVER`] of its basis's highest mode. Both bases are checked against
+//! the full model in `inverse::tests::reduced_bases_match_the_full_model_over_the_range`; the
+//! ladder against finer, graded truths in docs/run.md ("Convergence control").
 
 use crate::error::LayeredError;
 use crate::inverse::{LayeredEstimate, LayeredInverse, LayeredPlate};
