@@ -91,19 +91,31 @@ impl Cache {
     /// (module docs); a failing entry is removed and noted.
     pub fn get(&self, name: &str, key: Key) -> Option<Vec<u8>> {
         let path = self.path(name, key)?;
-        let bytes = std::fs::read(&path).ok()?;
+        let bytes = match read_entry(&path) {
+            Ok(Some(bytes)) => bytes,
+            Ok(None) => return None,
+            Err(why) => {
+                self.refuse(&path, why);
+                return None;
+            }
+        };
         match unwrap_entry(&bytes, key) {
             Ok(payload) => Some(payload.to_vec()),
             Err(why) => {
-                let _ = std::fs::remove_file(&path);
-                if let Ok(mut n) = self.notes.lock() {
-                    n.push(format!(
-                        "cache entry '{}' failed its check ({why}): removed and recomputed",
-                        path.display()
-                    ));
-                }
+                self.refuse(&path, why);
                 None
             }
+        }
+    }
+
+    /// Removes the entry at `path` (a link itself, not its target) and notes why.
+    fn refuse(&self, path: &Path, why: &str) {
+        let _ = std::fs::remove_file(path);
+        if let Ok(mut n) = self.notes.lock() {
+            n.push(format!(
+                "cache entry '{}' failed its check ({why}): removed and recomputed",
+                path.display()
+            ));
         }
     }
 
@@ -138,6 +150,35 @@ impl Cache {
     pub fn enabled(&self) -> bool {
         self.dir.is_some()
     }
+}
+
+/// The bytes of the entry at `path`: `None` when there is none, an error when it is not a
+/// regular file (a link, a pipe, a device: reading one could block or never end) or holds
+/// other than its header announces. At most its header and the payload it announces are read.
+fn read_entry(path: &Path) -> std::result::Result<Option<Vec<u8>>, &'static str> {
+    use std::io::Read;
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        return Ok(None);
+    };
+    if !meta.file_type().is_file() {
+        return Err("not a regular file");
+    }
+    let mut file = std::fs::File::open(path).map_err(|_| "cannot be opened")?;
+    let mut bytes = vec![0u8; HEADER.min(meta.len() as usize)];
+    file.read_exact(&mut bytes).map_err(|_| "cannot be read")?;
+    if bytes.len() < HEADER {
+        return Ok(Some(bytes));
+    }
+    let mut word = [0u8; 8];
+    word.copy_from_slice(&bytes[16..24]);
+    let announced = u64::from_le_bytes(word);
+    if meta.len().checked_sub(HEADER as u64) != Some(announced) {
+        return Err("its length does not match its header");
+    }
+    file.take(announced)
+        .read_to_end(&mut bytes)
+        .map_err(|_| "cannot be read")?;
+    Ok(Some(bytes))
 }
 
 /// The payload of an entry whose header matches `key` and whose checksum holds.
@@ -225,6 +266,36 @@ mod tests {
         assert_eq!(c.notes().len(), good.len() * 8 + 2);
         std::fs::write(&path, &good).unwrap();
         assert_eq!(c.get("m", k).unwrap(), payload);
+    }
+
+    /// An entry that is not a regular file is refused and its link removed before it is read:
+    /// a link to an endless device, a link to another file, a named pipe (which would block a
+    /// read forever).
+    #[test]
+    fn entries_that_are_not_regular_files_are_refused_unread() {
+        let dir = lamdyn_testkit::TempDir::new("cache-special");
+        let c = Cache::new(Some(dir.to_path_buf()));
+        let k = Key::new("x").f64(4.5);
+        c.put("m", k, b"payload").unwrap();
+        let path = c.path("m", k).unwrap();
+        let target = dir.to_path_buf().join("elsewhere");
+        std::fs::rename(&path, &target).unwrap();
+        for link_to in [Path::new("/dev/zero"), target.as_path()] {
+            std::os::unix::fs::symlink(link_to, &path).unwrap();
+            assert!(c.get("m", k).is_none(), "{}", link_to.display());
+            assert!(std::fs::symlink_metadata(&path).is_err(), "the link stays");
+        }
+        assert_eq!(
+            std::fs::read(&target).unwrap().len(),
+            HEADER + 7,
+            "the target is kept"
+        );
+        let fifo = std::process::Command::new("mkfifo").arg(&path).status();
+        if fifo.is_ok_and(|s| s.success()) {
+            assert!(c.get("m", k).is_none());
+            assert!(std::fs::symlink_metadata(&path).is_err());
+        }
+        assert!(c.notes().iter().all(|n| n.contains("not a regular file")));
     }
 
     /// A result stored as JSON (the EMA's) comes back with the same bits: serde_json's

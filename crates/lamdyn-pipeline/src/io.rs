@@ -24,7 +24,70 @@ pub fn read_text(path: &Path) -> Result<String> {
 /// The file cannot be read or parsed.
 pub fn read_toml<T: DeserializeOwned>(path: &Path) -> Result<T> {
     let text = read_text(path)?;
-    toml::from_str(&text).map_err(|e| err!("error in '{}': {e}", path.display()))
+    toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))
+}
+
+/// Longest line of a file that an error quotes whole (the TOML parser's own message shows the
+/// offending line with a caret); a longer one, or one with control characters (binary input),
+/// is quoted as a bounded, escaped excerpt around the error.
+const QUOTED_LINE: usize = 200;
+
+/// The TOML parser's error `e` on `text`, naming `path`: its own message where the offending
+/// line is short and printable, else the line, column, message and an excerpt of at most
+/// [`EXCERPT`] characters with control characters escaped.
+fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> crate::PipelineError {
+    let Some(span) = e.span() else {
+        return err!("error in '{}': {e}", path.display());
+    };
+    let at = span.start.min(text.len());
+    let line_start = text[..at].rfind('\n').map_or(0, |k| k + 1);
+    let line_end = text[at..].find('\n').map_or(text.len(), |k| at + k);
+    let line = &text[line_start..line_end];
+    let printable = !line
+        .chars()
+        .any(|c| c.is_control() && c != '\t' && c != '\r');
+    if line.len() <= QUOTED_LINE && printable {
+        return err!("error in '{}': {e}", path.display());
+    }
+    let line_no = text[..line_start].matches('\n').count() + 1;
+    let column = text[line_start..at].chars().count() + 1;
+    err!(
+        "error in '{}': TOML parse error at line {line_no}, column {column}: {} (near \"{}\")",
+        path.display(),
+        e.message().trim_end(),
+        excerpt(line, at - line_start)
+    )
+}
+
+/// Characters of an excerpt quoted in an error.
+const EXCERPT: usize = 80;
+
+/// At most [`EXCERPT`] characters of `line` about byte `at`, control characters escaped and
+/// cuts marked with "...".
+pub fn excerpt(line: &str, at: usize) -> String {
+    let at = (0..=at.min(line.len()))
+        .rev()
+        .find(|&k| line.is_char_boundary(k))
+        .unwrap_or(0);
+    let before: Vec<char> = line[..at].chars().rev().take(EXCERPT / 2).collect();
+    let after: String = line[at..].chars().take(EXCERPT - before.len()).collect();
+    let start = at - before.iter().map(|c| c.len_utf8()).sum::<usize>();
+    let end = at + after.len();
+    let mut out = String::new();
+    if start > 0 {
+        out.push_str("...");
+    }
+    for c in line[start..end].chars() {
+        if c.is_control() || c == '"' || c == '\\' {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    if end < line.len() {
+        out.push_str("...");
+    }
+    out
 }
 
 /// A CSV table of numbers with a header row. Blank lines and lines starting with `#` are
@@ -146,6 +209,49 @@ impl CsvTable {
 
 #[cfg(test)]
 mod tests {
+    /// A job whose error lies on a line of a million characters, or on a line of binary
+    /// bytes, quotes at most 80 characters of it, control characters escaped; a short line
+    /// keeps the parser's own message with its caret.
+    #[test]
+    fn toml_errors_quote_a_bounded_printable_excerpt() {
+        let dir = lamdyn_testkit::TempDir::new("io-toml");
+        let long = dir.to_path_buf().join("long.toml");
+        std::fs::write(&long, format!("title = \"{}", "x".repeat(1_000_000))).unwrap();
+        let e = super::read_toml::<toml::Table>(&long)
+            .unwrap_err()
+            .to_string();
+        assert!(e.len() < 400, "{} characters", e.len());
+        assert!(e.contains("line 1, column") && e.contains("..."), "{e}");
+        let binary = dir.to_path_buf().join("binary.toml");
+        std::fs::write(&binary, b"a = 1\nb = \x01\x02\x1b[31m\n").unwrap();
+        let e = super::read_toml::<toml::Table>(&binary)
+            .unwrap_err()
+            .to_string();
+        assert!(!e.chars().any(|c| c.is_control() && c != '\n'), "{e:?}");
+        assert!(e.contains("line 2") && e.contains("\\u{1}"), "{e}");
+        let short = dir.to_path_buf().join("short.toml");
+        std::fs::write(&short, "a = \n").unwrap();
+        let e = super::read_toml::<toml::Table>(&short)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("TOML parse error at line 1") && e.contains('^'),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn excerpts_cut_and_escape() {
+        assert_eq!(super::excerpt("a\u{1b}b", 1), "a\\u{1b}b");
+        let long = "y".repeat(300);
+        let e = super::excerpt(&long, 150);
+        assert!(
+            e.starts_with("...") && e.ends_with("...") && e.len() == 86,
+            "{e}"
+        );
+        assert_eq!(super::excerpt("é", 1), "é");
+    }
+
     use super::*;
 
     #[test]
