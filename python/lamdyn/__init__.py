@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Optional, Sequence, Union
 
@@ -45,8 +45,11 @@ __all__ = [
     "fit_job",
     "core_inverse",
     "run",
+    "RunResult",
+    "ModalTable",
     "write_demo_job",
     "master_curve",
+    "MasterCurve",
     "DEMO_WLF",
 ]
 
@@ -409,32 +412,111 @@ def core_inverse(
     return r
 
 
-_MODAL_COLUMNS = (
-    "f_hz",
-    "e_storage_pa",
-    "e_loss_factor",
-    "phi_abs",
-    "g_paper_storage_pa",
-    "g_paper_loss_factor",
-    "g_exact_storage_pa",
-    "g_exact_loss_factor",
-    "g_layered_storage_pa",
-    "g_layered_loss_factor",
-    "g_true_storage_pa",
-    "g_true_loss_factor",
-)
+class _Fields:
+    """Dict-style reading of a result's attributes (``r["modal"]`` is ``r.modal``), for code
+    written against the dicts earlier versions returned."""
+
+    def keys(self) -> list:
+        return [f.name for f in fields(self)]
+
+    def items(self) -> list:
+        return [(k, getattr(self, k)) for k in self.keys()]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return getattr(self, key) if key in self.keys() else default
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self.keys():
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.keys()
 
 
-def _run_out(text: str) -> dict:
+@dataclass
+class ModalTable(_Fields):
+    """The core found at each modal frequency of a run: one float array per column, all of
+    the same length, NaN where a route has no value.
+
+    Attributes:
+        f_hz: the modal frequencies, Hz.
+        e_storage_pa: the laminate's effective E' fitted by the paper's route, Pa.
+        e_loss_factor: its loss factor.
+        phi_abs: |phi| of the paper's inverse (eq. 37; above 0.1 beyond its ~1 % validity).
+        g_paper_storage_pa, g_paper_loss_factor: the core's G' (Pa) and eta by the paper's
+            inverse (eqs. 33-45).
+        g_exact_storage_pa, g_exact_loss_factor: by the exact sandwich inverse (Mead-Markus).
+        g_layered_storage_pa, g_layered_loss_factor: by the layered inverse, the answer.
+        g_true_storage_pa, g_true_loss_factor: the truth of a virtual test (NaN without one).
+    """
+
+    f_hz: np.ndarray
+    e_storage_pa: np.ndarray
+    e_loss_factor: np.ndarray
+    phi_abs: np.ndarray
+    g_paper_storage_pa: np.ndarray
+    g_paper_loss_factor: np.ndarray
+    g_exact_storage_pa: np.ndarray
+    g_exact_loss_factor: np.ndarray
+    g_layered_storage_pa: np.ndarray
+    g_layered_loss_factor: np.ndarray
+    g_true_storage_pa: np.ndarray
+    g_true_loss_factor: np.ndarray
+
+
+@dataclass
+class RunResult(_Fields):
+    """What :func:`run` found on a job.
+
+    Attributes:
+        title: the job's title.
+        job: the job file's path.
+        temperature_k: the test's temperature, K (None when the job states none).
+        modal: the core at each modal frequency (:class:`ModalTable`).
+        ema_modes: the identified modes as (frequency in Hz, damping ratio) pairs.
+        ema_freq_hz, ema_damping_ratio: the same as arrays.
+        modes_without_core: frequencies (Hz) where no inverse found a core.
+        warnings: the run's warnings, as the report lists them.
+        timings: (stage, seconds, from the cache) per stage.
+        report: the report's folder, when one was written.
+    """
+
+    title: str
+    job: str
+    temperature_k: Optional[float]
+    modal: ModalTable
+    ema_modes: list
+    ema_freq_hz: np.ndarray
+    ema_damping_ratio: np.ndarray
+    modes_without_core: list
+    warnings: list
+    timings: list
+    report: Optional[str]
+
+
+def _run_out(text: str) -> RunResult:
     r = json.loads(text)
-    rows = r.pop("modal")
-    r["modal"] = {
-        c: np.array([np.nan if row[c] is None else row[c] for row in rows], dtype=float)
-        for c in _MODAL_COLUMNS
-    }
-    r["ema_freq_hz"] = np.array([m[0] for m in r["ema_modes"]])
-    r["ema_damping_ratio"] = np.array([m[1] for m in r["ema_modes"]])
-    return r
+    rows = r["modal"]
+    modal = ModalTable(
+        **{
+            f.name: np.array([np.nan if row[f.name] is None else row[f.name] for row in rows], dtype=float)
+            for f in fields(ModalTable)
+        }
+    )
+    return RunResult(
+        title=r["title"],
+        job=r["job"],
+        temperature_k=r["temperature_k"],
+        modal=modal,
+        ema_modes=[tuple(m) for m in r["ema_modes"]],
+        ema_freq_hz=np.array([m[0] for m in r["ema_modes"]]),
+        ema_damping_ratio=np.array([m[1] for m in r["ema_modes"]]),
+        modes_without_core=r["modes_without_core"],
+        warnings=r["warnings"],
+        timings=[tuple(t) for t in r["timings"]],
+        report=r["report"],
+    )
 
 
 def run(
@@ -444,7 +526,7 @@ def run(
     samples: Optional[int] = None,
     seed: Optional[int] = None,
     force: bool = False,
-) -> dict:
+) -> RunResult:
     """``lamdyn run JOB``: the whole chain on a job file.
 
     The report (HTML, figures, CSV/JSON tables) is written to ``out`` when given, under the
@@ -453,10 +535,11 @@ def run(
     default, ``.lamdyn-cache`` next to the job, as the CLI), a path, or None (no cache).
     ``samples``/``seed`` override the job's Monte Carlo.
 
-    Returns a dict: ``modal`` (arrays per column at the modal frequencies: ``f_hz``, E', eta of
-    the laminate, |phi|, G' and eta of the core by the paper's, the exact and the layered
-    inverse, and the truth when the job names one), ``temperature_k``, ``ema_freq_hz``,
-    ``ema_damping_ratio``, ``modes_without_core``, ``warnings``, ``timings``, ``report``.
+    Returns a :class:`RunResult`: ``modal`` (a :class:`ModalTable`, arrays per column at the
+    modal frequencies: E', eta of the laminate, |phi|, G' and eta of the core by the paper's,
+    the exact and the layered inverse, and the truth when the job names one),
+    ``temperature_k``, the EMA's modes, ``modes_without_core``, ``warnings``, ``timings``,
+    ``report``.
     """
     job = Path(job)
     if cache == "beside":
@@ -501,8 +584,51 @@ def write_demo_job(
     )
 
 
+@dataclass
+class MasterCurve(_Fields):
+    """One core law and its temperature shift over several temperatures (:func:`master_curve`).
+
+    Attributes:
+        parameters: by name (the law's ``g0_pa``, ``g_inf_pa``, ``tau_s``, ``alpha``; the
+            shift's ``c1`` and ``c2_k``, or ``activation_energy_j_mol``): a dict with
+            ``value``, ``sd`` and the 95 % profile-likelihood interval ``ci95`` (infinite on a
+            side the data do not bound).
+        undetermined: parameter combinations the data do not fix.
+        correlation: the parameters' correlation matrix.
+        residual_sd: the relative scatter of G' and of eta about the curve.
+        points: the points fitted.
+        t95: Student's t for the 95 % intervals.
+        shift: ``"wlf"`` or ``"arrhenius"``.
+        reference_temperature_k: where a_T = 1, K.
+        shift_factors: log10 a_T with its 95 % band at each temperature of the data.
+        reduced_freq_hz: the curve's reduced frequencies, Hz.
+        storage_pa, storage_ci95: G' on the curve, Pa, and its 95 % band (2 x n).
+        loss_factor, loss_factor_ci95: eta on the curve and its 95 % band (2 x n).
+        temperatures_k, log10_a_t, log10_a_t_ci95: the shift over temperature, K, with its
+            95 % band (2 x n).
+    """
+
+    parameters: dict
+    undetermined: list
+    correlation: np.ndarray
+    residual_sd: Any
+    points: Any
+    t95: float
+    shift: str
+    reference_temperature_k: float
+    shift_factors: list
+    reduced_freq_hz: np.ndarray
+    storage_pa: np.ndarray
+    storage_ci95: np.ndarray
+    loss_factor: np.ndarray
+    loss_factor_ci95: np.ndarray
+    temperatures_k: np.ndarray
+    log10_a_t: np.ndarray
+    log10_a_t_ci95: np.ndarray
+
+
 def master_curve(
-    results: Optional[Sequence[dict]] = None,
+    results: Optional[Sequence[Union[RunResult, dict]]] = None,
     *,
     temperature_k: Any = None,
     freq_hz: Any = None,
@@ -513,25 +639,20 @@ def master_curve(
     inverse: str = "layered",
     curve_freqs_hz: Any = None,
     curve_temperatures_k: Any = None,
-) -> dict:
+) -> MasterCurve:
     """One core law and its temperature shift fitted to cores identified at several
     temperatures (time-temperature superposition): G*(f; T) = G*_ref(a_T f), with a
     fractional Zener G*_ref and a_T by WLF (``shift="wlf"``: C1, C2 in K) or Arrhenius
     (``"arrhenius"``: activation energy in J/mol), a_T = 1 at ``reference_temperature_k``.
 
-    The points come from ``results`` (dicts returned by :func:`run` or by
-    :func:`lamdyn.batch.run_batch`, each with its ``temperature_k``; the ``inverse``'s core:
+    The points come from ``results`` (:class:`RunResult` s of :func:`run` or of
+    :func:`lamdyn.batch.run_batch`, or dicts laid out alike, each with its ``temperature_k``; the ``inverse``'s core:
     ``layered``, ``exact`` or ``paper``) or from the arrays ``temperature_k``, ``freq_hz``,
     ``storage_pa`` and ``loss_factor``.
 
-    Returns a dict: ``parameters`` (by name: value, sd, 95 % profile-likelihood interval
-    ``ci95``, infinite on a side the data do not bound), ``undetermined`` (parameter
-    combinations the data do not fix), ``correlation``, ``residual_sd`` (relative scatter of G'
-    and of eta about the curve), ``shift_factors`` (log10 a_T with its 95 % band at each
-    temperature), and arrays of the curve at ``curve_freqs_hz`` (reduced, Hz; default 60
-    points over the data's reduced band): ``reduced_freq_hz``, ``storage_pa``,
-    ``storage_ci95`` (2 x n), ``loss_factor``, ``loss_factor_ci95``; and ``log10_a_t`` at
-    ``curve_temperatures_k`` (default: 40 points over the data's temperatures).
+    Returns a :class:`MasterCurve`; its curve is at ``curve_freqs_hz`` (reduced, Hz; default 60
+    points over the data's reduced band) and its shift at ``curve_temperatures_k`` (default:
+    40 points over the data's temperatures).
     """
     if results is not None:
         t, f, g, eta = [], [], [], []
@@ -585,25 +706,24 @@ def master_curve(
         # JSON has no infinity: an open side of an interval comes as null.
         lo, hi = p["ci95"]
         p["ci95"] = [-np.inf if lo is None else lo, np.inf if hi is None else hi]
-    out = {
-        "parameters": {p["name"]: p for p in fit_["parameters"]},
-        "undetermined": fit_["undetermined"],
-        "correlation": np.array(fit_["correlation"]),
-        "residual_sd": fit_["residual_sd"],
-        "points": fit_["points"],
-        "t95": fit_["t95"],
-        "shift": fit_["shift"],
-        "reference_temperature_k": fit_["reference_temperature_k"],
-        "shift_factors": fit_["shift_factors"],
-    }
-    c = r["curve"]
-    out["reduced_freq_hz"] = np.array([p["reduced_freq_hz"] for p in c])
-    out["storage_pa"] = np.array([p["storage_pa"] for p in c])
-    out["storage_ci95"] = np.array([p["storage_ci95"] for p in c]).T.reshape(2, -1)
-    out["loss_factor"] = np.array([p["loss_factor"] for p in c])
-    out["loss_factor_ci95"] = np.array([p["loss_factor_ci95"] for p in c]).T.reshape(2, -1)
-    sc = r["shift_curve"]
-    out["temperatures_k"] = np.array([p["temperature_k"] for p in sc])
-    out["log10_a_t"] = np.array([p["log10_a_t"] for p in sc])
-    out["log10_a_t_ci95"] = np.array([p["log10_a_t_ci95"] for p in sc]).T.reshape(2, -1)
-    return out
+    c, sc = r["curve"], r["shift_curve"]
+    band = lambda rows, k: np.array([p[k] for p in rows]).T.reshape(2, -1)  # noqa: E731
+    return MasterCurve(
+        parameters={p["name"]: p for p in fit_["parameters"]},
+        undetermined=fit_["undetermined"],
+        correlation=np.array(fit_["correlation"]),
+        residual_sd=fit_["residual_sd"],
+        points=fit_["points"],
+        t95=fit_["t95"],
+        shift=fit_["shift"],
+        reference_temperature_k=fit_["reference_temperature_k"],
+        shift_factors=fit_["shift_factors"],
+        reduced_freq_hz=np.array([p["reduced_freq_hz"] for p in c]),
+        storage_pa=np.array([p["storage_pa"] for p in c]),
+        storage_ci95=band(c, "storage_ci95"),
+        loss_factor=np.array([p["loss_factor"] for p in c]),
+        loss_factor_ci95=band(c, "loss_factor_ci95"),
+        temperatures_k=np.array([p["temperature_k"] for p in sc]),
+        log10_a_t=np.array([p["log10_a_t"] for p in sc]),
+        log10_a_t_ci95=band(sc, "log10_a_t_ci95"),
+    )

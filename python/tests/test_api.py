@@ -21,9 +21,12 @@ PUBLIC = {
     'fit': "(freqs_hz: 'Any', frf: 'Any', responses: 'Sequence[Any]', references: 'Sequence[Any]', model: 'Union[dict, PathLike]', quantity: 'str' = 'accelerance', law: 'str' = 'per_mode', band_hz: 'Optional[Sequence[float]]' = None, misfit: 'str' = 'log_rms', reference: 'int' = 0, exclude_hz: 'Optional[Sequence[Sequence[float]]]' = None, covariance: 'str' = 'robust_hc3', n_modes: 'Optional[int]' = None, residual: 'bool' = True, tolerance_m: 'float' = 0.001, sensor_mapping: 'str' = 'surface') -> 'dict'",
     'fit_job': "(job: 'PathLike') -> 'dict'",
     'core_inverse': "(freqs_hz: 'Any', e_storage_pa: 'Any', e_loss_factor: 'Any', stack: 'Union[dict, PathLike]', kinematics: 'str' = 'beam', core_formula: 'str' = 'eq41', face_shear: 'str' = 'neglect', bending: 'str' = 'faces') -> 'dict'",
-    'run': "(job: 'PathLike', out: 'Optional[PathLike]' = None, cache: 'Union[PathLike, None, str]' = 'beside', samples: 'Optional[int]' = None, seed: 'Optional[int]' = None, force: 'bool' = False) -> 'dict'",
+    'run': "(job: 'PathLike', out: 'Optional[PathLike]' = None, cache: 'Union[PathLike, None, str]' = 'beside', samples: 'Optional[int]' = None, seed: 'Optional[int]' = None, force: 'bool' = False) -> 'RunResult'",
+    'RunResult': None,
+    'ModalTable': None,
     'write_demo_job': "(out: 'PathLike', temperature_k: 'Optional[float]' = None, c1: 'float' = 12.0, c2_k: 'float' = 90.0, samples: 'int' = 0, seed: 'int' = 1, force: 'bool' = False) -> 'str'",
-    'master_curve': "(results: 'Optional[Sequence[dict]]' = None, *, temperature_k: 'Any' = None, freq_hz: 'Any' = None, storage_pa: 'Any' = None, loss_factor: 'Any' = None, reference_temperature_k: 'float' = 293.15, shift: 'str' = 'wlf', inverse: 'str' = 'layered', curve_freqs_hz: 'Any' = None, curve_temperatures_k: 'Any' = None) -> 'dict'",
+    'master_curve': "(results: 'Optional[Sequence[Union[RunResult, dict]]]' = None, *, temperature_k: 'Any' = None, freq_hz: 'Any' = None, storage_pa: 'Any' = None, loss_factor: 'Any' = None, reference_temperature_k: 'float' = 293.15, shift: 'str' = 'wlf', inverse: 'str' = 'layered', curve_freqs_hz: 'Any' = None, curve_temperatures_k: 'Any' = None) -> 'MasterCurve'",
+    'MasterCurve': None,
     'DEMO_WLF': None,
 }
 
@@ -53,3 +56,25 @@ def test_the_package_s_public_names_and_signatures_are_pinned():
 def test_the_batch_module_s_public_names_and_signatures_are_pinned():
     check(lamdyn.batch, BATCH)
 
+
+
+def test_results_are_typed_and_still_read_as_dicts():
+    """A run's and a master curve's results are dataclasses with attributes; ``r["modal"]`` and
+    ``r.get("temperature_k")`` read the same attributes for code written against dicts."""
+    import dataclasses
+
+    import numpy as np
+
+    table = lamdyn.ModalTable(**{f.name: np.zeros(2) for f in dataclasses.fields(lamdyn.ModalTable)})
+    r = lamdyn.RunResult("t", "job.toml", 293.15, table, [], np.zeros(0), np.zeros(0), [], [], [], None)
+    assert r["modal"] is r.modal and r.get("temperature_k") == 293.15 and "modal" in r
+    assert r.get("nothing", 1) == 1
+    assert [k for k, _ in r.modal.items()][:2] == ["f_hz", "e_storage_pa"]
+    try:
+        r["nothing"]
+    except KeyError:
+        pass
+    else:
+        raise AssertionError("an unknown key must raise KeyError")
+    for cls in (lamdyn.RunResult, lamdyn.ModalTable, lamdyn.MasterCurve):
+        assert dataclasses.is_dataclass(cls) and cls.__doc__ and "Attributes:" in cls.__doc__
