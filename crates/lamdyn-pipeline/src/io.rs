@@ -60,7 +60,7 @@ fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> crate::PipelineEr
 }
 
 /// Characters of an excerpt quoted in an error.
-const EXCERPT: usize = 80;
+pub const EXCERPT: usize = 80;
 
 /// At most [`EXCERPT`] characters of `line` about byte `at`, control characters escaped and
 /// cuts marked with "...".
