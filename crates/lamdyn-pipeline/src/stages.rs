@@ -116,11 +116,9 @@ pub fn run_job(
     let sandwich = t.stage("inverse setup", || Ok((inverse_setup(&job)?, false)))?;
     let modal_hz = modal_frequencies(fit_result, &ema);
     let curve_hz = fit_result.map_or_else(Vec::new, |f| curve_grid(&job, f, &measured.set));
+    let hz = [modal_hz.as_slice(), curve_hz.as_slice()];
     let (mut modal, curve, causality) = t.stage("inverse", || {
-        Ok((
-            inverses(&sandwich, fit_result, [&modal_hz, &curve_hz])?,
-            false,
-        ))
+        Ok((inverses(&sandwich, fit_result, hz)?, false))
     })?;
     if fit_result.is_none() {
         starts_from_the_poles(&model, &ema, &mut modal);
@@ -138,7 +136,7 @@ pub fn run_job(
     let mc = match (fit_result, &sandwich.stack) {
         (Some(fit), Some(_)) if job.uncertainty.samples > 0 => {
             Some(t.stage("uncertainty", || {
-                let freqs_hz = [modal_hz.as_slice(), curve_hz.as_slice()].concat();
+                let freqs_hz = hz.concat();
                 let mc = monte_carlo(&job, fit, sandwich.paper, freqs_hz, spinner)?;
                 Ok((mc, false))
             })?)
