@@ -44,27 +44,6 @@ pub struct RunOptions {
     pub cache_dir: Option<PathBuf>,
 }
 
-/// Runs `f` as stage `name`: progress, timing, and "stage 'NAME' failed" on error.
-fn stage<T>(
-    name: &'static str,
-    spinner: &dyn Reporter,
-    timings: &mut Vec<StageTime>,
-    f: impl FnOnce() -> Result<(T, bool)>,
-) -> Result<T> {
-    spinner.stage(&format!("stage '{name}'"));
-    let t = Instant::now();
-    let (value, cached) = f().map_err(|e| PipelineError::Stage {
-        stage: name,
-        source: Box::new(e),
-    })?;
-    timings.push(StageTime {
-        name,
-        seconds: t.elapsed().as_secs_f64(),
-        cached,
-    });
-    Ok(value)
-}
-
 /// Sets faer's global parallelism (used by its operators and decompositions that take no
 /// explicit `Par`) to sequential. faer's parallel kernels split their sums by the thread
 /// count, so results changed with `RAYON_NUM_THREADS` (the layered inverse's G* at 3e-6,
@@ -239,9 +218,21 @@ struct Timed<'a> {
 }
 
 impl Timed<'_> {
-    /// Runs `f` as stage `name` ([`stage`]).
+    /// Runs `f` as stage `name`: progress, timing (with whether `f` took its result from the
+    /// cache), and "stage 'NAME' failed" on error.
     fn stage<T>(&mut self, name: &'static str, f: impl FnOnce() -> Result<(T, bool)>) -> Result<T> {
-        stage(name, self.spinner, &mut self.timings, f)
+        self.spinner.stage(&format!("stage '{name}'"));
+        let t = Instant::now();
+        let (value, cached) = f().map_err(|e| PipelineError::Stage {
+            stage: name,
+            source: Box::new(e),
+        })?;
+        self.timings.push(StageTime {
+            name,
+            seconds: t.elapsed().as_secs_f64(),
+            cached,
+        });
+        Ok(value)
     }
 }
 

@@ -125,10 +125,11 @@ fn module_of(rel: &Path, has_lib: bool) -> Option<ModulePath> {
 /// The cycles among sibling modules of the crate made of `files` (module docs).
 pub fn cycles(files: &[SourceFile]) -> Vec<Cycle> {
     let modules: BTreeSet<ModulePath> = files.iter().map(|f| f.module.clone()).collect();
-    let reexports = reexports(files, &modules);
+    let code: Vec<String> = files.iter().map(|f| code_of(&f.text)).collect();
+    let reexports = reexports(files, &code, &modules);
     let mut edges: BTreeMap<(ModulePath, ModulePath), Use> = BTreeMap::new();
-    for f in files {
-        for (line, path) in paths(&code_of(&f.text)) {
+    for (f, code) in files.iter().zip(&code) {
+        for (line, path) in paths(code) {
             let Some(to) = resolve(&f.module, &path, &modules, &reexports) else {
                 continue;
             };
@@ -146,13 +147,14 @@ pub fn cycles(files: &[SourceFile]) -> Vec<Cycle> {
 }
 
 /// Per (module, name) re-exported there by a `pub use` of another module's item: that module.
+/// `code` is each file's [`code_of`].
 fn reexports(
     files: &[SourceFile],
+    code: &[String],
     modules: &BTreeSet<ModulePath>,
 ) -> BTreeMap<(ModulePath, String), ModulePath> {
     let mut map = BTreeMap::new();
-    for f in files {
-        let code = code_of(&f.text);
+    for (f, code) in files.iter().zip(code) {
         for stmt in code.split(';') {
             let s = stmt.trim_start();
             let Some(rest) = s
@@ -602,7 +604,7 @@ mod tests {
                 "pub mod a;\npub mod b;\npub mod c;\npub use a::Thing;\n",
             ),
             file("a", "use crate::{x, b::{Other, more}};\npub struct Thing;"),
-            file("b", "fn f() -> crate::Thing { todo!() }\n"),
+            file("b", "fn f() -> crate::Thing { crate::Thing }\n"),
             file(
                 "c",
                 "// crate::a::Thing\nconst S: &str = \"crate::a\";\n#[cfg(test)]\nmod tests { use crate::a; }\n",

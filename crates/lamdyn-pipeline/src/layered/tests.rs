@@ -424,9 +424,10 @@ fn the_ladder_reruns_at_supports_found_far_off() {
     assert!(supports_found(&free, Some(&far)).is_none());
 }
 
-/// The default wide prior and shared remainder ([`LawTuning`]).
-const WIDE: f64 = 0.05;
-const SHARED: f64 = 0.5;
+/// The default wide prior ([`LawTuning::wide_prior`]).
+const WIDE: f64 = LawTuning::DEFAULT_WIDE_PRIOR;
+/// The default shared remainder ([`LawTuning::remainder_shared`]).
+const SHARED: f64 = LawTuning::DEFAULT_REMAINDER_SHARED;
 
 /// A failed law fit, for the choice between laws.
 fn no_fit(why: &str) -> FitError {

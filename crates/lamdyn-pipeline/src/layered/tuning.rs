@@ -41,15 +41,22 @@ pub struct LawTuning {
     pub remainder_shared: f64,
 }
 
+impl LawTuning {
+    /// The default [`LawTuning::wide_prior`].
+    pub const DEFAULT_WIDE_PRIOR: f64 = 0.05;
+    /// The default [`LawTuning::remainder_shared`].
+    pub const DEFAULT_REMAINDER_SHARED: f64 = 0.5;
+}
+
 impl Default for LawTuning {
     fn default() -> Self {
         Self {
             prony_offsets: vec![0.0, 0.25, 0.5, 0.75],
-            wide_prior: 0.05,
+            wide_prior: Self::DEFAULT_WIDE_PRIOR,
             settled: 0.05,
             relinearisations: 4,
             supports_rerun: 0.05,
-            remainder_shared: 0.5,
+            remainder_shared: Self::DEFAULT_REMAINDER_SHARED,
         }
     }
 }
