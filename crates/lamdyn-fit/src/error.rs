@@ -20,6 +20,9 @@ pub enum FitError {
     /// An error of the FRF data.
     #[error(transparent)]
     Frf(#[from] lamdyn_frf::FrfError),
+    /// An error of the layered model.
+    #[error(transparent)]
+    Layered(#[from] lamdyn_layered::LayeredError),
     /// A law's parameters left the physical range.
     #[error(transparent)]
     Law(#[from] lamdyn_material::MaterialError),

@@ -15,6 +15,7 @@
 //! | [`lm`] | Levenberg–Marquardt on faer |
 //! | `start` | starting points: storage modulus at the peaks, screened grid of loss parameters |
 //! | [`fit`] | multi-start fit, covariance and 95 % intervals |
+//! | [`frf_fit`] | the core's law fitted to the measured FRFs through the layered model |
 //! | [`modes`] | mode-wise estimates and the Table-3 peak comparison |
 //! | [`joint`] | the core's law fitted to all modes with the inputs known within a tolerance |
 //! | [`synthetic`] | measurement grids and seeded noise for tests and demos |
@@ -28,6 +29,7 @@
 pub mod direct;
 mod error;
 pub mod fit;
+pub mod frf_fit;
 pub mod joint;
 pub mod law;
 pub mod lm;

@@ -1,7 +1,8 @@
 //! Levenberg–Marquardt for small nonlinear least-squares problems, on faer.
 //!
 //! Minimises S(x) = Σ r_i(x)² with steps (JᵀJ + λ diag JᵀJ) δ = −Jᵀr [Marquardt 1963], J by
-//! central differences (2p evaluations), λ divided by 3 after an accepted step and multiplied by
+//! central differences (2p evaluations, [`levenberg_marquardt`]) or given with the residuals
+//! ([`levenberg_marquardt_with_jacobian`]), λ divided by 3 after an accepted step and multiplied by
 //! 4 after a rejected one. Written here rather than taken from the `levenberg-marquardt` crate
 //! because that crate works on nalgebra, a second linear-algebra library.
 
@@ -59,11 +60,59 @@ pub fn levenberg_marquardt(
     x0: &[f64],
     settings: LmSettings,
 ) -> Option<LmOutcome> {
+    let eval = |x: &[f64]| residuals(x).filter(|r| r.iter().all(|v| v.is_finite()));
+    let jac = |x: &[f64], r: &[f64]| {
+        let mut count = 0;
+        let mut counted = |x: &[f64]| {
+            count += 1;
+            eval(x)
+        };
+        jacobian(&mut counted, x, r).map(|j| (j, count))
+    };
+    minimise(&eval, &jac, x0, settings)
+}
+
+/// Minimises Σ r(x)² from `x0` with the Jacobian `jacobian(x)` (m × p) given by the caller
+/// (analytic derivatives): `residuals` as in [`levenberg_marquardt`], `jacobian` evaluated at
+/// accepted points only.
+pub fn levenberg_marquardt_with_jacobian(
+    residuals: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
+    jacobian: &(dyn Fn(&[f64]) -> Option<Mat<f64>> + Sync),
+    x0: &[f64],
+    settings: LmSettings,
+) -> Option<LmOutcome> {
+    let eval = |x: &[f64]| residuals(x).filter(|r| r.iter().all(|v| v.is_finite()));
+    let jac = |x: &[f64], r: &[f64]| {
+        jacobian(x)
+            .filter(|j| j.nrows() == r.len() && j.ncols() == x.len())
+            .filter(|j| (0..j.ncols()).all(|c| j.col(c).iter().all(|v| v.is_finite())))
+            .map(|j| (j, 1))
+    };
+    minimise(&eval, &jac, x0, settings)
+}
+
+/// A Jacobian at (x, r(x)) and the residual evaluations it took.
+type JacobianSource<'a> = dyn Fn(&[f64], &[f64]) -> Option<(Mat<f64>, usize)> + 'a;
+
+/// The Marquardt iteration of both entry points; `jac` returns the Jacobian and the residual
+/// evaluations it took.
+fn minimise(
+    eval_residuals: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
+    jac: &JacobianSource<'_>,
+    x0: &[f64],
+    settings: LmSettings,
+) -> Option<LmOutcome> {
     let p = x0.len();
-    let mut evaluations = 0;
-    let mut eval = |x: &[f64]| {
-        evaluations += 1;
-        residuals(x).filter(|r| r.iter().all(|v| v.is_finite()))
+    let evaluations = std::cell::Cell::new(0);
+    let eval = |x: &[f64]| {
+        evaluations.set(evaluations.get() + 1);
+        eval_residuals(x)
+    };
+    let jacobian = |x: &[f64], r: &[f64]| {
+        jac(x, r).map(|(j, n)| {
+            evaluations.set(evaluations.get() + n);
+            j
+        })
     };
     let mut x = x0.to_vec();
     let mut r = eval(&x)?;
@@ -74,7 +123,7 @@ pub fn levenberg_marquardt(
     let mut reason = String::from("iteration limit");
     let mut converged = false;
     let mut iterations = 0;
-    let mut jac = jacobian(&mut eval, &x, &r)?;
+    let mut jac = jacobian(&x, &r)?;
     while iterations < settings.max_iterations {
         iterations += 1;
         let m = r.len();
@@ -125,7 +174,7 @@ pub fn levenberg_marquardt(
             reason = "no step lowers the cost (minimum to working precision)".into();
             break;
         }
-        jac = jacobian(&mut eval, &x, &r)?;
+        jac = jacobian(&x, &r)?;
         if converged {
             break;
         }
@@ -137,7 +186,7 @@ pub fn levenberg_marquardt(
         cost,
         initial_cost,
         iterations,
-        evaluations,
+        evaluations: evaluations.get(),
         converged,
         reason,
     })

@@ -15,9 +15,11 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`frf`] | FRFs between surface points and their derivative with respect to the core |
 //! | [`hex20`] | the C3D20 element: shape functions, stiffness, consistent mass |
 //! | [`mesh`] | layered plates and shallow shells of hexahedra, graded towards the edges |
 //! | [`plan`] | the part's plan: a rectangle, or any quadrilateral mesh of the mid-surface (Gmsh) |
+//! | [`probe`] | sensors and hammers at any point of the top surface (shape functions) |
 //! | [`system`] | sparse K and M per layer, supports; lowest modes by shift-invert Lanczos |
 //! | [`reduced`] | reduced basis over a range of core moduli; FRFs and complex eigenvalues |
 //! | [`inverse`] | the core's G* per measured mode through the reduced model |
@@ -33,11 +35,13 @@
 
 pub mod convergence;
 mod error;
+pub mod frf;
 pub mod hex20;
 pub mod inverse;
 pub mod mesh;
 pub mod ordering;
 pub mod plan;
+pub mod probe;
 pub mod reduced;
 pub mod sensitivity;
 pub mod seq;

@@ -357,6 +357,17 @@ impl ReducedModel {
         c64::new(v.re, v.im)
     }
 
+    /// The projected dynamic stiffness Vᵀ Z(ω) V at ω (rad/s) and core scale s (module docs).
+    pub(crate) fn dynamic_stiffness_matrix(&self, omega: f64, core_scale: Complex64) -> Mat<c64> {
+        let m = self.size();
+        Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, omega, core_scale))
+    }
+
+    /// Vᵀ K_c V at the assembled core modulus: ∂(Vᵀ Z V)/∂s.
+    pub(crate) fn core_matrix(&self) -> &Mat<f64> {
+        &self.k_core
+    }
+
     /// Complex eigenvalues λ = ω²(1 + iη) of the reduced model with a frequency-independent core
     /// scale s (Vᵀ M V = I, so the eigenvalues of Vᵀ Z(0) V: the dashpots left out), increasing
     /// real part: the natural frequencies √Re λ/2π and modal loss factors Im λ/Re λ.

@@ -1,0 +1,681 @@
+//! The core's law fitted to the measured FRFs through a model whose stiffness holds the core
+//! through one complex scale s(ω) = G*(ω)/G_a (the layered model, [`CoreFrfModel`]): the
+//! model is fitted to the data, not to poles identified from it, so damped and overlapping
+//! modes need no EMA.
+//!
+//! **Model of the data.** At each line ω_l of the band, sensor c and reference r,
+//!
+//!   D_lcr = g_r Q(ω_l) H_cr(ω_l; s(ω_l; u)) + e_lcr,
+//!
+//! with H the model's receptance, Q the factor to the measured quantity (1, iω, −ω²), g_r a
+//! real calibration gain per reference (prior ln g_r ~ N(0, s_g²)) and e the noise, whose scale
+//! σ_lcr is taken from the data ([`BandData`]: the curve's local level, a dynamic-range floor).
+//!
+//! **Fit.** Levenberg–Marquardt on the parameters x = (u, ln g) minimises
+//! Σ |(g_r Q H − D)/σ|² + Σ (ln g_r/s_g)², with the Jacobian analytic through the same LU as
+//! the residuals: ∂H/∂u_k = ∂H/∂s · (∂G*/∂u_k)/G_a (∂H/∂s from
+//! [`lamdyn_layered::frf::ObservedModel::receptance`], ∂G*/∂u from [`FrfLaw::gradient`]).
+//! Starts: the law closest to a given curve (another route's answer), or else the best few
+//! constant moduli of a grid in (G', η) evaluated on a thinned set of lines, each taken
+//! through [`FrfLaw::closest_to`]; the lowest minimum wins.
+//!
+//! **Bands.** C = s² τ (JᵀJ)⁺ at the minimum (Laplace approximation), s² = S/(N − p) the
+//! residuals' scale (the misfit's real noise, not the assumed one) and τ = 1 + 2 Σ_k ρ_k the
+//! variance inflation of residuals correlated along frequency (ρ_k their pooled lag-k
+//! autocorrelation, summed to its first non-positive value [Box & Jenkins 1976, §2.1.5 —
+//! Bartlett's formula for the variance of a mean]): a structured residual (a model error, a
+//! missed mode) leaves fewer independent lines than it counts, and the bands widen with it. A
+//! relative discretization error (the mesh ladder's estimate) is added to the bands of ln G'
+//! and ln η in quadrature. A law parameter whose 95 % interval spans more than a decade either
+//! side is reported as not determined by the data.
+
+mod data;
+mod law;
+
+pub use data::{BandData, ENVELOPE_HALF_WIDTH};
+pub use law::{FrfLaw, PRONY_TERMS_PER_DECADE};
+
+use crate::error::{FitError, inconsistent};
+use crate::lm::{LmOutcome, LmSettings, levenberg_marquardt_with_jacobian};
+use crate::master::{describe_direction, pseudo_inverse};
+use faer::Mat;
+use lamdyn_frf::{FrfSet, Quantity};
+use lamdyn_layered::frf::{LineReceptance, ObservedModel};
+use num_complex::Complex64;
+use rayon::prelude::*;
+
+const CONTEXT: &str = "FRF fit";
+
+/// A model whose core enters through one complex scale s(ω) = G*(ω)/G_a.
+pub trait CoreFrfModel: Sync {
+    /// Number of sensors (rows of H).
+    fn n_sensors(&self) -> usize;
+    /// Number of references (columns of H).
+    fn n_references(&self) -> usize;
+    /// Receptance H and ∂H/∂s at ω (rad/s) for the core scale s.
+    ///
+    /// # Errors
+    /// Whatever the model's solve reports.
+    fn receptance(&self, omega: f64, core_scale: Complex64) -> Result<LineReceptance, FitError>;
+}
+
+impl CoreFrfModel for ObservedModel {
+    fn n_sensors(&self) -> usize {
+        ObservedModel::n_sensors(self)
+    }
+    fn n_references(&self) -> usize {
+        ObservedModel::n_references(self)
+    }
+    fn receptance(&self, omega: f64, core_scale: Complex64) -> Result<LineReceptance, FitError> {
+        Ok(ObservedModel::receptance(self, omega, core_scale)?)
+    }
+}
+
+/// Settings of [`fit_core_to_frfs`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrfFitSettings {
+    /// The band fitted, Hz (inclusive).
+    pub band_hz: [f64; 2],
+    /// Dynamic range of the weights, dB ([`BandData`]).
+    pub dynamic_range_db: f64,
+    /// Prior standard deviation s_g of each reference's ln gain.
+    pub gain_prior_sd: f64,
+    /// Starts taken from the constant-modulus grid (when no start curve is given).
+    pub starts: usize,
+    /// Lines of the band the grid is evaluated on (evenly thinned).
+    pub grid_lines: usize,
+    /// The iteration's stopping rules.
+    pub lm: LmSettings,
+    /// Relative discretization error of (G', η) added to the bands (the ladder's estimate).
+    pub discretization_rel: [f64; 2],
+}
+
+impl FrfFitSettings {
+    /// Defaults over `band_hz`: 40 dB dynamic range, a 10 % gain prior, two starts from 48 grid
+    /// lines, at most 60 iterations to a relative cost change of 1e-8, no discretization error.
+    pub fn over(band_hz: [f64; 2]) -> Self {
+        Self {
+            band_hz,
+            dynamic_range_db: 40.0,
+            gain_prior_sd: 0.1,
+            starts: 2,
+            grid_lines: 48,
+            lm: LmSettings {
+                max_iterations: 60,
+                cost_tolerance: 1e-8,
+                gradient_tolerance: 1e-12,
+            },
+            discretization_rel: [0.0, 0.0],
+        }
+    }
+}
+
+/// A fitted law parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrfParameter {
+    /// Name with unit.
+    pub name: String,
+    /// Value, SI.
+    pub value: f64,
+    /// 95 % interval, or `None` where the data do not determine it (module docs).
+    pub ci95: Option<[f64; 2]>,
+}
+
+/// The law and its band at one frequency.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrfLawPoint {
+    /// Frequency, Hz.
+    pub f_hz: f64,
+    /// G', Pa.
+    pub storage_pa: f64,
+    /// η.
+    pub loss_factor: f64,
+    /// 95 % band of G', Pa.
+    pub storage_ci95: [f64; 2],
+    /// 95 % band of η.
+    pub loss_factor_ci95: [f64; 2],
+}
+
+/// The fit's answer (module docs).
+#[derive(Debug, Clone)]
+pub struct FrfFit {
+    /// The law fitted.
+    pub law: FrfLaw,
+    /// Its unconstrained parameters.
+    pub u: Vec<f64>,
+    /// Its natural parameters with intervals.
+    pub parameters: Vec<FrfParameter>,
+    /// The references' calibration gains.
+    pub gains: Vec<f64>,
+    /// Covariance of u (the law's block of C).
+    pub covariance: Mat<f64>,
+    /// The residuals' scale s.
+    pub noise_scale: f64,
+    /// The variance inflation τ for residuals correlated along frequency.
+    pub inflation: f64,
+    /// The misfit S at the start and at the end.
+    pub cost: [f64; 2],
+    /// RMS of the weighted residual relative to the weighted data.
+    pub relative_rms: f64,
+    /// Iterations and residual evaluations of the winning start.
+    pub iterations: usize,
+    /// Residual evaluations of the winning start.
+    pub evaluations: usize,
+    /// Lines and residuals fitted.
+    pub lines: usize,
+    /// The band, Hz.
+    pub band_hz: [f64; 2],
+    /// G_a, Pa.
+    pub assembled_modulus_pa: f64,
+    /// The relative discretization error in the bands.
+    pub discretization_rel: [f64; 2],
+}
+
+impl FrfFit {
+    /// G*(f), Pa.
+    pub fn modulus(&self, f_hz: f64) -> Complex64 {
+        self.law.modulus(&self.u, 2.0 * std::f64::consts::PI * f_hz)
+    }
+
+    /// The law and its 95 % band at `f_hz` (module docs).
+    pub fn at(&self, f_hz: f64) -> FrfLawPoint {
+        let w = 2.0 * std::f64::consts::PI * f_hz;
+        let g = self.law.modulus(&self.u, w);
+        let grad = self.law.gradient(&self.u, w);
+        let d_ln_storage: Vec<f64> = grad.iter().map(|d| d.re / g.re).collect();
+        let d_ln_eta: Vec<f64> = grad.iter().map(|d| d.im / g.im - d.re / g.re).collect();
+        let var = |d: &[f64]| {
+            let mut v = 0.0;
+            for a in 0..d.len() {
+                for b in 0..d.len() {
+                    v += d[a] * self.covariance[(a, b)] * d[b];
+                }
+            }
+            v.max(0.0)
+        };
+        let sd_storage = (var(&d_ln_storage) + self.discretization_rel[0].powi(2)).sqrt();
+        let sd_eta = (var(&d_ln_eta) + self.discretization_rel[1].powi(2)).sqrt();
+        let band = |x: f64, sd: f64| [x * (-1.96 * sd).exp(), x * (1.96 * sd).exp()];
+        let eta = g.im / g.re;
+        FrfLawPoint {
+            f_hz,
+            storage_pa: g.re,
+            loss_factor: eta,
+            storage_ci95: band(g.re, sd_storage),
+            loss_factor_ci95: band(eta, sd_eta),
+        }
+    }
+
+    /// One line: how the fit went.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} fitted to {} lines in {:.1}–{:.1} Hz: misfit {:.3e} → {:.3e} (relative RMS {:.1} %), {} iterations, noise scale {:.3}, correlation inflation {:.1}",
+            self.law.name(),
+            self.lines,
+            self.band_hz[0],
+            self.band_hz[1],
+            self.cost[0],
+            self.cost[1],
+            100.0 * self.relative_rms,
+            self.iterations,
+            self.noise_scale,
+            self.inflation
+        )
+    }
+}
+
+/// A start of the fit: a curve G*(ω) (Pa, ω in rad/s) the law starts closest to.
+pub type StartCurve<'a> = &'a (dyn Fn(f64) -> Complex64 + Sync);
+
+/// Fits `law` to `set` through `model` (module docs). `set`'s responses and references are the
+/// model's sensors and references in order; `assembled_modulus_pa` is G_a.
+///
+/// # Errors
+/// [`FitError::Inconsistent`] for channel counts that differ from the model's, a band with
+/// fewer lines than parameters, non-finite data, a model that cannot be solved at the start,
+/// or a fit that does not settle within its iterations (how far it got and which parameters
+/// move together).
+pub fn fit_core_to_frfs(
+    model: &dyn CoreFrfModel,
+    set: &FrfSet,
+    law: FrfLaw,
+    assembled_modulus_pa: f64,
+    start: Option<StartCurve<'_>>,
+    settings: &FrfFitSettings,
+) -> Result<FrfFit, FitError> {
+    if set.responses().len() != model.n_sensors() || set.references().len() != model.n_references()
+    {
+        return Err(inconsistent(
+            CONTEXT,
+            format!(
+                "the data have {} response(s) × {} reference(s), the model {} × {}",
+                set.responses().len(),
+                set.references().len(),
+                model.n_sensors(),
+                model.n_references()
+            ),
+        ));
+    }
+    if !(assembled_modulus_pa.is_finite() && assembled_modulus_pa > 0.0) {
+        return Err(inconsistent(
+            CONTEXT,
+            format!("assembled core modulus {assembled_modulus_pa} Pa must be positive"),
+        ));
+    }
+    let n_params = law.n_params() + set.references().len();
+    let data = BandData::from_set(set, settings.band_hz, settings.dynamic_range_db, n_params)?;
+    let problem = Problem {
+        model,
+        data,
+        law,
+        g_a: assembled_modulus_pa,
+        quantity: set.quantity(),
+        gain_prior_sd: settings.gain_prior_sd,
+        data_weight: 1.0,
+    };
+    let mut problem = problem;
+    let starts = problem.starts(start, settings)?;
+    let mut best: Option<LmOutcome> = None;
+    for x0 in starts {
+        let run = problem.minimise(&x0, settings.lm);
+        if let Some(run) = run
+            && best.as_ref().is_none_or(|b| run.cost < b.cost)
+        {
+            best = Some(run);
+        }
+    }
+    let first = best.ok_or_else(|| {
+        inconsistent(
+            CONTEXT,
+            "the model could not be solved at any start (a singular dynamic stiffness)".into(),
+        )
+    })?;
+    if !first.converged {
+        return Err(problem.did_not_settle(&first));
+    }
+    // The data's own noise scale, then the fit again with the data rows on that scale, so the
+    // gains' priors weigh against the data as they should: a fixed point (module docs).
+    let (mut run, mut data_scale) = (first, 1.0);
+    for _ in 0..MAX_SCALE_PASSES {
+        let scale = problem.data_noise_scale(&run);
+        let settled = (scale / data_scale - 1.0).abs() < 0.1;
+        data_scale = scale;
+        problem.data_weight = 1.0 / data_scale;
+        run = problem.minimise(&run.x, settings.lm).ok_or_else(|| {
+            inconsistent(
+                CONTEXT,
+                "the model could not be solved at the previous pass's answer".into(),
+            )
+        })?;
+        if !run.converged {
+            return Err(problem.did_not_settle(&run));
+        }
+        if settled {
+            break;
+        }
+    }
+    problem.conclude(run, data_scale, settings)
+}
+
+/// The problem the iteration sees.
+struct Problem<'a> {
+    model: &'a dyn CoreFrfModel,
+    data: BandData,
+    law: FrfLaw,
+    g_a: f64,
+    quantity: Quantity,
+    gain_prior_sd: f64,
+    /// 1/s: the data rows divided by the noise scale s of the first pass (1 in it).
+    data_weight: f64,
+}
+
+/// One line's residuals and, if asked, its Jacobian rows (row-major, p per row).
+type LineBlock = (Vec<f64>, Vec<f64>);
+
+impl Problem<'_> {
+    fn n_law(&self) -> usize {
+        self.law.n_params()
+    }
+
+    fn n_params(&self) -> usize {
+        self.n_law() + self.data.n_references
+    }
+
+    /// One Levenberg–Marquardt run over every line from `x0`.
+    fn minimise(&self, x0: &[f64], lm: LmSettings) -> Option<LmOutcome> {
+        let all: Vec<usize> = (0..self.data.n_lines()).collect();
+        levenberg_marquardt_with_jacobian(
+            &|x| self.evaluate(x, &all, false).map(|e| e.0),
+            &|x| self.evaluate(x, &all, true).and_then(|e| e.1),
+            x0,
+            lm,
+        )
+    }
+
+    /// s = (S_data/(N − p))^½ of `run`'s data rows (the priors' rows left out), in the
+    /// weights' units, at least 1e-6 (a relative noise of one part per million: below any
+    /// measurement, and where the misfit's rounding begins).
+    fn data_noise_scale(&self, run: &LmOutcome) -> f64 {
+        let n = self.data.n_residuals();
+        let s_data: f64 = run.residuals[..n].iter().map(|v| v * v).sum::<f64>()
+            / (self.data_weight * self.data_weight);
+        (s_data / n.saturating_sub(self.n_params()).max(1) as f64)
+            .sqrt()
+            .max(1e-6)
+    }
+
+    /// Residuals over `lines` plus the gains' prior rows, and the Jacobian if `with_jacobian`.
+    fn evaluate(
+        &self,
+        x: &[f64],
+        lines: &[usize],
+        with_jacobian: bool,
+    ) -> Option<(Vec<f64>, Option<Mat<f64>>)> {
+        let blocks: Vec<LineBlock> = lines
+            .par_iter()
+            .map(|&l| self.line(x, l, with_jacobian))
+            .collect::<Option<Vec<_>>>()?;
+        let p = self.n_params();
+        let n_r = self.data.n_references;
+        let mut r: Vec<f64> = blocks.iter().flat_map(|b| b.0.iter().copied()).collect();
+        let rows = r.len() + n_r;
+        r.extend((0..n_r).map(|k| x[self.n_law() + k] / self.gain_prior_sd));
+        let jac = with_jacobian.then(|| {
+            let mut j = Mat::<f64>::zeros(rows, p);
+            let mut row = 0;
+            for b in &blocks {
+                for chunk in b.1.chunks(p) {
+                    for (k, v) in chunk.iter().enumerate() {
+                        j[(row, k)] = *v;
+                    }
+                    row += 1;
+                }
+            }
+            for k in 0..n_r {
+                j[(row + k, self.n_law() + k)] = 1.0 / self.gain_prior_sd;
+            }
+            j
+        });
+        Some((r, jac))
+    }
+
+    /// Line `l`'s block (module docs).
+    fn line(&self, x: &[f64], l: usize, with_jacobian: bool) -> Option<LineBlock> {
+        let (u, ln_gains) = x.split_at(self.n_law());
+        let w = self.data.omegas[l];
+        let g = self.law.modulus(u, w);
+        if !(g.re > 0.0 && g.im >= 0.0 && g.is_finite()) {
+            return None;
+        }
+        let rec = self.model.receptance(w, g / self.g_a).ok()?;
+        let q = self.quantity.from_receptance(w);
+        let dg: Vec<Complex64> = if with_jacobian {
+            self.law
+                .gradient(u, w)
+                .iter()
+                .map(|d| d / self.g_a)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let (n_c, n_r, p) = (self.data.n_sensors, self.data.n_references, self.n_params());
+        let mut res = Vec::with_capacity(2 * n_c * n_r);
+        let mut jac = Vec::with_capacity(if with_jacobian { 2 * n_c * n_r * p } else { 0 });
+        for r in 0..n_r {
+            let gain = ln_gains[r].exp();
+            for c in 0..n_c {
+                let wt = self.data.weights[l][r][c] * self.data_weight;
+                let h = rec.h[(c, r)];
+                let modelled = gain * q * Complex64::new(h.re, h.im);
+                let e = wt * (modelled - self.data.values[l][r][c]);
+                res.push(e.re);
+                res.push(e.im);
+                if with_jacobian {
+                    let dh = rec.dh_ds[(c, r)];
+                    let dm = wt * gain * q * Complex64::new(dh.re, dh.im);
+                    let mut rows = [vec![0.0; p], vec![0.0; p]];
+                    for (k, d) in dg.iter().enumerate() {
+                        let v = dm * d;
+                        rows[0][k] = v.re;
+                        rows[1][k] = v.im;
+                    }
+                    let dgain = wt * modelled;
+                    rows[0][self.n_law() + r] = dgain.re;
+                    rows[1][self.n_law() + r] = dgain.im;
+                    jac.extend(rows[0].iter().chain(&rows[1]));
+                }
+            }
+        }
+        Some((res, jac))
+    }
+
+    /// Starting points (module docs).
+    fn starts(
+        &self,
+        start: Option<StartCurve<'_>>,
+        settings: &FrfFitSettings,
+    ) -> Result<Vec<Vec<f64>>, FitError> {
+        let n_r = self.data.n_references;
+        let with_gains = |u: Vec<f64>| u.into_iter().chain(std::iter::repeat_n(0.0, n_r)).collect();
+        if let Some(curve) = start {
+            return Ok(vec![with_gains(
+                self.law.closest_to(&self.data.omegas, curve),
+            )]);
+        }
+        let n_l = self.data.n_lines();
+        let step = n_l.div_ceil(settings.grid_lines.max(1)).max(1);
+        let lines: Vec<usize> = (0..n_l).step_by(step).collect();
+        let mut scored: Vec<(f64, usize, usize)> = Vec::new();
+        for (i, &ratio) in GRID_STORAGE_RATIOS.iter().enumerate() {
+            for (j, &eta) in GRID_LOSS_FACTORS.iter().enumerate() {
+                let g = Complex64::new(ratio * self.g_a, ratio * self.g_a * eta);
+                let cost = self.constant_cost(g, &lines);
+                if cost.is_finite() {
+                    scored.push((cost, i, j));
+                }
+            }
+        }
+        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut chosen: Vec<(usize, usize)> = Vec::new();
+        for &(_, i, j) in &scored {
+            // Starts at least two grid steps apart in G' or in η.
+            if chosen
+                .iter()
+                .all(|&(a, b)| a.abs_diff(i) >= 2 || b.abs_diff(j) >= 2)
+            {
+                chosen.push((i, j));
+            }
+            if chosen.len() >= settings.starts.max(1) {
+                break;
+            }
+        }
+        if chosen.is_empty() {
+            return Err(inconsistent(
+                CONTEXT,
+                "the model could not be solved for any constant core modulus of the start grid"
+                    .into(),
+            ));
+        }
+        Ok(chosen
+            .into_iter()
+            .map(|(i, j)| {
+                let g = Complex64::new(
+                    GRID_STORAGE_RATIOS[i] * self.g_a,
+                    GRID_STORAGE_RATIOS[i] * self.g_a * GRID_LOSS_FACTORS[j],
+                );
+                with_gains(self.law.closest_to(&self.data.omegas, &|_| g))
+            })
+            .collect())
+    }
+
+    /// The data misfit with a constant core modulus `g` and unit gains on `lines`.
+    fn constant_cost(&self, g: Complex64, lines: &[usize]) -> f64 {
+        let cost: Option<f64> = lines
+            .par_iter()
+            .map(|&l| {
+                let w = self.data.omegas[l];
+                let rec = self.model.receptance(w, g / self.g_a).ok()?;
+                let q = self.quantity.from_receptance(w);
+                let mut s = 0.0;
+                for r in 0..self.data.n_references {
+                    for c in 0..self.data.n_sensors {
+                        let h = rec.h[(c, r)];
+                        let m = q * Complex64::new(h.re, h.im);
+                        s += (self.data.weights[l][r][c] * (m - self.data.values[l][r][c]))
+                            .norm_sqr();
+                    }
+                }
+                Some(s)
+            })
+            .sum();
+        cost.unwrap_or(f64::INFINITY)
+    }
+
+    /// The answer from the winning run (module docs).
+    fn conclude(
+        &self,
+        run: LmOutcome,
+        data_scale: f64,
+        settings: &FrfFitSettings,
+    ) -> Result<FrfFit, FitError> {
+        let names = self.names();
+        let jtj = run.jacobian.transpose() * &run.jacobian;
+        let (inv, _) = pseudo_inverse(&jtj, CONTEXT)?;
+        // On the second pass's scale the data rows should give χ²/ν ≈ 1; more is scatter the
+        // first pass did not see, less is not credited.
+        let s2 = (self.data_noise_scale(&run) / data_scale).powi(2).max(1.0);
+        let inflation = self.inflation(&run.residuals);
+        let n_law = self.n_law();
+        let covariance = Mat::from_fn(n_law, n_law, |a, b| s2 * inflation * inv[(a, b)]);
+        let u = run.x[..n_law].to_vec();
+        let natural = self.law.natural(&u);
+        let parameters = natural
+            .iter()
+            .enumerate()
+            .map(|(k, &value)| {
+                let sd = covariance[(k, k)].max(0.0).sqrt();
+                let determined = 1.96 * sd <= 10f64.ln();
+                FrfParameter {
+                    name: names[k].clone(),
+                    value,
+                    ci95: determined.then(|| natural_interval(&self.law, &u, k, sd)),
+                }
+            })
+            .collect();
+        let data_norm: f64 = self.weighted_data_norm();
+        Ok(FrfFit {
+            law: self.law.clone(),
+            parameters,
+            gains: run.x[n_law..].iter().map(|v| v.exp()).collect(),
+            covariance,
+            noise_scale: data_scale * s2.sqrt(),
+            inflation,
+            cost: [run.initial_cost, run.cost],
+            relative_rms: self.data_noise_scale(&run)
+                * (self.data.n_residuals() as f64 / data_norm).sqrt(),
+            iterations: run.iterations,
+            evaluations: run.evaluations,
+            lines: self.data.n_lines(),
+            band_hz: settings.band_hz,
+            assembled_modulus_pa: self.g_a,
+            discretization_rel: settings.discretization_rel,
+            u,
+        })
+    }
+
+    fn weighted_data_norm(&self) -> f64 {
+        let d = &self.data;
+        (0..d.n_lines())
+            .flat_map(|l| {
+                (0..d.n_references).flat_map(move |r| {
+                    (0..d.n_sensors)
+                        .map(move |c| (d.weights[l][r][c] * d.values[l][r][c]).norm_sqr())
+                })
+            })
+            .sum::<f64>()
+            .max(f64::MIN_POSITIVE)
+    }
+
+    /// τ = 1 + 2 Σ ρ_k over the residual series along the lines (module docs).
+    fn inflation(&self, residuals: &[f64]) -> f64 {
+        let d = &self.data;
+        let per_line = 2 * d.n_references * d.n_sensors;
+        let n_l = d.n_lines();
+        let at = |l: usize, s: usize| residuals[l * per_line + s];
+        let c0: f64 = (0..n_l)
+            .flat_map(|l| (0..per_line).map(move |s| (l, s)))
+            .map(|(l, s)| at(l, s).powi(2))
+            .sum();
+        if c0.is_nan() || c0 <= 0.0 {
+            return 1.0;
+        }
+        let mut tau = 1.0;
+        for k in 1..(n_l / 4).max(1) {
+            let ck: f64 = (0..n_l - k)
+                .flat_map(|l| (0..per_line).map(move |s| (l, s)))
+                .map(|(l, s)| at(l, s) * at(l + k, s))
+                .sum();
+            let rho = ck / c0;
+            if rho <= 0.0 {
+                break;
+            }
+            tau += 2.0 * rho;
+        }
+        tau
+    }
+
+    /// The parameters' names with units, the gains last.
+    fn names(&self) -> Vec<String> {
+        self.law
+            .names()
+            .into_iter()
+            .chain((0..self.data.n_references).map(|r| format!("gain of reference {}", r + 1)))
+            .collect()
+    }
+
+    /// The error of a fit that ran out of iterations: how far it got and what moves together.
+    fn did_not_settle(&self, run: &LmOutcome) -> FitError {
+        let names = self.names();
+        let jtj = run.jacobian.transpose() * &run.jacobian;
+        let weakest = jtj.self_adjoint_eigen(faer::Side::Lower).ok().map(|e| {
+            (0..jtj.nrows())
+                .map(|a| e.U()[(a, 0)])
+                .collect::<Vec<f64>>()
+        });
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let together = weakest.map_or_else(
+            || "unknown parameters".to_string(),
+            |v| describe_direction(&names, &v),
+        );
+        inconsistent(
+            CONTEXT,
+            format!(
+                "the fit did not settle in {} iterations ({}): the misfit fell from {:.4e} to {:.4e}; the parameters that move together are {together}. Narrow the band, give a start law, or choose a law with fewer terms",
+                run.iterations, run.reason, run.initial_cost, run.cost
+            ),
+        )
+    }
+}
+
+/// Passes of the noise scale's fixed point at most (each a Levenberg–Marquardt run from the
+/// previous answer; noisy data settle in two).
+const MAX_SCALE_PASSES: usize = 6;
+
+/// G'/G_a of the start grid, 1/16 … 16 in steps of two.
+const GRID_STORAGE_RATIOS: [f64; 9] = [0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
+/// η of the start grid.
+const GRID_LOSS_FACTORS: [f64; 6] = [0.05, 0.15, 0.3, 0.6, 1.0, 1.5];
+
+/// The 95 % interval of natural parameter `k` from the sd of its unconstrained u_k.
+fn natural_interval(law: &FrfLaw, u: &[f64], k: usize, sd: f64) -> [f64; 2] {
+    let at = |delta: f64| {
+        let mut v = u.to_vec();
+        v[k] += delta;
+        law.natural(&v)[k]
+    };
+    let (a, b) = (at(-1.96 * sd), at(1.96 * sd));
+    [a.min(b), a.max(b)]
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,183 @@
+//! The FRF fit on a small modal model with a known core: exact recovery, and its errors.
+
+use super::*;
+use faer::c64;
+use lamdyn_frf::Channel;
+use std::f64::consts::PI;
+
+/// Three modes whose stiffness is k_e,k + s k_c,k (different core shares), two sensors, two
+/// references: H_cr = Σ_k φ_ck φ_rk/(k_e,k + s k_c,k − ω²).
+struct Modal {
+    k_e: [f64; 3],
+    k_c: [f64; 3],
+    phi: [[f64; 3]; 2],
+}
+
+impl Modal {
+    fn new() -> Self {
+        let w = |f: f64| (2.0 * PI * f).powi(2);
+        Self {
+            k_e: [w(30.0), w(70.0), w(120.0)],
+            k_c: [0.3 * w(30.0), 0.5 * w(70.0), 0.2 * w(120.0)],
+            phi: [[1.0, 0.7, -0.4], [0.5, -0.9, 0.8]],
+        }
+    }
+}
+
+impl CoreFrfModel for Modal {
+    fn n_sensors(&self) -> usize {
+        2
+    }
+    fn n_references(&self) -> usize {
+        2
+    }
+    fn receptance(&self, omega: f64, s: Complex64) -> Result<LineReceptance, FitError> {
+        let mut h = Mat::<c64>::zeros(2, 2);
+        let mut dh = Mat::<c64>::zeros(2, 2);
+        for k in 0..3 {
+            let z = self.k_e[k] + s * self.k_c[k] - omega * omega;
+            for c in 0..2 {
+                for r in 0..2 {
+                    let a = self.phi[c][k] * self.phi[r][k] / z;
+                    let d = -a * self.k_c[k] / z;
+                    h[(c, r)] += c64::new(a.re, a.im);
+                    dh[(c, r)] += c64::new(d.re, d.im);
+                }
+            }
+        }
+        Ok(LineReceptance { h, dh_ds: dh })
+    }
+}
+
+fn channels(prefix: &str) -> Vec<Channel> {
+    (0..2)
+        .map(|k| {
+            Channel::new(
+                format!("{prefix}{k}"),
+                [k as f64, 0.0, 0.0],
+                [0.0, 0.0, 1.0],
+            )
+            .unwrap()
+        })
+        .collect()
+}
+
+/// Accelerance of `model` with the core `law(u)` and gains `gains` at `freqs`.
+fn data(model: &Modal, law: &FrfLaw, u: &[f64], gains: [f64; 2], freqs: &[f64]) -> FrfSet {
+    let mut values = Vec::new();
+    for c in 0..2 {
+        for r in 0..2 {
+            for &f in freqs {
+                let w = 2.0 * PI * f;
+                let h = model.receptance(w, law.modulus(u, w) / G_A).unwrap().h[(c, r)];
+                values.push(-w * w * gains[r] * Complex64::new(h.re, h.im));
+            }
+        }
+    }
+    FrfSet::new(
+        freqs.to_vec(),
+        channels("s"),
+        channels("h"),
+        Quantity::Accelerance,
+        values,
+    )
+    .unwrap()
+}
+
+const G_A: f64 = 1e6;
+
+fn zener_truth() -> Vec<f64> {
+    vec![(0.4e6f64).ln(), (30e6f64).ln(), (2e-4f64).ln(), 0.4]
+}
+
+/// A Prony core on the fit's own relaxation times, G' 0.5–5 MPa and η 0.4–1 over the band.
+fn prony_truth(law: &FrfLaw) -> Vec<f64> {
+    (0..law.n_params())
+        .map(|k| (0.3e6 * 1.8f64.powi(k as i32)).ln())
+        .collect()
+}
+
+fn freqs() -> Vec<f64> {
+    (0..300).map(|k| 10.0 + 0.5 * k as f64).collect()
+}
+
+/// Noise-free data of the same law family, from the grid's starts (no start curve), the modes
+/// damped and overlapping: the FRFs are matched within 3e-4 relative RMS and the law over
+/// 40–150 Hz and the gains' ratio come back within 1e-3 (measured: FRFs 1.55e-4, gains 4e-5,
+/// the law 2e-4 at 40 Hz). The iteration stops there ("no step lowers the cost") rather than at the
+/// misfit's 1e-6 floor: the Prony terms trade against each other where the FRFs hardly see
+/// the core; closing that gap is open work.
+#[test]
+fn recovers_a_known_core_and_the_gains() {
+    let model = Modal::new();
+    let law = FrfLaw::generalized_maxwell_over(10.0, 160.0);
+    let truth = prony_truth(&law);
+    let set = data(&model, &law, &truth, [1.0, 1.07], &freqs());
+    let fit = fit_core_to_frfs(
+        &model,
+        &set,
+        law.clone(),
+        G_A,
+        None,
+        &FrfFitSettings::over([10.0, 160.0]),
+    )
+    .unwrap();
+    for f in [40.0, 60.0, 100.0, 150.0] {
+        let (a, b) = (fit.modulus(f), law.modulus(&truth, 2.0 * PI * f));
+        assert!(
+            (a / b - 1.0).norm() < 1e-3,
+            "{f} Hz: {a} vs {b}; {}",
+            fit.describe()
+        );
+    }
+    assert!(
+        (fit.gains[1] / fit.gains[0] - 1.07).abs() < 1e-3 && fit.relative_rms < 3e-4,
+        "gains {:?}; relative RMS {:.2e}; {}",
+        fit.gains,
+        fit.relative_rms,
+        fit.describe()
+    );
+}
+
+/// Every refusal names its cause: too few lines for the parameters, channel counts unlike
+/// the model's, all-zero data, and a fit cut off before it settles (how far it got).
+#[test]
+fn refusals_name_their_cause() {
+    let model = Modal::new();
+    let law = FrfLaw::FractionalZener;
+    let set = data(&model, &law, &zener_truth(), [1.0, 1.0], &freqs());
+    let fit = |set: &FrfSet, settings: &FrfFitSettings| {
+        fit_core_to_frfs(&model, set, law.clone(), G_A, None, settings)
+            .unwrap_err()
+            .to_string()
+    };
+    let few = fit(&set, &FrfFitSettings::over([10.0, 12.0]));
+    assert!(
+        few.contains("5 line(s)") && few.contains("fewer than the 6"),
+        "{few}"
+    );
+    let one = set.with_responses(&[0]).unwrap();
+    let counts = fit(&one, &FrfFitSettings::over([10.0, 160.0]));
+    assert!(
+        counts.contains("1 response(s) × 2 reference(s), the model 2 × 2"),
+        "{counts}"
+    );
+    let zero = FrfSet::new(
+        freqs(),
+        channels("s"),
+        channels("h"),
+        Quantity::Accelerance,
+        vec![Complex64::new(0.0, 0.0); 4 * freqs().len()],
+    )
+    .unwrap();
+    let zeros = fit(&zero, &FrfFitSettings::over([10.0, 160.0]));
+    assert!(zeros.contains("zero in the band"), "{zeros}");
+    let mut short = FrfFitSettings::over([10.0, 160.0]);
+    short.lm.max_iterations = 1;
+    short.starts = 1;
+    let cut = fit(&set, &short);
+    assert!(
+        cut.contains("did not settle in 1 iterations") && cut.contains("move together"),
+        "{cut}"
+    );
+}
