@@ -43,6 +43,7 @@ use lamdyn_frf::{FrfSet, Quantity};
 use lamdyn_layered::frf::{LineReceptance, ObservedModel};
 use num_complex::Complex64;
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 const CONTEXT: &str = "FRF fit";
 
@@ -157,9 +158,9 @@ pub struct FrfFit {
     pub cost: [f64; 2],
     /// RMS of the weighted residual relative to the weighted data.
     pub relative_rms: f64,
-    /// Iterations and residual evaluations of the winning start.
+    /// Iterations of the last pass.
     pub iterations: usize,
-    /// Residual evaluations of the winning start.
+    /// Residual evaluations of the last pass.
     pub evaluations: usize,
     /// Lines and residuals fitted.
     pub lines: usize,
@@ -329,7 +330,7 @@ struct Problem<'a> {
     data_weight: f64,
 }
 
-/// One line's residuals and, if asked, its Jacobian rows (row-major, p per row).
+/// One line's residuals and its Jacobian rows (row-major, p per row).
 type LineBlock = (Vec<f64>, Vec<f64>);
 
 impl Problem<'_> {
@@ -341,15 +342,25 @@ impl Problem<'_> {
         self.n_law() + self.data.n_references
     }
 
-    /// One Levenberg–Marquardt run over every line from `x0`.
+    /// One Levenberg–Marquardt run over every line from `x0`. Each evaluation builds the
+    /// Jacobian with the residuals (the LU per line gives both); the iteration asks for the
+    /// Jacobian at the point it has just accepted, so the last one is kept and handed back
+    /// rather than factorised again.
     fn minimise(&self, x0: &[f64], lm: LmSettings) -> Option<LmOutcome> {
-        let all: Vec<usize> = (0..self.data.n_lines()).collect();
-        levenberg_marquardt_with_jacobian(
-            &|x| self.evaluate(x, &all, false).map(|e| e.0),
-            &|x| self.evaluate(x, &all, true).and_then(|e| e.1),
-            x0,
-            lm,
-        )
+        let last: Mutex<Option<(Vec<f64>, Mat<f64>)>> = Mutex::new(None);
+        let residuals = |x: &[f64]| {
+            let (r, j) = self.evaluate(x)?;
+            *last.lock().unwrap_or_else(|e| e.into_inner()) = Some((x.to_vec(), j));
+            Some(r)
+        };
+        let jacobian = |x: &[f64]| {
+            let kept = last.lock().unwrap_or_else(|e| e.into_inner()).take();
+            match kept {
+                Some((at, j)) if at == x => Some(j),
+                _ => self.evaluate(x).map(|e| e.1),
+            }
+        };
+        levenberg_marquardt_with_jacobian(&residuals, &jacobian, x0, lm)
     }
 
     /// s = (S_data/(N − p))^½ of `run`'s data rows (the priors' rows left out), in the
@@ -364,43 +375,31 @@ impl Problem<'_> {
             .max(1e-6)
     }
 
-    /// Residuals over `lines` plus the gains' prior rows, and the Jacobian if `with_jacobian`.
-    fn evaluate(
-        &self,
-        x: &[f64],
-        lines: &[usize],
-        with_jacobian: bool,
-    ) -> Option<(Vec<f64>, Option<Mat<f64>>)> {
-        let blocks: Vec<LineBlock> = lines
-            .par_iter()
-            .map(|&l| self.line(x, l, with_jacobian))
+    /// Residuals over every line plus the gains' prior rows, and their Jacobian.
+    fn evaluate(&self, x: &[f64]) -> Option<(Vec<f64>, Mat<f64>)> {
+        let blocks: Vec<LineBlock> = (0..self.data.n_lines())
+            .into_par_iter()
+            .map(|l| self.line(x, l))
             .collect::<Option<Vec<_>>>()?;
         let p = self.n_params();
         let n_r = self.data.n_references;
         let mut r: Vec<f64> = blocks.iter().flat_map(|b| b.0.iter().copied()).collect();
         let rows = r.len() + n_r;
         r.extend((0..n_r).map(|k| x[self.n_law() + k] / self.gain_prior_sd));
-        let jac = with_jacobian.then(|| {
-            let mut j = Mat::<f64>::zeros(rows, p);
-            let mut row = 0;
-            for b in &blocks {
-                for chunk in b.1.chunks(p) {
-                    for (k, v) in chunk.iter().enumerate() {
-                        j[(row, k)] = *v;
-                    }
-                    row += 1;
-                }
+        let mut j = Mat::<f64>::zeros(rows, p);
+        for (row, v) in blocks.iter().flat_map(|b| b.1.chunks(p)).enumerate() {
+            for (k, v) in v.iter().enumerate() {
+                j[(row, k)] = *v;
             }
-            for k in 0..n_r {
-                j[(row + k, self.n_law() + k)] = 1.0 / self.gain_prior_sd;
-            }
-            j
-        });
-        Some((r, jac))
+        }
+        for k in 0..n_r {
+            j[(rows - n_r + k, self.n_law() + k)] = 1.0 / self.gain_prior_sd;
+        }
+        Some((r, j))
     }
 
     /// Line `l`'s block (module docs).
-    fn line(&self, x: &[f64], l: usize, with_jacobian: bool) -> Option<LineBlock> {
+    fn line(&self, x: &[f64], l: usize) -> Option<LineBlock> {
         let (u, ln_gains) = x.split_at(self.n_law());
         let w = self.data.omegas[l];
         let g = self.law.modulus(u, w);
@@ -409,41 +408,36 @@ impl Problem<'_> {
         }
         let rec = self.model.receptance(w, g / self.g_a).ok()?;
         let q = self.quantity.from_receptance(w);
-        let dg: Vec<Complex64> = if with_jacobian {
-            self.law
-                .gradient(u, w)
-                .iter()
-                .map(|d| d / self.g_a)
-                .collect()
-        } else {
-            Vec::new()
-        };
+        let dg: Vec<Complex64> = self
+            .law
+            .gradient(u, w)
+            .iter()
+            .map(|d| d / self.g_a)
+            .collect();
         let (n_c, n_r, p) = (self.data.n_sensors, self.data.n_references, self.n_params());
         let mut res = Vec::with_capacity(2 * n_c * n_r);
-        let mut jac = Vec::with_capacity(if with_jacobian { 2 * n_c * n_r * p } else { 0 });
+        let mut jac = vec![0.0; 2 * n_c * n_r * p];
         for r in 0..n_r {
             let gain = ln_gains[r].exp();
             for c in 0..n_c {
                 let wt = self.data.weights[l][r][c] * self.data_weight;
-                let h = rec.h[(c, r)];
+                let (h, dh) = (rec.h[(c, r)], rec.dh_ds[(c, r)]);
                 let modelled = gain * q * Complex64::new(h.re, h.im);
                 let e = wt * (modelled - self.data.values[l][r][c]);
                 res.push(e.re);
                 res.push(e.im);
-                if with_jacobian {
-                    let dh = rec.dh_ds[(c, r)];
-                    let dm = wt * gain * q * Complex64::new(dh.re, dh.im);
-                    let mut rows = [vec![0.0; p], vec![0.0; p]];
-                    for (k, d) in dg.iter().enumerate() {
-                        let v = dm * d;
-                        rows[0][k] = v.re;
-                        rows[1][k] = v.im;
-                    }
-                    let dgain = wt * modelled;
-                    rows[0][self.n_law() + r] = dgain.re;
-                    rows[1][self.n_law() + r] = dgain.im;
-                    jac.extend(rows[0].iter().chain(&rows[1]));
+                // The two rows (real, imaginary part) of this residual.
+                let at = 2 * p * (r * n_c + c);
+                let (re_row, im_row) = jac[at..at + 2 * p].split_at_mut(p);
+                let dm = wt * gain * q * Complex64::new(dh.re, dh.im);
+                for (k, d) in dg.iter().enumerate() {
+                    let v = dm * d;
+                    re_row[k] = v.re;
+                    im_row[k] = v.im;
                 }
+                let dgain = wt * modelled;
+                re_row[self.n_law() + r] = dgain.re;
+                im_row[self.n_law() + r] = dgain.im;
             }
         }
         Some((res, jac))
