@@ -194,6 +194,105 @@ fn elastic_of(all: Vec<Complex64>, target: Complex64) -> Vec<Complex64> {
     all.into_iter().filter(|l| l.re > floor).collect()
 }
 
+/// A layered plate meshed and assembled with its supports, the core at G_ref: what every
+/// reduced model of the part starts from.
+pub(crate) struct PartModel {
+    /// The hexahedral mesh.
+    pub mesh: HexMesh,
+    /// Its system, supports included.
+    pub system: LayeredSystem,
+    /// The viscoelastic layers.
+    pub cores: Vec<usize>,
+    /// The faces' shared loss factor.
+    pub face_loss: f64,
+}
+
+impl PartModel {
+    /// `plate` on `elements` in plane, the core at `g_ref_pa`, with its supports.
+    ///
+    /// # Errors
+    /// As [`LayeredInverse::build`].
+    pub(crate) fn assemble(
+        plate: &LayeredPlate,
+        elements: [usize; 2],
+        g_ref_pa: f64,
+    ) -> Result<Self, LayeredError> {
+        let cores = core_layers(plate)?;
+        if !(g_ref_pa.is_finite() && g_ref_pa > 0.0) {
+            return Err(LayeredError::Invalid(format!(
+                "reference core modulus {g_ref_pa} Pa must be positive"
+            )));
+        }
+        let eta_e = plate
+            .layers
+            .iter()
+            .find_map(|l| l.young_pa.map(|_| l.loss_factor));
+        if plate
+            .layers
+            .iter()
+            .any(|l| l.young_pa.is_some() && Some(l.loss_factor) != eta_e)
+        {
+            return Err(LayeredError::Invalid(
+                "the faces must share one loss factor".into(),
+            ));
+        }
+        let (mesh, mut system) = assemble(plate, elements, g_ref_pa)?;
+        system.add_supports(&support_terms(&mesh, &plate.supports)?)?;
+        Ok(Self {
+            mesh,
+            system,
+            cores,
+            face_loss: eta_e.unwrap_or(0.0),
+        })
+    }
+    /// Adds to `model` (built from this part's system) the derivatives of its matrices with
+    /// respect to `inputs` ([`ReducedModel::add_derivative`]; a thickness by central differences
+    /// of two more assemblies of `plate` on `elements`).
+    ///
+    /// # Errors
+    /// Those of the assemblies.
+    pub(crate) fn add_input_derivatives(
+        &self,
+        model: &mut ReducedModel,
+        plate: &LayeredPlate,
+        elements: [usize; 2],
+        g_ref_pa: f64,
+        inputs: &[Input],
+    ) -> Result<(), LayeredError> {
+        // The supports' inputs only where there are supports (on a free part they are zero).
+        let inputs = inputs
+            .iter()
+            .filter(|i| !i.of_supports() || !plate.supports.is_empty());
+        for &input in inputs {
+            let thick = |sign: f64| -> Result<LayeredSystem, LayeredError> {
+                let mut p = plate.clone();
+                for (l, layer) in p.layers.iter_mut().enumerate() {
+                    let face = !self.cores.contains(&l);
+                    if (input == Input::FaceThickness && face)
+                        || (input == Input::CoreThickness && !face)
+                    {
+                        layer.thickness_m *= 1.0 + sign * THICKNESS_STEP;
+                    }
+                }
+                Ok(assemble(&p, elements, g_ref_pa)?.1)
+            };
+            match input {
+                Input::FaceThickness | Input::CoreThickness => {
+                    let (plus, minus) = (thick(1.0)?, thick(-1.0)?);
+                    model.add_derivative(
+                        input,
+                        &self.system,
+                        &self.cores,
+                        Some((&plus, &minus, THICKNESS_STEP)),
+                    )?;
+                }
+                _ => model.add_derivative(input, &self.system, &self.cores, None)?,
+            }
+        }
+        Ok(())
+    }
+}
+
 impl LayeredInverse {
     /// Meshes and assembles `plate` with `elements` in plane and the core at `g_ref_pa`, and
     /// builds the reduced basis of `modes` modes at each of [`BASIS_RATIOS`] times G_ref.
@@ -240,27 +339,13 @@ impl LayeredInverse {
         ratios: &[f64],
         inputs: &[Input],
     ) -> Result<Self, LayeredError> {
-        let cores = core_layers(plate)?;
-        if !(g_ref_pa.is_finite() && g_ref_pa > 0.0) {
-            return Err(LayeredError::Invalid(format!(
-                "reference core modulus {g_ref_pa} Pa must be positive"
-            )));
-        }
-        let eta_e = plate
-            .layers
-            .iter()
-            .find_map(|l| l.young_pa.map(|_| l.loss_factor));
-        if plate
-            .layers
-            .iter()
-            .any(|l| l.young_pa.is_some() && Some(l.loss_factor) != eta_e)
-        {
-            return Err(LayeredError::Invalid(
-                "the faces must share one loss factor".into(),
-            ));
-        }
-        let (mesh, mut system) = assemble(plate, elements, g_ref_pa)?;
-        system.add_supports(&support_terms(&mesh, &plate.supports)?)?;
+        let part = PartModel::assemble(plate, elements, g_ref_pa)?;
+        let PartModel {
+            mesh,
+            system,
+            cores,
+            face_loss,
+        } = &part;
         // A unit load at the first top node: its static residual vector rounds off the basis.
         let mut load = vec![0.0; system.n_dofs];
         let (node, _) = mesh
@@ -271,45 +356,16 @@ impl LayeredInverse {
         load[3 * node + 2] = 1.0;
         let shift = -(2.0 * std::f64::consts::PI).powi(2);
         let mut model = ReducedModel::with_orders(
-            &system,
-            &cores,
+            system,
+            cores,
             ratios,
             modes,
             &[load],
             shift,
             krylov_orders(ratios),
         )?;
-        model.set_elastic_loss(eta_e.unwrap_or(0.0))?;
-        // The supports' inputs only where there are supports (on a free part they are zero).
-        let inputs = inputs
-            .iter()
-            .filter(|i| !i.of_supports() || !plate.supports.is_empty());
-        for &input in inputs {
-            let thick = |sign: f64| -> Result<LayeredSystem, LayeredError> {
-                let mut p = plate.clone();
-                for (l, layer) in p.layers.iter_mut().enumerate() {
-                    let face = !cores.contains(&l);
-                    if (input == Input::FaceThickness && face)
-                        || (input == Input::CoreThickness && !face)
-                    {
-                        layer.thickness_m *= 1.0 + sign * THICKNESS_STEP;
-                    }
-                }
-                Ok(assemble(&p, elements, g_ref_pa)?.1)
-            };
-            match input {
-                Input::FaceThickness | Input::CoreThickness => {
-                    let (plus, minus) = (thick(1.0)?, thick(-1.0)?);
-                    model.add_derivative(
-                        input,
-                        &system,
-                        &cores,
-                        Some((&plus, &minus, THICKNESS_STEP)),
-                    )?;
-                }
-                _ => model.add_derivative(input, &system, &cores, None)?,
-            }
-        }
+        model.set_elastic_loss(*face_loss)?;
+        part.add_input_derivatives(&mut model, plate, elements, g_ref_pa, inputs)?;
         Ok(Self {
             model: model.free_eigenproblem(),
             g_assembled_pa: g_ref_pa,

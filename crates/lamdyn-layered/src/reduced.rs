@@ -363,6 +363,37 @@ impl ReducedModel {
         Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, omega, core_scale))
     }
 
+    /// The inputs whose derivatives this model holds, in their order.
+    pub fn inputs(&self) -> Vec<Input> {
+        self.derivatives.iter().map(|d| d.input).collect()
+    }
+
+    /// ∂(Vᵀ K_c V)/∂ln θ of the `k`-th input (core at its assembled modulus).
+    pub(crate) fn input_core_derivative(&self, k: usize) -> &Mat<f64> {
+        &self.derivatives[k].dk_core
+    }
+
+    /// ∂(Vᵀ Z V)/∂ln θ of the `k`-th input at ω (rad/s) and core scale s:
+    /// (1 + iη_e) ∂K_e + s ∂K_c − ω² ∂M + ∂K_s + iω ∂C_s.
+    pub(crate) fn input_derivative_matrix(
+        &self,
+        k: usize,
+        omega: f64,
+        core_scale: Complex64,
+    ) -> Mat<c64> {
+        let d = &self.derivatives[k];
+        let m = self.size();
+        Mat::from_fn(m, m, |i, j| {
+            let v = Complex64::new(1.0, self.elastic_loss) * d.dk_elastic[(i, j)]
+                + core_scale * d.dk_core[(i, j)]
+                + Complex64::new(
+                    d.dk_supports[(i, j)] - omega * omega * d.dmass[(i, j)],
+                    omega * d.dc_supports[(i, j)],
+                );
+            c64::new(v.re, v.im)
+        })
+    }
+
     /// Vᵀ K_c V at the assembled core modulus: ∂(Vᵀ Z V)/∂s.
     pub(crate) fn core_matrix(&self) -> &Mat<f64> {
         &self.k_core

@@ -298,6 +298,11 @@ pub struct InverseOptions {
     /// `per_mode` or `none`.
     #[serde(default)]
     pub core_law: CoreLawChoice,
+    /// The core's law fitted to the measured FRFs through the layered model
+    /// (crate::frf_route): `auto` (default: where modes are damped or overlap, the rule of
+    /// crate::frf_route), `always` or `never`.
+    #[serde(default)]
+    pub frf_fit: FrfFitChoice,
     /// The supports the part rested on in the test, in the layered model
     /// (`[[inverse.supports]]`; none: free).
     #[serde(default)]
@@ -352,6 +357,19 @@ pub enum CoreLawChoice {
     None,
 }
 
+/// When the FRF fit runs and is the answer (`inverse.frf_fit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrfFitChoice {
+    /// Where the rule calls for it (crate::frf_route): it is then the answer.
+    #[default]
+    Auto,
+    /// Always, and it is the answer.
+    Always,
+    /// Never.
+    Never,
+}
+
 fn default_layered_elements() -> [usize; 2] {
     [12, 12]
 }
@@ -389,6 +407,7 @@ impl Default for InverseOptions {
             layered_max_dofs: default_layered_max_dofs(),
             layered_edge_grading: 0.0,
             core_law: CoreLawChoice::default(),
+            frf_fit: FrfFitChoice::default(),
             supports: Vec::new(),
         }
     }

@@ -12,6 +12,7 @@
 //! | inverse | G*(f) of the core by the paper's inverse (eqs. 33–45) and the exact one | lamdyn-material |
 //! | layered inverse | G* at each EMA pole through a layered solid model (`layered`); an overlapping pair fitted to the FRFs around it | lamdyn-layered |
 //! | core law | the core's law fitted to all layered modes with the inputs shared; its band widths and what would narrow them ([`band_widths`]) | lamdyn-fit |
+//! | FRF fit | the core's law fitted to the measured FRFs through the layered model, the answer where modes are damped or overlap ([`frf_route`]) | lamdyn-fit, lamdyn-layered |
 //! | uncertainty | Monte Carlo over the stack and the fit's covariance ([`uncertainty`]) | here |
 //! | report | HTML with figures, CSV/JSON tables ([`report`]) into a results folder ([`output`]) | lamdyn-report |
 //!
@@ -58,6 +59,7 @@ pub mod demo;
 pub mod error;
 pub mod excitation;
 pub mod fit_job;
+pub mod frf_route;
 pub mod io;
 pub mod job;
 mod layered;

@@ -3,6 +3,7 @@
 
 use crate::band_widths::{BandWidths, band_widths};
 use crate::chain::{CorePoint, StageTime, Truth};
+use crate::frf_route::FrfOutcome;
 use crate::job::Job;
 use crate::measurement::Measured;
 use crate::uncertainty;
@@ -30,6 +31,9 @@ pub struct ChainResult {
     /// The core's law fitted to all layered modes with the inputs shared (None: not asked
     /// for, or no layered mode with a band), or why it failed.
     pub core_law: Option<std::result::Result<lamdyn_fit::joint::CoreLawFit, lamdyn_fit::FitError>>,
+    /// The FRF route: the core's law fitted to the measured FRFs through the layered model,
+    /// the answer where the rule calls for it ([`crate::frf_route`]).
+    pub frf: FrfOutcome,
     /// The paper's route: the effective modulus fitted to the FRFs on the shell model; `None`
     /// when its fit failed and the layered route went on alone (`paper_route_error` says why).
     pub fit: Option<FitResult>,
@@ -79,12 +83,14 @@ impl ChainResult {
 
     /// Frequencies (Hz) of the modes where no inverse found a core it can stand behind: no
     /// exact and no layered result, and the paper's none or beyond its validity
-    /// (|φ| > [`PHI_ACCURACY_LIMIT`](lamdyn_material::laminate::PHI_ACCURACY_LIMIT)). The run
-    /// has no answer there, and the CLI exits 1.
+    /// (|φ| > [`PHI_ACCURACY_LIMIT`](lamdyn_material::laminate::PHI_ACCURACY_LIMIT)), and no
+    /// FRF fit as the answer over its band. The run has no answer there, and the CLI exits 1.
     pub fn modes_without_core(&self) -> Vec<f64> {
         use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
+        let frf_band = self.frf.answer().map(|r| r.fit.band_hz);
         self.modal
             .iter()
+            .filter(|p| frf_band.is_none_or(|b| p.freq_hz < b[0] || p.freq_hz > b[1]))
             .filter(|p| {
                 let paper_valid =
                     p.paper_g().is_some() && p.phi().is_some_and(|phi| phi <= PHI_ACCURACY_LIMIT);

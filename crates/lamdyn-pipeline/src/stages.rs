@@ -8,6 +8,7 @@
 use crate::cache::{Cache, Key};
 use crate::chain::{CorePoint, NoSandwichInverse, StageTime, Truth, nearest_within};
 use crate::error::{Context, Result};
+use crate::frf_route::{self, FrfOutcome, WhyFrfFit};
 use crate::job::{Job, KinematicsChoice, ModelFile, relative};
 use crate::measurement::{Measured, read_measurement};
 use crate::result::ChainResult;
@@ -107,8 +108,17 @@ pub fn run_job(
         ema: &ema,
         checks: &pole_checks,
     };
-    let (layered_line, core_law) = layered_route(&mut t, (&job, &base), data, &mut modal, &cache)?;
+    let (layered_line, core_law, setup) =
+        layered_route(&mut t, (&job, &base), data, &mut modal, &cache)?;
     layered::to_real_frequency(&mut modal, core_law.as_ref());
+    let frf = frf_route(
+        &mut t,
+        &job,
+        setup.as_ref(),
+        data,
+        &modal,
+        core_law.as_ref(),
+    );
     if sandwich.stack.is_none() && job.uncertainty.samples > 0 {
         warnings.push(text::monte_carlo_skipped(job.stack.layers.len()));
     }
@@ -145,6 +155,7 @@ pub fn run_job(
         model_line,
         layered_line,
         core_law,
+        frf,
         fit,
         paper_route_error: error,
         fit_lines: curves.lines,
@@ -357,14 +368,14 @@ type LawResult = Option<std::result::Result<lamdyn_fit::joint::CoreLawFit, FitEr
 
 /// The layered route (when `inverse.layered`): stage "layered inverse" on the job's
 /// [`layered::LayeredSetup`], then "core law"; where the law finds the supports far from the
-/// job's, the ladder and the law again at those. Its line and the law.
+/// job's, the ladder and the law again at those. Its line, the law and the setup it ended on.
 fn layered_route(
     t: &mut Timed,
     (job, base): (&Job, &Path),
     data: layered::Observations,
     modal: &mut [CorePoint],
     cache: &Cache,
-) -> Result<(Option<String>, LawResult)> {
+) -> Result<(Option<String>, LawResult, Option<layered::LayeredSetup>)> {
     let spinner = t.spinner;
     let (mut line, mut coarsest, mut setup) = (None, None, None);
     if job.inverse.layered {
@@ -388,7 +399,7 @@ fn layered_route(
         .as_ref()
         .and_then(|s| Some((s, layered::supports_found(s, law.as_ref())?)))
     else {
-        return Ok((line, law));
+        return Ok((line, law, setup));
     };
     let moved = setup.at_supports(at);
     let again = t.stage("layered inverse at the supports found", || {
@@ -402,7 +413,70 @@ fn layered_route(
         let law = layered::fit_law(moved.core_law, tuning, modal, again.coarsest.as_ref());
         Ok((law, false))
     })?;
-    Ok((line, law))
+    Ok((line, law, Some(moved)))
+}
+
+/// Stage "FRF fit" where `inverse.frf_fit` and the rule call for it ([`frf_route`]): the
+/// core's law fitted to the FRFs through the layered model of `setup`. A failure is kept in
+/// the outcome (the pole route stays the answer), not raised.
+fn frf_route(
+    t: &mut Timed,
+    job: &Job,
+    setup: Option<&layered::LayeredSetup>,
+    data: layered::Observations,
+    modal: &[CorePoint],
+    law: Option<&std::result::Result<lamdyn_fit::joint::CoreLawFit, FitError>>,
+) -> FrfOutcome {
+    use crate::job::FrfFitChoice;
+    let Some(setup) = setup else {
+        return FrfOutcome::NotRun("the layered route is off (inverse.layered = false)");
+    };
+    let mut why = frf_route::reasons(&data.ema.modes, modal);
+    match job.inverse.frf_fit {
+        FrfFitChoice::Never => return FrfOutcome::NotRun("inverse.frf_fit = \"never\""),
+        FrfFitChoice::Always => why.insert(0, WhyFrfFit::Asked),
+        FrfFitChoice::Auto if why.is_empty() => {
+            return FrfOutcome::NotRun(
+                "the modes are light and separated and each has a layered core: the pole route holds (inverse.frf_fit = \"always\" runs the FRF fit beside it)",
+            );
+        }
+        FrfFitChoice::Auto => {}
+    }
+    let input = layered::FrfFitInput {
+        set: data.frfs,
+        band_hz: frf_band(job, data.ema),
+        start: law.and_then(|l| l.as_ref().ok()),
+        modal,
+    };
+    let spinner = t.spinner;
+    let outcome = t.stage("FRF fit", || {
+        Ok((
+            layered::fit_to_frfs(setup, &input, why.clone(), spinner),
+            false,
+        ))
+    });
+    match outcome {
+        Ok(Ok(route)) => FrfOutcome::Fitted(Box::new(route)),
+        Ok(Err(error)) | Err(error) => FrfOutcome::Failed { why, error },
+    }
+}
+
+/// The FRF fit's band: the EMA's (the job's, else the fit's, else the data's), from half the
+/// lowest identified mode at least (a free part's rigid-body modes make the model singular at
+/// 0 Hz).
+fn frf_band(job: &Job, ema: &EmaResult) -> [f64; 2] {
+    let [lo, hi] = ema_band(job).unwrap_or(ema.band_hz);
+    let lowest = ema
+        .modes
+        .iter()
+        .map(|m| m.freq_hz)
+        .fold(f64::INFINITY, f64::min);
+    let floor = if lowest.is_finite() {
+        0.5 * lowest
+    } else {
+        1.0
+    };
+    [lo.max(floor).max(1e-3), hi]
 }
 
 /// The EMA band: the job's, else the fit's, else every line.

@@ -11,11 +11,15 @@
 //! real calibration gain per reference (prior ln g_r ~ N(0, s_g²)) and e the noise, whose scale
 //! σ_lcr is taken from the data ([`BandData`]: the curve's local level, a dynamic-range floor).
 //!
-//! **Fit.** Levenberg–Marquardt on the parameters x = (u, ln g) minimises
-//! Σ |(g_r Q H − D)/σ|² + Σ (ln g_r/s_g)², with the Jacobian analytic through the same LU as
-//! the residuals: ∂H/∂u_k = ∂H/∂s · (∂G*/∂u_k)/G_a (∂H/∂s from
-//! [`lamdyn_layered::frf::ObservedModel::receptance`], ∂G*/∂u from [`FrfLaw::gradient`]).
-//! Starts: the law closest to a given curve (another route's answer), or else the best few
+//! **Fit.** Levenberg–Marquardt on the parameters x = (u, δ, ln g) minimises
+//! Σ |(g_r Q H − D)/σ|² + Σ (δ_k/s_k)² + Σ (ln g_r/s_g)², δ_k = ln θ_k/θ_k,0 the changes of
+//! the model's inputs fitted under their priors ([`InputPrior`]: the faces' modulus, the
+//! thicknesses, densities, the supports' stiffness and damping), with the Jacobian analytic
+//! through the same LU as the residuals: ∂H/∂u_k = ∂H/∂s · (∂G*/∂u_k)/G_a and ∂H/∂δ_k
+//! ([`lamdyn_layered::frf::ObservedModel::receptance_with_inputs`]; ∂G*/∂u from
+//! [`FrfLaw::gradient`]). The law's covariance is the law block of the whole inverse, so the
+//! inputs' priors widen its band as far as the data do not pin them.
+//! Starts: the law closest to a given curve (another route's answer), and the best few
 //! constant moduli of a grid in (G', η) evaluated on a thinned set of lines, each taken
 //! through [`FrfLaw::closest_to`]; the lowest minimum wins.
 //!
@@ -40,7 +44,8 @@ use crate::lm::{LmOutcome, LmSettings, levenberg_marquardt_with_jacobian};
 use crate::master::{describe_direction, pseudo_inverse};
 use faer::Mat;
 use lamdyn_frf::{FrfSet, Quantity};
-use lamdyn_layered::frf::{LineReceptance, ObservedModel};
+use lamdyn_layered::frf::{LineReceptance, ObservedModel, input_change};
+use lamdyn_layered::sensitivity::Input;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::sync::Mutex;
@@ -58,6 +63,29 @@ pub trait CoreFrfModel: Sync {
     /// # Errors
     /// Whatever the model's solve reports.
     fn receptance(&self, omega: f64, core_scale: Complex64) -> Result<LineReceptance, FitError>;
+    /// The inputs whose changes [`Self::receptance_with_inputs`] takes (none by default).
+    fn inputs(&self) -> Vec<Input> {
+        Vec::new()
+    }
+    /// H, ∂H/∂s and ∂H/∂δ_k with the inputs changed by `deltas` (ln θ/θ₀, one per
+    /// [`Self::inputs`]); a model without inputs takes none.
+    ///
+    /// # Errors
+    /// Whatever the model's solve reports; changes the model does not take.
+    fn receptance_with_inputs(
+        &self,
+        omega: f64,
+        core_scale: Complex64,
+        deltas: &[f64],
+    ) -> Result<LineReceptance, FitError> {
+        if deltas.is_empty() {
+            return self.receptance(omega, core_scale);
+        }
+        Err(inconsistent(
+            CONTEXT,
+            format!("the model takes no input changes, {} given", deltas.len()),
+        ))
+    }
 }
 
 impl CoreFrfModel for ObservedModel {
@@ -70,6 +98,43 @@ impl CoreFrfModel for ObservedModel {
     fn receptance(&self, omega: f64, core_scale: Complex64) -> Result<LineReceptance, FitError> {
         Ok(ObservedModel::receptance(self, omega, core_scale)?)
     }
+    fn inputs(&self) -> Vec<Input> {
+        ObservedModel::inputs(self)
+    }
+    fn receptance_with_inputs(
+        &self,
+        omega: f64,
+        core_scale: Complex64,
+        deltas: &[f64],
+    ) -> Result<LineReceptance, FitError> {
+        Ok(ObservedModel::receptance_with_inputs(
+            self, omega, core_scale, deltas,
+        )?)
+    }
+}
+
+/// An input of the model fitted beside the law under a prior: ln θ/θ₀ ~ N(0, sd²).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InputPrior {
+    /// The input (the model must hold its derivatives).
+    pub input: Input,
+    /// Prior standard deviation of ln θ/θ₀ (a 2 % tolerance: 0.02).
+    pub sd: f64,
+}
+
+/// An input as the fit found it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FittedInput {
+    /// The input.
+    pub input: Input,
+    /// θ/θ₀ − 1 (how far from the value the model was built with).
+    pub change: f64,
+    /// The change as the model takes it (δ of [`lamdyn_layered::frf::input_change`]).
+    pub delta: f64,
+    /// Standard deviation of ln θ/θ₀ after the fit (its prior's where the data say nothing).
+    pub sd: f64,
+    /// Its prior standard deviation.
+    pub prior_sd: f64,
 }
 
 /// Settings of [`fit_core_to_frfs`].
@@ -89,6 +154,14 @@ pub struct FrfFitSettings {
     pub lm: LmSettings,
     /// Relative discretization error of (G', η) added to the bands (the ladder's estimate).
     pub discretization_rel: [f64; 2],
+    /// The model's inputs fitted beside the law under their priors (none: held as built).
+    pub inputs: Vec<InputPrior>,
+    /// Standard deviation of a weak prior on each of the law's parameters u about the first
+    /// start: it holds a term the band does not see (a Prony weight whose relaxation lies
+    /// far outside it, the equilibrium modulus) where the data leave it, instead of letting
+    /// the iteration run after a vanishing gain in the misfit; wide enough (3: a factor 20 at
+    /// one sd) that such a term still reports as not determined.
+    pub law_prior_sd: f64,
 }
 
 impl FrfFitSettings {
@@ -107,6 +180,8 @@ impl FrfFitSettings {
                 gradient_tolerance: 1e-12,
             },
             discretization_rel: [0.0, 0.0],
+            inputs: Vec::new(),
+            law_prior_sd: f64::INFINITY,
         }
     }
 }
@@ -170,6 +245,8 @@ pub struct FrfFit {
     pub assembled_modulus_pa: f64,
     /// The relative discretization error in the bands.
     pub discretization_rel: [f64; 2],
+    /// The inputs fitted beside the law.
+    pub inputs: Vec<FittedInput>,
 }
 
 impl FrfFit {
@@ -263,7 +340,8 @@ pub fn fit_core_to_frfs(
             format!("assembled core modulus {assembled_modulus_pa} Pa must be positive"),
         ));
     }
-    let n_params = law.n_params() + set.references().len();
+    let inputs = fitted_inputs(model, &settings.inputs)?;
+    let n_params = law.n_params() + inputs.len() + set.references().len();
     let data = BandData::from_set(set, settings.band_hz, settings.dynamic_range_db, n_params)?;
     let problem = Problem {
         model,
@@ -272,10 +350,14 @@ pub fn fit_core_to_frfs(
         g_a: assembled_modulus_pa,
         quantity: set.quantity(),
         gain_prior_sd: settings.gain_prior_sd,
+        inputs,
+        n_model_inputs: model.inputs().len(),
+        law_prior: None,
         data_weight: 1.0,
     };
     let mut problem = problem;
     let starts = problem.starts(start, settings)?;
+    let prior_centre = starts.first().map(|x| x[..problem.n_law()].to_vec());
     let mut best: Option<LmOutcome> = None;
     for x0 in starts {
         let run = problem.minimise(&x0, settings.lm);
@@ -291,24 +373,30 @@ pub fn fit_core_to_frfs(
             "the model could not be solved at any start (a singular dynamic stiffness)".into(),
         )
     })?;
-    if !first.converged {
-        return Err(problem.did_not_settle(&first));
-    }
     // The data's own noise scale, then the fit again with the data rows on that scale, so the
-    // gains' priors weigh against the data as they should: a fixed point (module docs).
+    // priors weigh against the data as they should: a fixed point (module docs). The first
+    // pass, on an unknown scale, runs without the law's weak prior (which would outweigh data
+    // rows of unit weight) and need not settle; the passes after it must.
+    if let Some(centre) = prior_centre
+        && settings.law_prior_sd.is_finite()
+        && settings.law_prior_sd > 0.0
+    {
+        problem.law_prior = Some((centre, settings.law_prior_sd));
+    }
     let (mut run, mut data_scale) = (first, 1.0);
     for _ in 0..MAX_SCALE_PASSES {
         let scale = problem.data_noise_scale(&run);
         let settled = (scale / data_scale - 1.0).abs() < 0.1;
         data_scale = scale;
         problem.data_weight = 1.0 / data_scale;
+        let from = run.x.clone();
         run = problem.minimise(&run.x, settings.lm).ok_or_else(|| {
             inconsistent(
                 CONTEXT,
                 "the model could not be solved at the previous pass's answer".into(),
             )
         })?;
-        if !run.converged {
+        if !run.converged && problem.law_change_in_band(&from, &run.x) > SETTLED_LAW_CHANGE {
             return Err(problem.did_not_settle(&run));
         }
         if settled {
@@ -316,6 +404,48 @@ pub fn fit_core_to_frfs(
         }
     }
     problem.conclude(run, data_scale, settings)
+}
+
+/// Each prior's input as (its index among the model's inputs, its prior sd).
+///
+/// # Errors
+/// An input the model holds no derivatives for, one named twice, or a prior sd that is not
+/// positive.
+fn fitted_inputs(
+    model: &dyn CoreFrfModel,
+    priors: &[InputPrior],
+) -> Result<Vec<(usize, InputPrior)>, FitError> {
+    let held = model.inputs();
+    let mut out: Vec<(usize, InputPrior)> = Vec::with_capacity(priors.len());
+    for p in priors {
+        let Some(k) = held.iter().position(|&i| i == p.input) else {
+            return Err(inconsistent(
+                CONTEXT,
+                format!(
+                    "input '{}' has a prior but the model holds no derivative for it",
+                    p.input.name()
+                ),
+            ));
+        };
+        if out.iter().any(|(j, _)| *j == k) {
+            return Err(inconsistent(
+                CONTEXT,
+                format!("input '{}' has two priors", p.input.name()),
+            ));
+        }
+        if !(p.sd.is_finite() && p.sd > 0.0) {
+            return Err(inconsistent(
+                CONTEXT,
+                format!(
+                    "input '{}': prior sd {} must be positive",
+                    p.input.name(),
+                    p.sd
+                ),
+            ));
+        }
+        out.push((k, *p));
+    }
+    Ok(out)
 }
 
 /// The problem the iteration sees.
@@ -326,6 +456,13 @@ struct Problem<'a> {
     g_a: f64,
     quantity: Quantity,
     gain_prior_sd: f64,
+    /// The inputs fitted: (index among the model's inputs, prior).
+    inputs: Vec<(usize, InputPrior)>,
+    /// How many inputs the model holds.
+    n_model_inputs: usize,
+    /// The weak prior on the law's parameters: its centre and sd
+    /// ([`FrfFitSettings::law_prior_sd`]).
+    law_prior: Option<(Vec<f64>, f64)>,
     /// 1/s: the data rows divided by the noise scale s of the first pass (1 in it).
     data_weight: f64,
 }
@@ -338,8 +475,30 @@ impl Problem<'_> {
         self.law.n_params()
     }
 
+    fn n_inputs(&self) -> usize {
+        self.inputs.len()
+    }
+
+    /// Index of the first gain in x = (u, δ, ln g).
+    fn first_gain(&self) -> usize {
+        self.n_law() + self.n_inputs()
+    }
+
     fn n_params(&self) -> usize {
-        self.n_law() + self.data.n_references
+        self.first_gain() + self.data.n_references
+    }
+
+    /// The model's input changes for x: the fitted ones from x, the others 0 (none when no
+    /// input is fitted).
+    fn model_deltas(&self, x: &[f64]) -> Vec<f64> {
+        if self.inputs.is_empty() {
+            return Vec::new();
+        }
+        let mut d = vec![0.0; self.n_model_inputs];
+        for (j, (k, _)) in self.inputs.iter().enumerate() {
+            d[*k] = x[self.n_law() + j];
+        }
+        d
     }
 
     /// One Levenberg–Marquardt run over every line from `x0`. Each evaluation builds the
@@ -382,31 +541,54 @@ impl Problem<'_> {
             .map(|l| self.line(x, l))
             .collect::<Option<Vec<_>>>()?;
         let p = self.n_params();
-        let n_r = self.data.n_references;
+        let n_law = self.n_law();
         let mut r: Vec<f64> = blocks.iter().flat_map(|b| b.0.iter().copied()).collect();
-        let rows = r.len() + n_r;
-        r.extend((0..n_r).map(|k| x[self.n_law() + k] / self.gain_prior_sd));
-        let mut j = Mat::<f64>::zeros(rows, p);
+        let data_rows = r.len();
+        // The priors' rows: one per input, one per gain (x's tail after the law).
+        let prior_sd: Vec<f64> = self
+            .inputs
+            .iter()
+            .map(|(_, p)| p.sd)
+            .chain(std::iter::repeat_n(
+                self.gain_prior_sd,
+                self.data.n_references,
+            ))
+            .collect();
+        r.extend(prior_sd.iter().enumerate().map(|(k, sd)| x[n_law + k] / sd));
+        if let Some((centre, sd)) = &self.law_prior {
+            r.extend((0..n_law).map(|k| (x[k] - centre[k]) / sd));
+        }
+        let mut j = Mat::<f64>::zeros(r.len(), p);
         for (row, v) in blocks.iter().flat_map(|b| b.1.chunks(p)).enumerate() {
             for (k, v) in v.iter().enumerate() {
                 j[(row, k)] = *v;
             }
         }
-        for k in 0..n_r {
-            j[(rows - n_r + k, self.n_law() + k)] = 1.0 / self.gain_prior_sd;
+        for (k, sd) in prior_sd.iter().enumerate() {
+            j[(data_rows + k, n_law + k)] = 1.0 / sd;
+        }
+        if let Some((_, sd)) = &self.law_prior {
+            let first = data_rows + prior_sd.len();
+            for k in 0..n_law {
+                j[(first + k, k)] = 1.0 / sd;
+            }
         }
         Some((r, j))
     }
 
     /// Line `l`'s block (module docs).
     fn line(&self, x: &[f64], l: usize) -> Option<LineBlock> {
-        let (u, ln_gains) = x.split_at(self.n_law());
+        let u = &x[..self.n_law()];
+        let ln_gains = &x[self.first_gain()..];
         let w = self.data.omegas[l];
         let g = self.law.modulus(u, w);
         if !(g.re > 0.0 && g.im >= 0.0 && g.is_finite()) {
             return None;
         }
-        let rec = self.model.receptance(w, g / self.g_a).ok()?;
+        let rec = self
+            .model
+            .receptance_with_inputs(w, g / self.g_a, &self.model_deltas(x))
+            .ok()?;
         let q = self.quantity.from_receptance(w);
         let dg: Vec<Complex64> = self
             .law
@@ -435,9 +617,15 @@ impl Problem<'_> {
                     re_row[k] = v.re;
                     im_row[k] = v.im;
                 }
+                for (j, (k, _)) in self.inputs.iter().enumerate() {
+                    let d = rec.dh_dinputs[*k][(c, r)];
+                    let v = wt * gain * q * Complex64::new(d.re, d.im);
+                    re_row[self.n_law() + j] = v.re;
+                    im_row[self.n_law() + j] = v.im;
+                }
                 let dgain = wt * modelled;
-                re_row[self.n_law() + r] = dgain.re;
-                im_row[self.n_law() + r] = dgain.im;
+                re_row[self.first_gain() + r] = dgain.re;
+                im_row[self.first_gain() + r] = dgain.im;
             }
         }
         Some((res, jac))
@@ -449,13 +637,19 @@ impl Problem<'_> {
         start: Option<StartCurve<'_>>,
         settings: &FrfFitSettings,
     ) -> Result<Vec<Vec<f64>>, FitError> {
-        let n_r = self.data.n_references;
-        let with_gains = |u: Vec<f64>| u.into_iter().chain(std::iter::repeat_n(0.0, n_r)).collect();
-        if let Some(curve) = start {
-            return Ok(vec![with_gains(
-                self.law.closest_to(&self.data.omegas, curve),
-            )]);
-        }
+        let tail = self.n_inputs() + self.data.n_references;
+        let with_gains = |u: Vec<f64>| {
+            u.into_iter()
+                .chain(std::iter::repeat_n(0.0, tail))
+                .collect()
+        };
+        // A given curve (another route's answer) is the first start; the grid's follow it,
+        // since another route's law may sit in another basin (a pole route misled by damped
+        // modes).
+        let given: Vec<Vec<f64>> = start
+            .map(|curve| with_gains(self.law.closest_to(&self.data.omegas, curve)))
+            .into_iter()
+            .collect();
         let n_l = self.data.n_lines();
         let step = n_l.div_ceil(settings.grid_lines.max(1)).max(1);
         let lines: Vec<usize> = (0..n_l).step_by(step).collect();
@@ -490,15 +684,15 @@ impl Problem<'_> {
                     .into(),
             ));
         }
-        Ok(chosen
+        Ok(given
             .into_iter()
-            .map(|(i, j)| {
+            .chain(chosen.into_iter().map(|(i, j)| {
                 let g = Complex64::new(
                     GRID_STORAGE_RATIOS[i] * self.g_a,
                     GRID_STORAGE_RATIOS[i] * self.g_a * GRID_LOSS_FACTORS[j],
                 );
                 with_gains(self.law.closest_to(&self.data.omegas, &|_| g))
-            })
+            }))
             .collect())
     }
 
@@ -560,7 +754,22 @@ impl Problem<'_> {
         Ok(FrfFit {
             law: self.law.clone(),
             parameters,
-            gains: run.x[n_law..].iter().map(|v| v.exp()).collect(),
+            gains: run.x[self.first_gain()..].iter().map(|v| v.exp()).collect(),
+            inputs: self
+                .inputs
+                .iter()
+                .enumerate()
+                .map(|(j, (_, prior))| {
+                    let k = n_law + j;
+                    FittedInput {
+                        input: prior.input,
+                        change: input_change(prior.input, run.x[k]).0,
+                        delta: run.x[k],
+                        sd: (s2 * inflation * inv[(k, k)]).max(0.0).sqrt(),
+                        prior_sd: prior.sd,
+                    }
+                })
+                .collect(),
             covariance,
             noise_scale: data_scale * s2.sqrt(),
             inflation,
@@ -623,8 +832,27 @@ impl Problem<'_> {
         self.law
             .names()
             .into_iter()
+            .chain(
+                self.inputs
+                    .iter()
+                    .map(|(_, p)| format!("ln {}", p.input.name())),
+            )
             .chain((0..self.data.n_references).map(|r| format!("gain of reference {}", r + 1)))
             .collect()
+    }
+
+    /// The largest relative change of G*(ω) over the band's lines between the laws of `a` and
+    /// `b`: what a pass that ran out of iterations still moved where the data see the law.
+    fn law_change_in_band(&self, a: &[f64], b: &[f64]) -> f64 {
+        let n = self.n_law();
+        self.data
+            .omegas
+            .iter()
+            .map(|&w| {
+                let (ga, gb) = (self.law.modulus(&a[..n], w), self.law.modulus(&b[..n], w));
+                (gb / ga - 1.0).norm()
+            })
+            .fold(0.0, f64::max)
     }
 
     /// The error of a fit that ran out of iterations: how far it got and what moves together.
@@ -650,6 +878,12 @@ impl Problem<'_> {
         )
     }
 }
+
+/// The largest change of G* over the band (relative) that a pass may still make when it runs
+/// out of iterations and count as settled: what it then moves are terms the band does not see
+/// (the equilibrium modulus of a Prony law whose optimum lies at zero, reached only in the
+/// limit of ln g → −∞), not the law the data determine.
+const SETTLED_LAW_CHANGE: f64 = 1e-3;
 
 /// Passes of the noise scale's fixed point at most (each a Levenberg–Marquardt run from the
 /// previous answer; noisy data settle in two).

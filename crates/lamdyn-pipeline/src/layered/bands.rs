@@ -17,6 +17,7 @@
 //!   mode's sensitivity, as one standard deviation; the ladder refines in plane only).
 
 use super::pole_scatter::PoleScatter;
+use super::setup::input_rel_sd;
 use crate::band::{BandSource, CoarsePole, InputEffect, LayeredBand, half_width};
 use crate::job::UncertaintyOptions;
 use lamdyn_layered::LayeredError;
@@ -25,26 +26,6 @@ use lamdyn_layered::inverse::{LayeredInverse, LayeredPlate};
 use lamdyn_layered::sensitivity::{Input, ModeSensitivity, log_parts, relative_parts};
 use num_complex::Complex64;
 use rayon::prelude::*;
-
-/// The relative standard deviation of the job's prior on `input` (`[uncertainty]`; a
-/// thickness's sd in m over the first face's or core's thickness in `plate`).
-fn input_rel_sd(input: Input, plate: &LayeredPlate, priors: &UncertaintyOptions) -> f64 {
-    let thickness = |core: bool| {
-        plate
-            .layers
-            .iter()
-            .find(|l| l.young_pa.is_none() == core)
-            .map_or(f64::INFINITY, |l| l.thickness_m)
-    };
-    match input {
-        Input::FaceModulus => priors.face_modulus_rel_sd,
-        Input::FaceThickness => priors.thickness_sd_m / thickness(false),
-        Input::CoreThickness => priors.thickness_sd_m / thickness(true),
-        Input::FaceDensity | Input::CoreDensity => priors.density_rel_sd,
-        Input::SupportStiffness => priors.support_stiffness_rel_sd,
-        Input::SupportDamping => priors.support_damping_rel_sd,
-    }
-}
 
 /// Each input's prior and the coarsest model moved by ±1 sd of each input with a prior below
 /// `wide_prior` ([`LawTuning::wide_prior`](super::tuning::LawTuning::wide_prior)), built once for every mode's band ([`band`], [`second_order`]): neither

@@ -16,12 +16,14 @@
 //! | pairs | [`pairs`], [`pair_fit`] | overlapping pairs fitted to the FRFs |
 //! | bands | [`pole_scatter`](mod@pole_scatter), [`bands`] | each mode's [`LayeredBand`] |
 //! | law | [`law`] | the core's law over all modes, the supports it found, G* at the real frequency |
+//! | FRF fit | [`frf_fit`] | the core's law fitted to the measured FRFs, where the rule calls for it ([`crate::frf_route`]) |
 //!
-//! [`run`] does the first four; the chain ([`crate::stages`]) calls [`fit_law`] after it, and
+//! [`run`] does the first four; the chain ([`crate::stages`]) calls [`fit_law`] after it,
 //! [`run`] again at the supports the law found ([`supports_found`],
-//! [`LayeredSetup::at_supports`]).
+//! [`LayeredSetup::at_supports`]), then [`fit_to_frfs`] where the rule calls for it.
 
 mod bands;
+mod frf_fit;
 mod ladder;
 mod law;
 mod pair_fit;
@@ -32,6 +34,7 @@ mod setup;
 mod tests;
 mod tuning;
 
+pub use frf_fit::{FrfFitInput, fit_to_frfs};
 pub use law::{fit_law, supports_found, to_real_frequency};
 pub use pole_scatter::PoleChecks;
 pub use setup::LayeredSetup;

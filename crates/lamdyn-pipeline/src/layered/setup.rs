@@ -19,6 +19,7 @@ use lamdyn_fem::model::MeshSpec;
 use lamdyn_layered::convergence::LadderSettings;
 use lamdyn_layered::inverse::{InverseLayer, LayeredPlate};
 use lamdyn_layered::plan::Plan;
+use lamdyn_layered::sensitivity::Input;
 use lamdyn_layered::supports::PointSupport;
 use lamdyn_material::laminate::StackSpec;
 use num_complex::Complex64;
@@ -295,4 +296,24 @@ fn homogenized_start(
         (z0, r0, z1, r1) = (z1, r1, z2, r2);
     }
     None
+}
+
+/// The relative standard deviation of the job's prior on `input` (`[uncertainty]`; a
+/// thickness's sd in m over the first face's or core's thickness in `plate`).
+pub(crate) fn input_rel_sd(input: Input, plate: &LayeredPlate, priors: &UncertaintyOptions) -> f64 {
+    let thickness = |core: bool| {
+        plate
+            .layers
+            .iter()
+            .find(|l| l.young_pa.is_none() == core)
+            .map_or(f64::INFINITY, |l| l.thickness_m)
+    };
+    match input {
+        Input::FaceModulus => priors.face_modulus_rel_sd,
+        Input::FaceThickness => priors.thickness_sd_m / thickness(false),
+        Input::CoreThickness => priors.thickness_sd_m / thickness(true),
+        Input::FaceDensity | Input::CoreDensity => priors.density_rel_sd,
+        Input::SupportStiffness => priors.support_stiffness_rel_sd,
+        Input::SupportDamping => priors.support_damping_rel_sd,
+    }
 }

@@ -84,6 +84,19 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
             Column::new("err_eta_layered", "err eta_l", "%", Fmt::Fixed(1)).scaled(0.01),
         ]);
     }
+    let frf = r.frf.route();
+    if frf.is_some() {
+        columns.extend([
+            Column::new("g_frf_storage_pa", "G'_frf", "MPa", Fmt::Fixed(3)).scaled(1e6),
+            Column::new("g_frf_loss_factor", "eta_frf", "", Fmt::Fixed(3)),
+        ]);
+        if truth {
+            columns.extend([
+                Column::new("err_g_frf", "err G'_f", "%", Fmt::Fixed(1)).scaled(0.01),
+                Column::new("err_eta_frf", "err eta_f", "%", Fmt::Fixed(1)).scaled(0.01),
+            ]);
+        }
+    }
     let mut rep = Report::new("run", columns);
     rep.input("job", r.job_path.display().to_string());
     rep.input("measurement", r.measured.source.clone());
@@ -94,6 +107,7 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
     if let Some(b) = r.band_widths() {
         rep.input("bands", b.describe());
     }
+    rep.input("FRF fit", r.frf.describe());
     rep.input("report", dir.join("report.html").display().to_string());
     if let Some(m) = &r.uncertainty {
         rep.input(
@@ -147,6 +161,15 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
             row.push(err(re(gl), re(g)));
             row.push(err(eta(gl), eta(g)));
         }
+        if let Some(route) = frf {
+            let gf = route.modulus(p.freq_hz);
+            row.extend(split(Some(gf)));
+            if let Some(t) = &r.truth {
+                let g = t.at(p.freq_hz);
+                row.push(err(Some(gf.re), g.map(|g| g.re)));
+                row.push(err(Some(gf.im / gf.re), g.map(|g| g.im / g.re)));
+            }
+        }
         rep.row(row);
     }
     rep.warnings.extend(r.warnings.iter().cloned());
@@ -159,5 +182,8 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
         ));
     }
     rep.notes.push("G'_paper: paper eqs. 33-45 (eq. 41); G'_exact: Mead-Markus exact sandwich inverse; G'_layer: layered solid model matched to each EMA pole; |phi| > 0.1: beyond the paper model's ~1 % validity.".into());
+    if frf.is_some() {
+        rep.notes.push("G'_frf: the core's law fitted to the measured FRFs through the layered model (the whole band at once, no poles), corrected for the mesh by the ladder.".into());
+    }
     rep
 }

@@ -10,6 +10,8 @@
 //! against the truth of a virtual test, and |φ| against the paper model's validity limit), the
 //! Kramers–Kronig verdict, the warnings and the stage timings.
 
+mod frf;
+
 use super::uncertainty::{Band, Bands};
 use super::{ChainResult, CorePoint};
 use crate::err;
@@ -914,6 +916,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     let (header, rows, modal_csv) = modal_table(r);
     lead_section(&mut html, r, &header, &rows);
     law_section(&mut html, &mut files, r);
+    frf::section(&mut html, &mut files, r)?;
     let band_widths = r.band_widths();
     if let Some(b) = &band_widths {
         html.paragraph(&format!("Band widths. {}", b.describe()));

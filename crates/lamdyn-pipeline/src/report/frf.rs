@@ -1,0 +1,133 @@
+//! The report's section on the FRF route ([`crate::frf_route`]): whether it ran and why, the
+//! core's law from the FRFs beside the pole route's at each modal frequency, and the measured
+//! against the model FRFs at a few channels with their residual.
+
+use super::{BLACK, ORANGE, PURPLE, add_figure};
+use crate::ChainResult;
+use crate::error::Result;
+use crate::frf_route::{FrfCurve, FrfRoute};
+use lamdyn_report::HtmlReport;
+use lamdyn_report::chart::{Axis, Chart, Mark, Series};
+
+/// The section (nothing when the layered route is off).
+///
+/// # Errors
+/// A figure that cannot be rendered.
+pub(super) fn section(
+    html: &mut HtmlReport,
+    files: &mut super::Files,
+    r: &ChainResult,
+) -> Result<()> {
+    if r.layered_line.is_none() {
+        return Ok(());
+    }
+    html.heading("The core from the FRFs (no poles)");
+    html.paragraph(&format!("FRF fit: {}.", r.frf.describe()));
+    let Some(route) = r.frf.route() else {
+        return Ok(());
+    };
+    let (header, rows) = law_table(r, route);
+    html.table(
+        "The core's law fitted to the FRFs (corrected for the mesh, 95 % band) beside the pole route's law, at each modal frequency.",
+        &header,
+        rows,
+    );
+    for (k, curve) in route.curves.iter().enumerate() {
+        add_figure(
+            html,
+            files,
+            &format!("frf_fit_{}", k + 1),
+            &format!(
+                "|FRF| measured and from the fitted layered model at {} / {}, and their difference.",
+                curve.channel, curve.reference
+            ),
+            &curve_chart(curve, r.measured.set.quantity().unit()),
+        )?;
+    }
+    Ok(())
+}
+
+/// f, the FRF law with its band, the pole route's law, the truth where known.
+fn law_table(r: &ChainResult, route: &FrfRoute) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let mut header = vec![
+        "f (Hz)",
+        "G' FRF fit (MPa)",
+        "95 % band",
+        "eta FRF fit",
+        "95 % band",
+        "G' pole route's law (MPa)",
+        "eta pole route's law",
+    ];
+    if r.truth.is_some() {
+        header.extend(["G' true (MPa)", "eta true"]);
+    }
+    let pole_law = r.core_law.as_ref().and_then(|l| l.as_ref().ok());
+    let rows = r
+        .modal
+        .iter()
+        .map(|p| {
+            let f = p.freq_hz;
+            let a = route.at(f);
+            let mut row = vec![
+                format!("{f:.2}"),
+                format!("{:.3}", a.storage_pa / 1e6),
+                format!(
+                    "{:.3} … {:.3}",
+                    a.storage_ci95[0] / 1e6,
+                    a.storage_ci95[1] / 1e6
+                ),
+                format!("{:.3}", a.loss_factor),
+                format!(
+                    "{:.3} … {:.3}",
+                    a.loss_factor_ci95[0], a.loss_factor_ci95[1]
+                ),
+            ];
+            let g = pole_law.and_then(|l| l.modulus(f));
+            row.push(g.map_or("-".into(), |g| format!("{:.3}", g.re / 1e6)));
+            row.push(g.map_or("-".into(), |g| format!("{:.3}", g.im / g.re)));
+            if let Some(t) = &r.truth {
+                let g = t.at(f);
+                row.push(g.map_or("-".into(), |g| format!("{:.3}", g.re / 1e6)));
+                row.push(g.map_or("-".into(), |g| format!("{:.3}", g.im / g.re)));
+            }
+            row
+        })
+        .collect();
+    (header, rows)
+}
+
+/// |H| measured and modelled and |H_model − H_measured| over the band.
+fn curve_chart(c: &FrfCurve, unit: &str) -> Chart {
+    let mut chart = Chart::new(
+        &format!("{} / {}", c.channel, c.reference),
+        Axis::linear("frequency (Hz)"),
+        Axis::log(&format!("|FRF| ({unit})")),
+    );
+    let points = |v: &mut dyn Iterator<Item = f64>| -> Vec<[f64; 2]> {
+        c.freqs_hz
+            .iter()
+            .zip(v)
+            .filter(|(_, y)| *y > 0.0 && y.is_finite())
+            .map(|(&f, y)| [f, y])
+            .collect()
+    };
+    let measured = points(&mut c.measured.iter().map(|h| h.norm()));
+    let model = points(&mut c.model.iter().map(|h| h.norm()));
+    let residual = points(&mut c.model.iter().zip(&c.measured).map(|(a, b)| (a - b).norm()));
+    chart
+        .series
+        .push(Series::new("measured", BLACK, Mark::Line, measured));
+    chart.series.push(Series::new(
+        "layered model, fitted law",
+        ORANGE,
+        Mark::Line,
+        model,
+    ));
+    chart.series.push(Series::new(
+        "|model - measured|",
+        PURPLE,
+        Mark::Line,
+        residual,
+    ));
+    chart
+}
