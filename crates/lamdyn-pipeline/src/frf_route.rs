@@ -117,17 +117,26 @@ pub fn reasons(modes: &[Mode], modal: &[CorePoint]) -> Vec<WhyFrfFit> {
     why
 }
 
-/// The mesh ladder's correction of the FRF fit's model (its coarsest mesh): at each mode the
-/// ladder converged, c = G*_extrapolated / G*_coarsest, the factor by which the coarsest mesh's
-/// answer misses the converged one ([`lamdyn_layered::convergence::ConvergedMode`]); between
-/// modes ln c is interpolated linearly in ln f, beyond them held. Its uncertainty: the
-/// ladder's own half-widths (its grid convergence index) and a quarter of |ln c| for the
-/// interpolation between modes, in quadrature.
+/// The mesh ladder's correction of the FRF fit's model (one of the ladder's levels): at each
+/// mode the ladder converged, c₀ = G*_extrapolated / G*_coarsest is the factor by which the
+/// coarsest mesh's answer misses the converged one
+/// ([`lamdyn_layered::convergence::ConvergedMode`]); a level whose element size is r times the
+/// coarsest's misses it by ln c = Re(ln c₀) r^p + i Im(ln c₀) r^q, p and q the mode's observed
+/// orders of Re λ and Im λ (the error of G* follows the eigenvalue's, to first order).
+/// The correction applied is a straight line in ln f through the modes' ln c, fitted by
+/// Theil–Sen (the median of the pairwise slopes, then the median intercept [Sen 1968]: one
+/// mode the pole route matched to the wrong model mode does not bend it), held beyond the
+/// modes. Its uncertainty: the ladder's own half-widths (its grid convergence index), a
+/// quarter of |ln c| for the interpolation between modes, and the modes' robust scatter about
+/// the line (1.4826 × their median absolute residual), in quadrature.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct DiscretizationCorrection {
     /// (f in Hz, c) at each converged mode, increasing f.
     pub modes: Vec<(f64, Complex64)>,
-    /// The correction's relative standard deviation in (G', η) (the largest over the modes).
+    /// The line ln c = a + b ln f (complex a, b; real and imaginary parts fitted apart).
+    pub line: [Complex64; 2],
+    /// The correction's relative standard deviation in (G', η): the largest over the modes,
+    /// with the scatter about the line.
     pub rel_sd: [f64; 2],
 }
 
@@ -136,20 +145,26 @@ pub struct DiscretizationCorrection {
 const INTERPOLATION_SHARE: f64 = 0.25;
 
 impl DiscretizationCorrection {
-    /// The correction from the ladder's modes among `modal` (none converged: no correction,
-    /// and `modes` is empty).
-    pub fn from_ladder(modal: &[CorePoint]) -> Self {
+    /// The correction of a level with elements `size_ratio` times the coarsest's in size (1:
+    /// the coarsest) from the ladder's modes among `modal` (none converged: no correction, and
+    /// `modes` is empty).
+    pub fn from_ladder(modal: &[CorePoint], size_ratio: f64) -> Self {
         let mut modes: Vec<(f64, Complex64)> = Vec::new();
         let mut rel_sd = [0.0f64; 2];
         for p in modal {
             let Some(c) = p.layered_convergence else {
                 continue;
             };
-            let factor = c.core_shear_pa / c.coarsest_pa;
-            if !(factor.is_finite() && factor.re > 0.0) {
+            let coarsest = c.core_shear_pa / c.coarsest_pa;
+            if !(coarsest.is_finite() && coarsest.re > 0.0) {
                 continue;
             }
-            let ln = factor.ln();
+            let ln0 = coarsest.ln();
+            let ln = Complex64::new(
+                ln0.re * size_ratio.powf(c.order),
+                ln0.im * size_ratio.powf(c.loss_order),
+            );
+            let factor = ln.exp();
             // ln c's real part moves ln G' (to first order), its imaginary part the phase:
             // η = tan(arg G*), so d ln η = d(arg)/(sin cos) of the core's phase.
             let arg = c.core_shear_pa.arg();
@@ -160,25 +175,76 @@ impl DiscretizationCorrection {
             modes.push((p.freq_hz, factor));
         }
         modes.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Self { modes, rel_sd }
+        let points: Vec<(f64, Complex64)> = modes.iter().map(|&(f, c)| (f.ln(), c.ln())).collect();
+        let part = |pick: fn(Complex64) -> f64| {
+            let pts: Vec<[f64; 2]> = points.iter().map(|&(x, y)| [x, pick(y)]).collect();
+            theil_sen(&pts)
+        };
+        let (re, im) = (part(|c| c.re), part(|c| c.im));
+        let line = [Complex64::new(re.0, im.0), Complex64::new(re.1, im.1)];
+        // The modes' robust scatter about the line, in ln G' and ln η (as above).
+        let scatter = |pick: fn(Complex64) -> f64, (a, b): (f64, f64)| {
+            let mut r: Vec<f64> = points
+                .iter()
+                .map(|&(x, y)| (pick(y) - a - b * x).abs())
+                .collect();
+            1.4826 * median(&mut r).unwrap_or(0.0)
+        };
+        let (s_re, s_im) = (scatter(|c| c.re, re), scatter(|c| c.im, im));
+        let eta_factor = modal
+            .iter()
+            .filter_map(|p| p.layered_convergence)
+            .map(|c| {
+                let arg = c.core_shear_pa.arg();
+                1.0 / (arg.sin() * arg.cos()).abs().max(1e-6)
+            })
+            .fold(0.0, f64::max);
+        rel_sd = [rel_sd[0].hypot(s_re), rel_sd[1].hypot(s_im * eta_factor)];
+        Self {
+            modes,
+            line,
+            rel_sd,
+        }
     }
 
-    /// c at `f_hz` (1 without converged modes).
+    /// c at `f_hz` on the line, held beyond the modes (1 without converged modes).
     pub fn factor(&self, f_hz: f64) -> Complex64 {
         let (Some(first), Some(last)) = (self.modes.first(), self.modes.last()) else {
             return Complex64::new(1.0, 0.0);
         };
-        if f_hz <= first.0 {
-            return first.1;
-        }
-        if f_hz >= last.0 {
-            return last.1;
-        }
-        let k = self.modes.partition_point(|m| m.0 <= f_hz).max(1);
-        let ((fa, ca), (fb, cb)) = (self.modes[k - 1], self.modes[k]);
-        let t = (f_hz / fa).ln() / (fb / fa).ln();
-        (ca.ln() * (1.0 - t) + cb.ln() * t).exp()
+        let x = f_hz.clamp(first.0, last.0).ln();
+        (self.line[0] + self.line[1] * x).exp()
     }
+}
+
+/// The Theil–Sen line (a, b) of y = a + b x through `points` [x, y]: b the median of the
+/// pairwise slopes, a the median of y − b x (one point: b = 0; none: (0, 0)).
+fn theil_sen(points: &[[f64; 2]]) -> (f64, f64) {
+    let mut slopes: Vec<f64> = Vec::new();
+    for (i, p) in points.iter().enumerate() {
+        for q in &points[i + 1..] {
+            if q[0] != p[0] {
+                slopes.push((q[1] - p[1]) / (q[0] - p[0]));
+            }
+        }
+    }
+    let b = median(&mut slopes).unwrap_or(0.0);
+    let mut intercepts: Vec<f64> = points.iter().map(|p| p[1] - b * p[0]).collect();
+    (median(&mut intercepts).unwrap_or(0.0), b)
+}
+
+/// The median of `v` (reordered), None when empty.
+fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    Some(if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    })
 }
 
 /// A measured FRF and the fitted model's over the band, at one channel and reference.
@@ -199,7 +265,7 @@ pub struct FrfCurve {
 /// The FRF route's answer.
 #[derive(Debug, Clone)]
 pub struct FrfRoute {
-    /// The fit on the coarsest mesh (its law uncorrected).
+    /// The fit on one of the ladder's levels (`model_line` names it; its law uncorrected).
     pub fit: FrfFit,
     /// Why it is the answer (empty: the pole route is, and this is beside it).
     pub why: Vec<WhyFrfFit>,
@@ -410,14 +476,33 @@ mod tests {
                 ..at(freq_hz)
             }
         };
-        let corr = DiscretizationCorrection::from_ladder(&[point(10.0, 1.04), point(40.0, 1.01)]);
+        let corr =
+            DiscretizationCorrection::from_ladder(&[point(10.0, 1.04), point(40.0, 1.01)], 1.0);
         assert!((corr.factor(5.0).re - 1.04).abs() < 1e-12);
         assert!((corr.factor(80.0).re - 1.01).abs() < 1e-12);
         let mid = corr.factor(20.0).re;
         let expected = (0.5 * (1.04f64.ln() + 1.01f64.ln())).exp();
         assert!((mid - expected).abs() < 1e-12, "{mid}");
         assert!((corr.rel_sd[0] - 0.25 * 1.04f64.ln()).abs() < 1e-12);
-        let none = DiscretizationCorrection::from_ladder(&[at(10.0)]);
+        // A level at half the coarsest's element size, order 2 (ConvergedMode::exact): a
+        // quarter of the coarsest's ln c.
+        let half = DiscretizationCorrection::from_ladder(&[point(10.0, 1.04)], 0.5);
+        assert!((half.factor(10.0).re.ln() - 0.25 * 1.04f64.ln()).abs() < 1e-12);
+        // Three modes on a line and one off it: the line holds the three, the outlier widens
+        // the band.
+        let bent = DiscretizationCorrection::from_ladder(
+            &[
+                point(10.0, 1.04),
+                point(20.0, 1.02),
+                point(40.0, 1.0),
+                point(30.0, 0.93),
+            ],
+            1.0,
+        );
+        let on_line = |f: f64| 1.04f64.ln() * (1.0 - (f / 10.0).ln() / 4f64.ln());
+        assert!((bent.factor(20.0).re.ln() - on_line(20.0)).abs() < 0.002);
+        assert!(bent.rel_sd[0] > corr.rel_sd[0]);
+        let none = DiscretizationCorrection::from_ladder(&[at(10.0)], 1.0);
         assert_eq!(none.factor(10.0), Complex64::new(1.0, 0.0));
     }
 }

@@ -108,17 +108,17 @@ pub fn run_job(
         ema: &ema,
         checks: &pole_checks,
     };
-    let (layered_line, core_law, setup) =
-        layered_route(&mut t, (&job, &base), data, &mut modal, &cache)?;
+    let LayeredRoute {
+        line: layered_line,
+        law: core_law,
+        setup,
+        levels,
+    } = layered_route(&mut t, (&job, &base), data, &mut modal, &cache)?;
     layered::to_real_frequency(&mut modal, core_law.as_ref());
-    let frf = frf_route(
-        &mut t,
-        &job,
-        setup.as_ref(),
-        data,
-        &modal,
-        core_law.as_ref(),
-    );
+    let frf = match &setup {
+        Some(s) => frf_route(&mut t, &job, (s, &levels), data, &modal, core_law.as_ref()),
+        None => FrfOutcome::NotRun("the layered route is off (inverse.layered = false)"),
+    };
     if sandwich.stack.is_none() && job.uncertainty.samples > 0 {
         warnings.push(text::monte_carlo_skipped(job.stack.layers.len()));
     }
@@ -366,18 +366,30 @@ fn inverse_setup(job: &Job) -> Result<InverseSetup> {
 /// The law fitted to the layered modes, or why it failed; `None` when not asked for.
 type LawResult = Option<std::result::Result<lamdyn_fit::joint::CoreLawFit, FitError>>;
 
+/// What the layered route leaves for the stages after it.
+struct LayeredRoute {
+    /// Its line (None: not run).
+    line: Option<String>,
+    /// The law over all modes.
+    law: LawResult,
+    /// The setup it ended on (at the supports found, where it re-ran there).
+    setup: Option<layered::LayeredSetup>,
+    /// The ladder's levels (elements, dofs) of its last run.
+    levels: Vec<([usize; 2], usize)>,
+}
+
 /// The layered route (when `inverse.layered`): stage "layered inverse" on the job's
 /// [`layered::LayeredSetup`], then "core law"; where the law finds the supports far from the
-/// job's, the ladder and the law again at those. Its line, the law and the setup it ended on.
+/// job's, the ladder and the law again at those.
 fn layered_route(
     t: &mut Timed,
     (job, base): (&Job, &Path),
     data: layered::Observations,
     modal: &mut [CorePoint],
     cache: &Cache,
-) -> Result<(Option<String>, LawResult, Option<layered::LayeredSetup>)> {
+) -> Result<LayeredRoute> {
     let spinner = t.spinner;
-    let (mut line, mut coarsest, mut setup) = (None, None, None);
+    let (mut line, mut coarsest, mut setup, mut levels) = (None, None, None, Vec::new());
     if job.inverse.layered {
         let (s, outcome) = t.stage("layered inverse", || {
             let s = layered::LayeredSetup::resolve(job, base)?;
@@ -386,6 +398,7 @@ fn layered_route(
             Ok(((s, outcome), cached))
         })?;
         (line, coarsest, setup) = (Some(outcome.line), outcome.coarsest, Some(s));
+        levels = outcome.levels;
     }
     let law = t.stage("core law", || {
         let tuning = setup
@@ -399,7 +412,12 @@ fn layered_route(
         .as_ref()
         .and_then(|s| Some((s, layered::supports_found(s, law.as_ref())?)))
     else {
-        return Ok((line, law, setup));
+        return Ok(LayeredRoute {
+            line,
+            law,
+            setup,
+            levels,
+        });
     };
     let moved = setup.at_supports(at);
     let again = t.stage("layered inverse at the supports found", || {
@@ -413,24 +431,27 @@ fn layered_route(
         let law = layered::fit_law(moved.core_law, tuning, modal, again.coarsest.as_ref());
         Ok((law, false))
     })?;
-    Ok((line, law, Some(moved)))
+    Ok(LayeredRoute {
+        line,
+        law,
+        setup: Some(moved),
+        levels: again.levels,
+    })
 }
 
 /// Stage "FRF fit" where `inverse.frf_fit` and the rule call for it ([`frf_route`]): the
-/// core's law fitted to the FRFs through the layered model of `setup`. A failure is kept in
+/// core's law fitted to the FRFs through the layered model of `setup` on one of the ladder's
+/// `levels`. A failure is kept in
 /// the outcome (the pole route stays the answer), not raised.
 fn frf_route(
     t: &mut Timed,
     job: &Job,
-    setup: Option<&layered::LayeredSetup>,
+    (setup, levels): (&layered::LayeredSetup, &[([usize; 2], usize)]),
     data: layered::Observations,
     modal: &[CorePoint],
     law: Option<&std::result::Result<lamdyn_fit::joint::CoreLawFit, FitError>>,
 ) -> FrfOutcome {
     use crate::job::FrfFitChoice;
-    let Some(setup) = setup else {
-        return FrfOutcome::NotRun("the layered route is off (inverse.layered = false)");
-    };
     let mut why = frf_route::reasons(&data.ema.modes, modal);
     match job.inverse.frf_fit {
         FrfFitChoice::Never => return FrfOutcome::NotRun("inverse.frf_fit = \"never\""),
@@ -447,6 +468,7 @@ fn frf_route(
         band_hz: frf_band(job, data.ema),
         start: law.and_then(|l| l.as_ref().ok()),
         modal,
+        levels,
     };
     let spinner = t.spinner;
     let outcome = t.stage("FRF fit", || {
@@ -757,13 +779,15 @@ struct FitCurves {
 /// The paper's route's fit as run: its result, or, when the layered route is on and can go on
 /// alone, why it failed. The layered route does not need the fit: it reads the EMA's poles and
 /// starts each from the modulus its pole implies on the shell model (`starts_from_the_poles`).
-/// It goes on alone only where every pole is damped at most [`MAX_DAMPING_ALONE`]: a fit that
-/// finds no resonance peak at all is also a sign of poles the EMA cannot resolve. Without the
-/// layered route the paper's is the only answer and its failure is the run's.
+/// It goes on alone where every pole is damped at most [`MAX_DAMPING_ALONE`], or where the FRF
+/// fit may run (`inverse.frf_fit` not `never`): a fit that finds no resonance peak at all is a
+/// sign of poles the EMA cannot resolve, and the rule of [`frf_route`] then makes the fit to
+/// the FRFs the answer. Without the layered route the paper's is the only answer and its
+/// failure is the run's.
 ///
 /// # Errors
 /// The fit's error when `inverse.layered` is off, or when a pole is damped more than
-/// [`MAX_DAMPING_ALONE`] (the poles named).
+/// [`MAX_DAMPING_ALONE`] and the FRF fit is off (the poles named).
 fn without_the_paper_route<T>(
     job: &Job,
     ema: &EmaResult,
@@ -775,11 +799,11 @@ fn without_the_paper_route<T>(
         Err(e) => e,
     };
     let damped = damped_beyond(&ema.modes, MAX_DAMPING_ALONE);
-    if damped.is_empty() {
+    if damped.is_empty() || job.inverse.frf_fit != crate::job::FrfFitChoice::Never {
         return Ok(Err(e));
     }
     Err(e).context(format!(
-        "the paper's route failed, and the layered route cannot go on from the poles alone: {} of {} poles are damped more than {:.0} % ({}{}), where the EMA's poles are not to be trusted without a fit to the FRFs",
+        "the paper's route failed, and the layered route cannot go on from the poles alone: {} of {} poles are damped more than {:.0} % ({}{}), where the EMA's poles are not to be trusted without a fit to the FRFs (inverse.frf_fit = \"never\")",
         damped.len(),
         ema.modes.len(),
         100.0 * MAX_DAMPING_ALONE,

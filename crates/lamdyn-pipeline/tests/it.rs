@@ -808,3 +808,82 @@ fn same_bits_on_one_and_two_threads() {
     assert!(one.modal.iter().all(|p| p.layered_g().is_some()));
     assert_eq!(bits(&one), bits(&two));
 }
+
+/// The small laminate with an acoustic-PVB-like core (a Prony series, G' 1.5–8 MPa, η 1.1–1.4
+/// over the band): modal damping above 5 %, neighbours overlapping.
+fn damped() -> Description {
+    let laminate = include_str!("../../lamdyn-testbench/tests/data/small_laminate.toml")
+        .replace("elements = [6, 6]", "elements = [18, 18]\nedge_grading = 0.2")
+        .replace(
+            r#"shear_law = { kind = "fractional_zener", g0_pa = 0.3e6, g_inf_pa = 300e6, tau_s = 1e-4, alpha = 0.55 }"#,
+            r#"shear_law = { kind = "generalized_maxwell", g_e_pa = 0.2e6, terms = [{ g_pa = 0.5e6, tau_s = 1e-1 }, { g_pa = 2.0e6, tau_s = 1e-2 }, { g_pa = 8.0e6, tau_s = 1e-3 }, { g_pa = 32e6, tau_s = 1e-4 }, { g_pa = 128e6, tau_s = 1e-5 }] }"#,
+        );
+    let text = format!(
+        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 400.0\nstep_hz = 1.0\nfrf_snr_db = 40.0\nseed = 5\n"
+    );
+    Description::parse("damped.toml", &text).unwrap()
+}
+
+/// Damped, overlapping modes (modal damping 5.7–14.2 %, six overlapping pairs, 1 % noise; the
+/// rule of lamdyn_pipeline::frf_route fires, and the paper's route finds no peak): the run
+/// takes the FRF fit as its answer, says why, has a core at every mode (exit 0), recovers the
+/// core within 4 % in G' and in η of the truth at every mode, inside its 95 % band, and the
+/// report shows the section with the measured and model FRFs. Measured: G' +0.4 … +3.3 %,
+/// η −2.0 … +1.4 % at eight modes from 69 to 344 Hz, where the pole route is −14 … +131 % in G'
+/// and has no core at 247 Hz; the rest is the model's error (relative RMS misfit 4.7 % against
+/// 1 % noise: the 28 × 28 fit model and the 18 × 18 graded truth differ by their meshes).
+#[test]
+fn damped_modes_take_the_frf_fit() {
+    let dir = TempDir::new("pipeline-damped");
+    let input = OutputDir::prepare(&dir.join("input"), &[], false).unwrap();
+    let options = RunOptions {
+        cache_dir: Some(dir.join("input/.lamdyn-cache")),
+    };
+    let sampling = DemoSampling {
+        samples: 0,
+        seed: 1,
+        temperature_k: None,
+    };
+    let t = std::time::Instant::now();
+    let (result, _, _) = run_demo(&damped(), &input, sampling, &options, &Silent).unwrap();
+    eprintln!(
+        "run {:.1?}; FRF fit: {}",
+        t.elapsed(),
+        result.frf.describe()
+    );
+    let route = result.frf.answer().expect("the FRF fit is the answer");
+    assert!(!route.why.is_empty());
+    let truth = result.truth.as_ref().unwrap();
+    for p in &result.modal {
+        let (g, t) = (route.modulus(p.freq_hz), truth.at(p.freq_hz).unwrap());
+        let (eg, ee) = (g.re / t.re - 1.0, (g.im / g.re) / (t.im / t.re) - 1.0);
+        let a = route.at(p.freq_hz);
+        eprintln!(
+            "{:.2} Hz: FRF fit G' {eg:+.4} [{:.3e}, {:.3e}] vs {:.3e}, eta {ee:+.4}; pole route {:?}",
+            p.freq_hz,
+            a.storage_ci95[0],
+            a.storage_ci95[1],
+            t.re,
+            p.layered_g().map(|g| g.re / t.re - 1.0)
+        );
+        assert!(
+            eg.abs() < 0.04 && ee.abs() < 0.04,
+            "{:.2} Hz: G' {eg:+.3}, eta {ee:+.3}",
+            p.freq_hz
+        );
+        let eta_t = t.im / t.re;
+        assert!(
+            (a.storage_ci95[0]..=a.storage_ci95[1]).contains(&t.re)
+                && (a.loss_factor_ci95[0]..=a.loss_factor_ci95[1]).contains(&eta_t),
+            "truth outside the band at {:.2} Hz: {a:?}",
+            p.freq_hz
+        );
+    }
+    assert!(result.modal.len() >= 6, "{} modes", result.modal.len());
+    assert!(result.modes_without_core().is_empty());
+    let out = OutputDir::prepare(&dir.join("report"), &[], false).unwrap();
+    out.write(&report::build(&result).unwrap()).unwrap();
+    let html = std::fs::read_to_string(dir.join("report/report.html")).unwrap();
+    assert!(html.contains("The core from the FRFs (no poles)"));
+    assert!(dir.join("report/figures/frf_fit_1.svg").is_file());
+}

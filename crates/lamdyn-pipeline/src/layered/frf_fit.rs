@@ -1,8 +1,8 @@
 //! The layered stage's FRF fit: the core's law fitted to the measured FRFs through the layered
-//! model on the ladder's coarsest mesh ([`lamdyn_fit::frf_fit`]), the inputs under the job's
+//! model on the ladder's finest level up to [`FRF_MAX_DOFS`] ([`lamdyn_fit::frf_fit`]), the inputs under the job's
 //! priors, then corrected for the mesh by the ladder ([`crate::frf_route`]).
 //!
-//! The model is the coarsest level of the ladder read at every response channel and driven at
+//! The model is that level of the ladder read at every response channel and driven at
 //! every reference by the surface's shape functions ([`ObservedModel::build`]), on a basis of
 //! `inverse.layered_modes` modes at two core moduli that bracket the start law over the band
 //! (at least G_ref/2 … 2 G_ref: [`FrfBasis::default`]), two orders of core sensitivities and
@@ -37,7 +37,15 @@ pub struct FrfFitInput<'a> {
     pub start: Option<&'a CoreLawFit>,
     /// The pole route's modal points (the ladder's corrections; the starts without a law).
     pub modal: &'a [CorePoint],
+    /// The ladder's levels (elements, dofs), coarsest first: the fit takes the finest up to
+    /// [`FRF_MAX_DOFS`] (the coarsest when empty).
+    pub levels: &'a [([usize; 2], usize)],
 }
+
+/// The largest level (dofs) the FRF fit's model is built on. Its cost per line does not grow
+/// with the level (one LU of the reduced basis), its build does (the basis's eigen solves and
+/// the inputs' assemblies); a finer level leaves less for the ladder's correction to carry.
+pub const FRF_MAX_DOFS: usize = 60_000;
 
 /// Fits the core's law to the FRFs through `setup`'s layered model (module docs); `why` says
 /// why it is the answer (empty: it is beside the pole route).
@@ -61,7 +69,14 @@ pub fn fit_to_frfs(
     let priors = input_priors(setup);
     let inputs: Vec<Input> = priors.iter().map(|p| p.input).collect();
     let (sensors, references) = (points(set.responses()), points(set.references()));
-    let label = setup.plate.plan.level_label(setup.start);
+    let level = input
+        .levels
+        .iter()
+        .filter(|l| l.1 <= FRF_MAX_DOFS)
+        .map(|l| l.0)
+        .next_back()
+        .unwrap_or(setup.start);
+    let label = setup.plate.plan.level_label(level);
     spinner.stage(&format!(
         "FRF fit: layered model {label} read at {} channel(s), {} reference(s)",
         sensors.len(),
@@ -70,7 +85,7 @@ pub fn fit_to_frfs(
     let t = Instant::now();
     let model = ObservedModel::build(
         &setup.plate,
-        setup.start,
+        level,
         g_ref,
         &basis,
         (&sensors, &references),
@@ -122,7 +137,10 @@ pub fn fit_to_frfs(
         ),
         fit,
         why,
-        correction: DiscretizationCorrection::from_ladder(input.modal),
+        correction: DiscretizationCorrection::from_ladder(
+            input.modal,
+            setup.start[0] as f64 / level[0] as f64,
+        ),
         curves,
         times_s: [build_s, fit_s],
     })

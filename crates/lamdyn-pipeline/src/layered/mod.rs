@@ -65,6 +65,8 @@ pub struct LayeredOutcome {
     pub coarsest: Option<LayeredInverse>,
     /// Whether every model came from the cache.
     pub all_cached: bool,
+    /// The ladder's levels: in-plane elements and dofs, coarsest first (empty: not converged).
+    pub levels: Vec<([usize; 2], usize)>,
 }
 
 /// The measured data the layered stage reads.
@@ -172,6 +174,12 @@ pub fn run(
         line,
         coarsest: Some(coarsest),
         all_cached,
+        levels: out
+            .meshes
+            .iter()
+            .copied()
+            .zip(out.dofs.iter().copied())
+            .collect(),
     })
 }
 
@@ -278,6 +286,7 @@ fn no_layered(
         line: format!("{what}: {why}"),
         coarsest: None,
         all_cached: false,
+        levels: Vec::new(),
     }
 }
 
