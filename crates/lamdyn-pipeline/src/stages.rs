@@ -372,7 +372,8 @@ struct LayeredRoute {
     line: Option<String>,
     /// The law over all modes.
     law: LawResult,
-    /// The setup it ended on (at the supports found, where it re-ran there).
+    /// The setup as the job gives it, supports included: the FRF fit fits the supports itself
+    /// under their priors, and does not take the ones the pole route's law found.
     setup: Option<layered::LayeredSetup>,
     /// The ladder's levels (elements, dofs) of its last run.
     levels: Vec<([usize; 2], usize)>,
@@ -434,7 +435,7 @@ fn layered_route(
     Ok(LayeredRoute {
         line,
         law,
-        setup: Some(moved),
+        setup: Some(setup.clone()),
         levels: again.levels,
     })
 }
@@ -469,6 +470,12 @@ fn frf_route(
         start: law.and_then(|l| l.as_ref().ok()),
         modal,
         levels,
+        half_widths_hz: data
+            .ema
+            .modes
+            .iter()
+            .map(|m| m.damping_ratio * m.freq_hz)
+            .collect(),
     };
     let spinner = t.spinner;
     let outcome = t.stage("FRF fit", || {

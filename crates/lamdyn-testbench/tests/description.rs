@@ -281,3 +281,23 @@ fn damped_sandwich_example_parses() {
     assert_eq!(d.test.max_hz, 500.0);
     assert!(d.layers[1].young_pa.is_none() && d.layers[0].young_pa == Some(70e9));
 }
+
+/// The two cases of docs/fit.md the FRF fit is measured on parse: the soft-core sandwich
+/// (free, a core 30 times softer than `damped-sandwich.toml`'s) and the roof on four stiff
+/// supports (a close pair near the supports' resonance).
+#[test]
+fn frf_fit_examples_parse() {
+    let soft = Description::parse(
+        "soft-core-sandwich.toml",
+        include_str!("../examples/soft-core-sandwich.toml"),
+    )
+    .unwrap();
+    assert!(soft.supports.is_none() && soft.layers[1].young_pa.is_none());
+    let supported = Description::parse(
+        "supported-close-pair.toml",
+        include_str!("../examples/supported-close-pair.toml"),
+    )
+    .unwrap();
+    let points = supported.supports.map(|s| s.points.len());
+    assert_eq!(points, Some(4));
+}

@@ -237,6 +237,10 @@ pub struct FrfFit {
     pub iterations: usize,
     /// Residual evaluations of the last pass.
     pub evaluations: usize,
+    /// Iterations and evaluations (each one sweep of the lines, residuals and Jacobian
+    /// together) over every start and pass: the fit's whole work (the start grid's
+    /// constant-modulus sweeps on its thinned lines not counted).
+    pub work: [usize; 2],
     /// Lines and residuals fitted.
     pub lines: usize,
     /// The band, Hz.
@@ -359,8 +363,12 @@ pub fn fit_core_to_frfs(
     let starts = problem.starts(start, settings)?;
     let prior_centre = starts.first().map(|x| x[..problem.n_law()].to_vec());
     let mut best: Option<LmOutcome> = None;
+    let mut work = [0usize; 2];
     for x0 in starts {
         let run = problem.minimise(&x0, settings.lm);
+        if let Some(r) = &run {
+            work = [work[0] + r.iterations, work[1] + r.evaluations];
+        }
         if let Some(run) = run
             && best.as_ref().is_none_or(|b| run.cost < b.cost)
         {
@@ -396,6 +404,7 @@ pub fn fit_core_to_frfs(
                 "the model could not be solved at the previous pass's answer".into(),
             )
         })?;
+        work = [work[0] + run.iterations, work[1] + run.evaluations];
         if !run.converged && problem.law_change_in_band(&from, &run.x) > SETTLED_LAW_CHANGE {
             return Err(problem.did_not_settle(&run));
         }
@@ -403,7 +412,9 @@ pub fn fit_core_to_frfs(
             break;
         }
     }
-    problem.conclude(run, data_scale, settings)
+    let mut fit = problem.conclude(run, data_scale, settings)?;
+    fit.work = work;
+    Ok(fit)
 }
 
 /// Each prior's input as (its index among the model's inputs, its prior sd).
@@ -696,9 +707,10 @@ impl Problem<'_> {
             .collect())
     }
 
-    /// The data misfit with a constant core modulus `g` and unit gains on `lines`.
+    /// The data misfit with a constant core modulus `g` and unit gains on `lines` (the lines
+    /// in parallel, summed in order: the same bits on any thread count).
     fn constant_cost(&self, g: Complex64, lines: &[usize]) -> f64 {
-        let cost: Option<f64> = lines
+        let per_line: Option<Vec<f64>> = lines
             .par_iter()
             .map(|&l| {
                 let w = self.data.omegas[l];
@@ -715,8 +727,8 @@ impl Problem<'_> {
                 }
                 Some(s)
             })
-            .sum();
-        cost.unwrap_or(f64::INFINITY)
+            .collect();
+        per_line.map_or(f64::INFINITY, |v| v.iter().sum())
     }
 
     /// The answer from the winning run (module docs).
@@ -778,6 +790,7 @@ impl Problem<'_> {
                 * (self.data.n_residuals() as f64 / data_norm).sqrt(),
             iterations: run.iterations,
             evaluations: run.evaluations,
+            work: [0, 0],
             lines: self.data.n_lines(),
             band_hz: settings.band_hz,
             assembled_modulus_pa: self.g_a,
