@@ -116,7 +116,7 @@ pub fn run_job(
     } = layered_route(&mut t, (&job, &base), data, &mut modal, &cache)?;
     layered::to_real_frequency(&mut modal, core_law.as_ref());
     let frf = match &setup {
-        Some(s) => frf_route(&mut t, &job, (s, &levels), data, &modal, core_law.as_ref()),
+        Some(s) => frf_fit_stage(&mut t, &job, (s, &levels), data, &modal, core_law.as_ref()),
         None => FrfOutcome::NotRun("the layered route is off (inverse.layered = false)"),
     };
     if sandwich.stack.is_none() && job.uncertainty.samples > 0 {
@@ -440,11 +440,11 @@ fn layered_route(
     })
 }
 
-/// Stage "FRF fit" where `inverse.frf_fit` and the rule call for it ([`frf_route`]): the
+/// Stage "FRF fit" where `inverse.frf_fit` and the rule call for it ([`crate::frf_route`]): the
 /// core's law fitted to the FRFs through the layered model of `setup` on one of the ladder's
 /// `levels`. A failure is kept in
 /// the outcome (the pole route stays the answer), not raised.
-fn frf_route(
+fn frf_fit_stage(
     t: &mut Timed,
     job: &Job,
     (setup, levels): (&layered::LayeredSetup, &[([usize; 2], usize)]),
@@ -788,7 +788,7 @@ struct FitCurves {
 /// starts each from the modulus its pole implies on the shell model (`starts_from_the_poles`).
 /// It goes on alone where every pole is damped at most [`MAX_DAMPING_ALONE`], or where the FRF
 /// fit may run (`inverse.frf_fit` not `never`): a fit that finds no resonance peak at all is a
-/// sign of poles the EMA cannot resolve, and the rule of [`frf_route`] then makes the fit to
+/// sign of poles the EMA cannot resolve, and the rule of [`crate::frf_route`] then makes the fit to
 /// the FRFs the answer. Without the layered route the paper's is the only answer and its
 /// failure is the run's.
 ///
