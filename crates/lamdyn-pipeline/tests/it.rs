@@ -828,8 +828,8 @@ fn damped() -> Description {
 /// rule of lamdyn_pipeline::frf_route fires, and the paper's route finds no peak): the run
 /// takes the FRF fit as its answer, says why, has a core at every mode (exit 0), recovers the
 /// core within 4 % in G' and in η of the truth at every mode, inside its 95 % band, and the
-/// report shows the section with the measured and model FRFs. Measured: G' +0.4 … +3.3 %,
-/// η −2.0 … +1.4 % at eight modes from 69 to 344 Hz, where the pole route is −14 … +131 % in G'
+/// report shows the section with the measured and model FRFs. Measured: G' +0.3 … +3.1 %,
+/// η −2.1 … +1.2 % at eight modes from 69 to 344 Hz, where the pole route is −14 … +131 % in G'
 /// and has no core at 247 Hz; the rest is the model's error (relative RMS misfit 4.7 % against
 /// 1 % noise: the 28 × 28 fit model and the 18 × 18 graded truth differ by their meshes).
 #[test]
