@@ -159,6 +159,8 @@ impl DiscretizationCorrection {
     pub fn from_ladder(modal: &[CorePoint], size_ratio: f64) -> Self {
         let mut modes: Vec<(f64, Complex64)> = Vec::new();
         let mut rel_sd = [0.0f64; 2];
+        // The largest d ln η / d arg G* over the modes, for the scatter's η part.
+        let mut eta_factor = 0.0f64;
         for p in modal {
             let Some(c) = p.layered_convergence else {
                 continue;
@@ -184,6 +186,7 @@ impl DiscretizationCorrection {
             // η = tan(arg G*), so d ln η = d(arg)/(sin cos) of the core's phase.
             let arg = c.core_shear_pa.arg();
             let to_eta = 1.0 / (arg.sin() * arg.cos()).abs().max(1e-6);
+            eta_factor = eta_factor.max(to_eta);
             let sd_g = (c.storage_band / 1.96)
                 .hypot(INTERPOLATION_SHARE * ln.re)
                 .hypot(spread.re);
@@ -210,14 +213,6 @@ impl DiscretizationCorrection {
             1.4826 * median(&mut r).unwrap_or(0.0)
         };
         let (s_re, s_im) = (scatter(|c| c.re, re), scatter(|c| c.im, im));
-        let eta_factor = modal
-            .iter()
-            .filter_map(|p| p.layered_convergence)
-            .map(|c| {
-                let arg = c.core_shear_pa.arg();
-                1.0 / (arg.sin() * arg.cos()).abs().max(1e-6)
-            })
-            .fold(0.0, f64::max);
         rel_sd = [rel_sd[0].hypot(s_re), rel_sd[1].hypot(s_im * eta_factor)];
         Self {
             modes,
@@ -425,7 +420,7 @@ impl FrfOutcome {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::chain::NoSandwichInverse;
     use lamdyn_layered::convergence::ConvergedMode;
@@ -444,7 +439,8 @@ mod tests {
         }
     }
 
-    fn mode(freq_hz: f64, damping_ratio: f64) -> Mode {
+    /// An identified mode at `freq_hz` with `damping_ratio` and nothing else (the tests' own).
+    pub(crate) fn mode(freq_hz: f64, damping_ratio: f64) -> Mode {
         Mode {
             freq_hz,
             damping_ratio,

@@ -1289,23 +1289,10 @@ mod tests {
         );
     }
 
+    use crate::frf_route::tests::mode;
+
     /// The poles that keep the layered route from going on without the paper's fit: those
     /// damped beyond the limit, and one whose damping ratio is not a number.
-    fn mode(freq_hz: f64, damping_ratio: f64) -> lamdyn_ema::identify::Mode {
-        lamdyn_ema::identify::Mode {
-            freq_hz,
-            damping_ratio,
-            loss_factor: 2.0 * damping_ratio,
-            pole: Complex64::new(0.0, 0.0),
-            stable_count: 0,
-            shape: Vec::new(),
-            participation: Vec::new(),
-            real_shape: Vec::new(),
-            mpc: 1.0,
-            mpd_deg: 0.0,
-        }
-    }
-
     #[test]
     fn poles_damped_beyond_the_limit_are_named() {
         let modes = [

@@ -11,98 +11,17 @@
 //!
 //! `cargo bench -p lamdyn-testbench --bench frf_fit`
 
+#[path = "../tests/common/glass_plate.rs"]
+mod glass_plate;
+
+use glass_plate::{bench, glass_plate, observed};
 use lamdyn_fit::frf_fit::{FrfFit, FrfFitSettings, FrfLaw, fit_core_to_frfs};
-use lamdyn_frf::FrfSet;
-use lamdyn_layered::frf::ObservedModel;
-use lamdyn_layered::probe::SurfaceProbe;
-use lamdyn_layered::reduced::ReducedModel;
-use lamdyn_testbench::description::{Bench, Description};
 use std::f64::consts::PI;
 use std::time::Instant;
 
-const PLATE: &str = r#"
-[plate]
-length_m = 1.2
-width_m = 0.9
-
-[mesh]
-elements = [NX, NY]
-edge_grading = GRADING
-through_thickness = [1, 1, 1]
-
-[[layers]]
-name = "glass"
-thickness_m = 3.0e-3
-density_kg_m3 = 2500.0
-poisson = 0.23
-young_pa = 70e9
-
-[[layers]]
-name = "acoustic PVB"
-thickness_m = 0.76e-3
-density_kg_m3 = 1070.0
-poisson = 0.49
-shear_law = { kind = "generalized_maxwell", g_e_pa = 0.2e6, terms = [{ g_pa = 0.5e6, tau_s = 1e-1 }, { g_pa = 2.0e6, tau_s = 1e-2 }, { g_pa = 8.0e6, tau_s = 1e-3 }, { g_pa = 32e6, tau_s = 1e-4 }, { g_pa = 128e6, tau_s = 1e-5 }] }
-
-[[layers]]
-name = "glass"
-thickness_m = 3.0e-3
-density_kg_m3 = 2500.0
-poisson = 0.23
-young_pa = 70e9
-
-[test]
-grid = [9, 3]
-hammer_xy_fraction = [0.31, 0.27]
-step_hz = 0.5
-max_hz = 220.0
-seed = 3
-frf_snr_db = 40.0
-
-[basis]
-modes = 40
-reference_hz = [20.0, 200.0]
-"#;
-
-fn bench(elements: [usize; 2], grading: f64) -> Bench {
-    let text = PLATE
-        .replace("NX", &elements[0].to_string())
-        .replace("NY", &elements[1].to_string())
-        .replace("GRADING", &grading.to_string());
-    Description::parse("damped glass plate", &text)
-        .and_then(|d| d.build(&mut |_| {}))
-        .expect("the plate builds")
-}
-
-/// The identification's model (as `tests/frf_fit.rs`): 30 modes at 0.5 and 2 G_a, two orders.
-fn observed(coarse: &Bench, set: &FrfSet) -> ObservedModel {
-    let locate = |c: &lamdyn_frf::Channel| {
-        SurfaceProbe::locate(&coarse.mesh, c.point_m, c.direction, 1e-6, &c.name)
-            .expect("on the plate")
-    };
-    let sensors: Vec<SurfaceProbe> = set.responses().iter().map(locate).collect();
-    let references: Vec<SurfaceProbe> = set.references().iter().map(locate).collect();
-    let loads: Vec<Vec<f64>> = references
-        .iter()
-        .map(|r| r.load(coarse.system.n_dofs))
-        .collect();
-    let shift = -(2.0 * PI).powi(2);
-    let model = ReducedModel::with_orders(
-        &coarse.system,
-        &coarse.core_layers,
-        &[0.5, 2.0],
-        30,
-        &loads,
-        shift,
-        2,
-    )
-    .expect("basis");
-    ObservedModel::new(model, &sensors, &references).expect("observed model")
-}
-
 fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
-    let truth = bench([24, 18], 0.2);
+    let truth = bench(&glass_plate([24, 18], 0.2, [9, 3], Some(40.0), 3));
     let set = truth.frfs().expect("FRFs");
     let band = [20.0, 220.0];
     let lines = set
@@ -110,7 +29,7 @@ fn main() {
         .iter()
         .filter(|f| (band[0]..=band[1]).contains(*f))
         .count();
-    let coarse = bench([18, 14], 0.0);
+    let coarse = bench(&glass_plate([18, 14], 0.0, [9, 3], None, 3));
     let g_a = coarse.assembled_modulus_pa;
     let mut fits: Vec<FrfFit> = Vec::new();
     for threads in [1, 2] {
@@ -120,7 +39,7 @@ fn main() {
             .expect("pool");
         pool.install(|| {
             let t = Instant::now();
-            let model = observed(&coarse, &set);
+            let model = observed(&coarse, &set, &[0.5, 2.0], 30);
             let build_s = t.elapsed().as_secs_f64();
             let t = Instant::now();
             let omegas: Vec<f64> = set

@@ -1,99 +1,17 @@
 //! The core's law fitted to FRFs through the layered model (lamdyn_fit::frf_fit) on virtual
 //! tests whose truth is a finer, edge-graded mesh than the identification's.
 
+#[path = "common/glass_plate.rs"]
+mod glass_plate;
+
+use glass_plate::{bench, glass_plate, observed};
 use lamdyn_fit::frf_fit::{FrfFit, FrfFitSettings, FrfLaw, fit_core_to_frfs};
-use lamdyn_frf::FrfSet;
-use lamdyn_layered::frf::ObservedModel;
 use lamdyn_layered::probe::SurfaceProbe;
-use lamdyn_layered::reduced::{DirectSolver, ReducedModel};
-use lamdyn_testbench::description::{Bench, Description};
+use lamdyn_layered::reduced::DirectSolver;
+use lamdyn_testbench::description::Bench;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 use std::time::Instant;
-
-/// A free laminated-glass plate, 1.2 × 0.9 m, glass 3 mm / acoustic-PVB-like core 0.76 mm /
-/// glass 3 mm; the core a Prony series with G' 1.6–6 MPa and η 0.9–1.3 over 20–200 Hz.
-fn glass_plate(elements: [usize; 2], grading: f64, snr_db: Option<f64>, seed: u64) -> String {
-    let noise = snr_db.map_or(String::new(), |s| format!("frf_snr_db = {s}\n"));
-    format!(
-        r#"
-[plate]
-length_m = 1.2
-width_m = 0.9
-
-[mesh]
-elements = [{}, {}]
-edge_grading = {grading}
-through_thickness = [1, 1, 1]
-
-[[layers]]
-name = "glass"
-thickness_m = 3.0e-3
-density_kg_m3 = 2500.0
-poisson = 0.23
-young_pa = 70e9
-
-[[layers]]
-name = "acoustic PVB"
-thickness_m = 0.76e-3
-density_kg_m3 = 1070.0
-poisson = 0.49
-shear_law = {{ kind = "generalized_maxwell", g_e_pa = 0.2e6, terms = [{{ g_pa = 0.5e6, tau_s = 1e-1 }}, {{ g_pa = 2.0e6, tau_s = 1e-2 }}, {{ g_pa = 8.0e6, tau_s = 1e-3 }}, {{ g_pa = 32e6, tau_s = 1e-4 }}, {{ g_pa = 128e6, tau_s = 1e-5 }}] }}
-
-[[layers]]
-name = "glass"
-thickness_m = 3.0e-3
-density_kg_m3 = 2500.0
-poisson = 0.23
-young_pa = 70e9
-
-[test]
-grid = [7, 6]
-hammer_xy_fraction = [0.31, 0.27]
-step_hz = 0.5
-max_hz = 220.0
-seed = {seed}
-{noise}
-[basis]
-modes = 40
-reference_hz = [20.0, 200.0]
-"#,
-        elements[0], elements[1]
-    )
-}
-
-fn bench(text: &str) -> Bench {
-    Description::parse("glass plate", text)
-        .unwrap()
-        .build(&mut |_| {})
-        .unwrap()
-}
-
-/// The identification's model: `coarse`'s mesh read at the measured channels' points and
-/// driven at the reference, on a basis of `modes` modes at `ratios` × G_a.
-fn observed(coarse: &Bench, set: &FrfSet, ratios: &[f64], modes: usize) -> ObservedModel {
-    let locate = |c: &lamdyn_frf::Channel| {
-        SurfaceProbe::locate(&coarse.mesh, c.point_m, c.direction, 1e-6, &c.name).unwrap()
-    };
-    let sensors: Vec<SurfaceProbe> = set.responses().iter().map(locate).collect();
-    let references: Vec<SurfaceProbe> = set.references().iter().map(locate).collect();
-    let loads: Vec<Vec<f64>> = references
-        .iter()
-        .map(|r| r.load(coarse.system.n_dofs))
-        .collect();
-    let shift = -(2.0 * PI).powi(2);
-    let model = ReducedModel::with_orders(
-        &coarse.system,
-        &coarse.core_layers,
-        ratios,
-        modes,
-        &loads,
-        shift,
-        2,
-    )
-    .unwrap();
-    ObservedModel::new(model, &sensors, &references).unwrap()
-}
 
 fn worst_errors(fit: &FrfFit, truth: &Bench, freqs: &[f64]) -> (f64, f64) {
     let mut worst = (0.0f64, 0.0f64);
@@ -116,7 +34,7 @@ fn worst_errors(fit: &FrfFit, truth: &Bench, freqs: &[f64]) -> (f64, f64) {
 #[test]
 fn damped_glass_plate_core_from_frfs() {
     let t0 = Instant::now();
-    let truth = bench(&glass_plate([24, 18], 0.2, Some(40.0), 3));
+    let truth = bench(&glass_plate([24, 18], 0.2, [7, 6], Some(40.0), 3));
     let set = truth.frfs().unwrap();
     let modal: Vec<Complex64> = truth
         .model
@@ -131,7 +49,7 @@ fn damped_glass_plate_core_from_frfs() {
         "truth {:.1?}: modes (f, zeta at 80 Hz core) {elastic:.3?}",
         t0.elapsed()
     );
-    let coarse = bench(&glass_plate([18, 14], 0.0, None, 3));
+    let coarse = bench(&glass_plate([18, 14], 0.0, [7, 6], None, 3));
     let g_a = coarse.assembled_modulus_pa;
     let t1 = Instant::now();
     let model = observed(&coarse, &set, &[0.5, 2.0], 30);

@@ -156,12 +156,6 @@ pub struct FrfFitSettings {
     pub discretization_rel: [f64; 2],
     /// The model's inputs fitted beside the law under their priors (none: held as built).
     pub inputs: Vec<InputPrior>,
-    /// Standard deviation of a weak prior on each of the law's parameters u about the first
-    /// start: it holds a term the band does not see (a Prony weight whose relaxation lies
-    /// far outside it, the equilibrium modulus) where the data leave it, instead of letting
-    /// the iteration run after a vanishing gain in the misfit; wide enough (3: a factor 20 at
-    /// one sd) that such a term still reports as not determined.
-    pub law_prior_sd: f64,
 }
 
 impl FrfFitSettings {
@@ -181,7 +175,6 @@ impl FrfFitSettings {
             },
             discretization_rel: [0.0, 0.0],
             inputs: Vec::new(),
-            law_prior_sd: f64::INFINITY,
         }
     }
 }
@@ -356,12 +349,10 @@ pub fn fit_core_to_frfs(
         gain_prior_sd: settings.gain_prior_sd,
         inputs,
         n_model_inputs: model.inputs().len(),
-        law_prior: None,
         data_weight: 1.0,
     };
     let mut problem = problem;
     let starts = problem.starts(start, settings)?;
-    let prior_centre = starts.first().map(|x| x[..problem.n_law()].to_vec());
     let mut best: Option<LmOutcome> = None;
     let mut work = [0usize; 2];
     for x0 in starts {
@@ -383,14 +374,7 @@ pub fn fit_core_to_frfs(
     })?;
     // The data's own noise scale, then the fit again with the data rows on that scale, so the
     // priors weigh against the data as they should: a fixed point (module docs). The first
-    // pass, on an unknown scale, runs without the law's weak prior (which would outweigh data
-    // rows of unit weight) and need not settle; the passes after it must.
-    if let Some(centre) = prior_centre
-        && settings.law_prior_sd.is_finite()
-        && settings.law_prior_sd > 0.0
-    {
-        problem.law_prior = Some((centre, settings.law_prior_sd));
-    }
+    // pass, on an unknown scale, need not settle; the passes after it must.
     let (mut run, mut data_scale) = (first, 1.0);
     for _ in 0..MAX_SCALE_PASSES {
         let scale = problem.data_noise_scale(&run);
@@ -471,9 +455,6 @@ struct Problem<'a> {
     inputs: Vec<(usize, InputPrior)>,
     /// How many inputs the model holds.
     n_model_inputs: usize,
-    /// The weak prior on the law's parameters: its centre and sd
-    /// ([`FrfFitSettings::law_prior_sd`]).
-    law_prior: Option<(Vec<f64>, f64)>,
     /// 1/s: the data rows divided by the noise scale s of the first pass (1 in it).
     data_weight: f64,
 }
@@ -566,9 +547,6 @@ impl Problem<'_> {
             ))
             .collect();
         r.extend(prior_sd.iter().enumerate().map(|(k, sd)| x[n_law + k] / sd));
-        if let Some((centre, sd)) = &self.law_prior {
-            r.extend((0..n_law).map(|k| (x[k] - centre[k]) / sd));
-        }
         let mut j = Mat::<f64>::zeros(r.len(), p);
         for (row, v) in blocks.iter().flat_map(|b| b.1.chunks(p)).enumerate() {
             for (k, v) in v.iter().enumerate() {
@@ -577,12 +555,6 @@ impl Problem<'_> {
         }
         for (k, sd) in prior_sd.iter().enumerate() {
             j[(data_rows + k, n_law + k)] = 1.0 / sd;
-        }
-        if let Some((_, sd)) = &self.law_prior {
-            let first = data_rows + prior_sd.len();
-            for k in 0..n_law {
-                j[(first + k, k)] = 1.0 / sd;
-            }
         }
         Some((r, j))
     }
