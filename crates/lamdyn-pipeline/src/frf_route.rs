@@ -123,10 +123,9 @@ pub fn reasons(modes: &[Mode], modal: &[CorePoint]) -> Vec<WhyFrfFit> {
 /// ([`lamdyn_layered::convergence::ConvergedMode`]); a level whose element size is r times the
 /// coarsest's misses it by ln c = Re(ln c₀) r^p + i Im(ln c₀) r^q, p and q the mode's observed
 /// orders of Re λ and Im λ (the error of G* follows the eigenvalue's, to first order), at least
-/// the element's asymptotic 4: on the roof on foam blocks the coarsest 12 × 12 level was 40 %
-/// low in G' at the first mode, and its observed order (about 3) scaled that to +4.4 % at
-/// 28 × 28, where the fit needed about +1 %; the difference to the observed order's correction
-/// is part of the uncertainty.
+/// the element's asymptotic 4 (a pre-asymptotic observed order scales a large coarsest error
+/// into too large a correction: docs/fit.md); the difference to the observed order's
+/// correction is part of the uncertainty.
 /// The correction applied is a straight line in ln f through the modes' ln c, fitted by
 /// Theil–Sen (the median of the pairwise slopes, then the median intercept [Sen 1968]: one
 /// mode the pole route matched to the wrong model mode does not bend it), held beyond the

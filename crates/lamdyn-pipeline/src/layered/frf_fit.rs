@@ -47,7 +47,7 @@ pub struct FrfFitInput<'a> {
 
 /// Lines the fit keeps per half-power half-width ζf of the narrowest identified mode: a damped
 /// part's 1 Hz lines over resonances 30 Hz wide carry the same information as every seventh
-/// of them, at a seventh of the cost (each line is one LU).
+/// of them at a seventh of the cost (each line is one LU; docs/fit.md).
 pub const LINES_PER_HALF_WIDTH: f64 = 4.0;
 
 /// Every how many lines the fit keeps: the narrowest half-width over [`LINES_PER_HALF_WIDTH`]
@@ -347,9 +347,9 @@ fn basis_moduli(setup: &LayeredSetup, input: &FrfFitInput) -> (f64, Vec<f64>) {
 
 /// The inputs fitted beside the law: those with a prior above zero and below the law's wide
 /// prior, the supports' only where there are supports. An input known more loosely (the
-/// supports' 20–30 % by default) is held at the job's value: fitted beside the law on the
-/// supported roof of `examples/supported-close-pair.toml` it kept the iteration from settling
-/// in 60 iterations, where holding it gave the core within 1.3 % (G') and 2.7 % (η).
+/// supports' 20–30 % by default) is held at the job's value: fitted beside the law it kept the
+/// iteration from settling on the supported roof of `examples/supported-close-pair.toml`
+/// (docs/fit.md).
 fn input_priors(setup: &LayeredSetup) -> Vec<InputPrior> {
     let wide = setup.tuning.law.wide_prior;
     Input::ALL
