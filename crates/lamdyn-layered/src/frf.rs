@@ -249,28 +249,41 @@ impl ObservedModel {
                 inputs.len()
             )));
         }
+        let at = (omega, core_scale);
         let mut z = self.model.dynamic_stiffness_matrix(omega, core_scale);
-        // ∂Z/∂s = K_c + Σ f(δ_k) ∂K_c/∂ln θ_k.
+        // Z += Σ f(δ_k) ∂Z/∂ln θ_k and ∂Z/∂s = K_c + Σ f(δ_k) ∂K_c/∂ln θ_k; the inputs'
+        // derivatives ∂H/∂δ_k = −C Z⁻¹ f'(δ_k) (∂Z/∂ln θ_k) q, each without its matrix formed.
         let mut core = None::<Mat<c64>>;
-        let mut dz: Vec<Mat<c64>> = Vec::with_capacity(deltas.len());
+        let mut slopes: Vec<f64> = Vec::with_capacity(deltas.len());
         for (k, (&input, &delta)) in inputs.iter().zip(deltas).enumerate() {
-            let d = self.model.input_derivative_matrix(k, omega, core_scale);
             let (f, df) = input_change(input, delta);
-            let scaled = |a: f64| Mat::from_fn(d.nrows(), d.ncols(), |i, j| d[(i, j)] * a);
-            z += scaled(f);
-            dz.push(scaled(df));
+            slopes.push(df);
+            if f == 0.0 {
+                continue;
+            }
+            self.model.add_input_derivative(k, at, f, &mut z);
             let dc = self.model.input_core_derivative(k);
             let c = core.get_or_insert_with(|| self.core.clone());
-            *c += Mat::from_fn(dc.nrows(), dc.ncols(), |i, j| c64::new(f * dc[(i, j)], 0.0));
+            for j in 0..dc.ncols() {
+                for i in 0..dc.nrows() {
+                    c[(i, j)] += c64::new(f * dc[(i, j)], 0.0);
+                }
+            }
         }
         let lu = z.partial_piv_lu();
         let q = lu.solve(&self.loads);
         let dq = lu.solve(core.as_ref().unwrap_or(&self.core) * &q);
         let h = &self.sensors * &q;
         let dh_ds = -(&self.sensors * &dq);
-        let dh_dinputs: Vec<Mat<c64>> = dz
+        let dh_dinputs: Vec<Mat<c64>> = slopes
             .iter()
-            .map(|d| -(&self.sensors * lu.solve(d * &q)))
+            .enumerate()
+            .map(|(k, &df)| {
+                let dz_q = self.model.input_derivative_times(k, at, &q);
+                let dh = &self.sensors * lu.solve(&dz_q);
+                let scale = c64::new(-df, 0.0);
+                Mat::from_fn(dh.nrows(), dh.ncols(), |i, j| dh[(i, j)] * scale)
+            })
             .collect();
         let finite = |x: &Mat<c64>| {
             (0..x.nrows()).all(|i| {

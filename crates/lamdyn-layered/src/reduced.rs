@@ -373,25 +373,63 @@ impl ReducedModel {
         &self.derivatives[k].dk_core
     }
 
-    /// ∂(Vᵀ Z V)/∂ln θ of the `k`-th input at ω (rad/s) and core scale s:
+    /// Entry (i, j) of ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s:
     /// (1 + iη_e) ∂K_e + s ∂K_c − ω² ∂M + ∂K_s + iω ∂C_s.
-    pub(crate) fn input_derivative_matrix(
+    fn input_derivative(
         &self,
         k: usize,
+        i: usize,
+        j: usize,
         omega: f64,
-        core_scale: Complex64,
-    ) -> Mat<c64> {
+        s: Complex64,
+    ) -> Complex64 {
         let d = &self.derivatives[k];
+        Complex64::new(1.0, self.elastic_loss) * d.dk_elastic[(i, j)]
+            + s * d.dk_core[(i, j)]
+            + Complex64::new(
+                d.dk_supports[(i, j)] - omega * omega * d.dmass[(i, j)],
+                omega * d.dc_supports[(i, j)],
+            )
+    }
+
+    /// z += f ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s, entry by entry: the sum
+    /// without the derivative matrix formed (a line of the FRF fit adds one per input).
+    pub(crate) fn add_input_derivative(
+        &self,
+        k: usize,
+        (omega, core_scale): (f64, Complex64),
+        f: f64,
+        z: &mut Mat<c64>,
+    ) {
         let m = self.size();
-        Mat::from_fn(m, m, |i, j| {
-            let v = Complex64::new(1.0, self.elastic_loss) * d.dk_elastic[(i, j)]
-                + core_scale * d.dk_core[(i, j)]
-                + Complex64::new(
-                    d.dk_supports[(i, j)] - omega * omega * d.dmass[(i, j)],
-                    omega * d.dc_supports[(i, j)],
-                );
-            c64::new(v.re, v.im)
-        })
+        for j in 0..m {
+            for i in 0..m {
+                let v = f * self.input_derivative(k, i, j, omega, core_scale);
+                z[(i, j)] += c64::new(v.re, v.im);
+            }
+        }
+    }
+
+    /// ∂(Vᵀ Z V)/∂ln θ_k · x at ω (rad/s) and core scale s for a block x (m × r), without the
+    /// derivative matrix formed.
+    pub(crate) fn input_derivative_times(
+        &self,
+        k: usize,
+        (omega, core_scale): (f64, Complex64),
+        x: &Mat<c64>,
+    ) -> Mat<c64> {
+        let m = self.size();
+        let mut y = Mat::<c64>::zeros(m, x.ncols());
+        for c in 0..x.ncols() {
+            for j in 0..m {
+                let xj = Complex64::new(x[(j, c)].re, x[(j, c)].im);
+                for i in 0..m {
+                    let v = self.input_derivative(k, i, j, omega, core_scale) * xj;
+                    y[(i, c)] += c64::new(v.re, v.im);
+                }
+            }
+        }
+        y
     }
 
     /// Vᵀ K_c V at the assembled core modulus: ∂(Vᵀ Z V)/∂s.
