@@ -44,6 +44,21 @@ impl FrfLaw {
         Self::GeneralizedMaxwell { taus }
     }
 
+    /// The same family on relaxation times moved by half a step of its grid (a generalized
+    /// Maxwell law; `None` for the fractional Zener law, which has no grid): its fit beside this
+    /// one shows what the grid's placement alone changes in the law ([`super::FrfFit::at`]).
+    pub fn shifted_half_step(&self) -> Option<Self> {
+        match self {
+            Self::GeneralizedMaxwell { taus } if taus.len() > 1 => {
+                let half = (taus[1] / taus[0]).sqrt();
+                Some(Self::GeneralizedMaxwell {
+                    taus: taus.iter().map(|t| t * half).collect(),
+                })
+            }
+            _ => None,
+        }
+    }
+
     /// The law's name as in job files.
     pub fn name(&self) -> &'static str {
         match self {

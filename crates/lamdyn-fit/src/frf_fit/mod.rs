@@ -30,7 +30,11 @@
 //! Bartlett's formula for the variance of a mean]): a structured residual (a model error, a
 //! missed mode) leaves fewer independent lines than it counts, and the bands widen with it. A
 //! relative discretization error (the mesh ladder's estimate) is added to the bands of ln G'
-//! and ln η in quadrature. A law parameter whose 95 % interval spans more than a decade either
+//! and ln η in quadrature, and so is the grid's own error: a generalized Maxwell law is fitted
+//! again on its relaxation times moved by half a step, from the first law's curve, and the two
+//! laws' difference counts as two draws of it ([`FrfFit::grid_spread`]): a true law between
+//! what one grid follows ripples about each placement in its own way, a bias of the law's form
+//! that no noise model sees. A law parameter whose 95 % interval spans more than a decade either
 //! side is reported as not determined by the data.
 
 mod data;
@@ -146,7 +150,8 @@ pub struct FrfFitSettings {
     pub dynamic_range_db: f64,
     /// Prior standard deviation s_g of each reference's ln gain.
     pub gain_prior_sd: f64,
-    /// Starts taken from the constant-modulus grid (when no start curve is given).
+    /// Starts taken from the constant-modulus grid beside the start curve; 0 with a start
+    /// curve: that curve alone (at least one grid start without a curve).
     pub starts: usize,
     /// Lines of the band the grid is evaluated on (evenly thinned).
     pub grid_lines: usize,
@@ -156,11 +161,16 @@ pub struct FrfFitSettings {
     pub discretization_rel: [f64; 2],
     /// The model's inputs fitted beside the law under their priors (none: held as built).
     pub inputs: Vec<InputPrior>,
+    /// Fit the law again on its grid moved by half a step, from the first law's curve, and put
+    /// the two laws' difference in the bands ([`FrfFit::sibling`]; a generalized Maxwell law
+    /// only).
+    pub grid_spread: bool,
 }
 
 impl FrfFitSettings {
     /// Defaults over `band_hz`: 40 dB dynamic range, a 10 % gain prior, two starts from 48 grid
-    /// lines, at most 60 iterations to a relative cost change of 1e-8, no discretization error.
+    /// lines, at most 60 iterations to a relative cost change of 1e-8, no discretization error,
+    /// the grid's spread in the bands.
     pub fn over(band_hz: [f64; 2]) -> Self {
         Self {
             band_hz,
@@ -175,6 +185,7 @@ impl FrfFitSettings {
             },
             discretization_rel: [0.0, 0.0],
             inputs: Vec::new(),
+            grid_spread: true,
         }
     }
 }
@@ -226,6 +237,11 @@ pub struct FrfFit {
     pub cost: [f64; 2],
     /// RMS of the weighted residual relative to the weighted data.
     pub relative_rms: f64,
+    /// The data's misfit S_data = Σ |(g Q H − D)/σ|² at the answer, on the data's own weights
+    /// (the priors' rows left out): what [`compare_laws`] weighs.
+    pub data_misfit: f64,
+    /// Real residuals N fitted (two per line, sensor and reference).
+    pub residuals: usize,
     /// Iterations of the last pass.
     pub iterations: usize,
     /// Residual evaluations of the last pass.
@@ -244,6 +260,14 @@ pub struct FrfFit {
     pub discretization_rel: [f64; 2],
     /// The inputs fitted beside the law.
     pub inputs: Vec<FittedInput>,
+    /// The same family on its relaxation grid moved by half a step, fitted to the same FRFs
+    /// from this law's curve ([`FrfFitSettings::grid_spread`]): law and parameters. Where the
+    /// true law lies between what a grid can follow, each placement ripples about it in its own
+    /// way; the two laws' difference is an error of the law's form that the covariance does not
+    /// see ([`FrfFit::at`]).
+    pub sibling: Option<(FrfLaw, Vec<f64>)>,
+    /// Why the sibling could not be fitted (the bands then lack the grid's part).
+    pub sibling_failed: Option<String>,
 }
 
 impl FrfFit {
@@ -268,8 +292,11 @@ impl FrfFit {
             }
             v.max(0.0)
         };
-        let sd_storage = (var(&d_ln_storage) + self.discretization_rel[0].powi(2)).sqrt();
-        let sd_eta = (var(&d_ln_eta) + self.discretization_rel[1].powi(2)).sqrt();
+        let [grid_storage, grid_eta] = self.grid_spread(w);
+        let sd_storage =
+            (var(&d_ln_storage) + self.discretization_rel[0].powi(2) + grid_storage.powi(2)).sqrt();
+        let sd_eta =
+            (var(&d_ln_eta) + self.discretization_rel[1].powi(2) + grid_eta.powi(2)).sqrt();
         let band = |x: f64, sd: f64| [x * (-1.96 * sd).exp(), x * (1.96 * sd).exp()];
         let eta = g.im / g.re;
         FrfLawPoint {
@@ -281,10 +308,29 @@ impl FrfFit {
         }
     }
 
+    /// The grid's part of the bands at ω: the sd of ln G' and ln η over the two grid placements,
+    /// |ln a − ln b|/√2 (two draws of the grid's error; zeros without a [`FrfFit::sibling`]).
+    pub fn grid_spread(&self, omega: f64) -> [f64; 2] {
+        let Some((law, u)) = &self.sibling else {
+            return [0.0, 0.0];
+        };
+        let (a, b) = (self.law.modulus(&self.u, omega), law.modulus(u, omega));
+        [
+            (a.re / b.re).ln().abs() / std::f64::consts::SQRT_2,
+            ((a.im / a.re) / (b.im / b.re)).ln().abs() / std::f64::consts::SQRT_2,
+        ]
+    }
+
     /// One line: how the fit went.
     pub fn describe(&self) -> String {
+        let grid = match &self.sibling_failed {
+            Some(e) => format!(
+                "; the grid moved by half a step did not fit ({e}): the bands lack the grid's spread"
+            ),
+            None => String::new(),
+        };
         format!(
-            "{} fitted to {} lines in {:.1}–{:.1} Hz: misfit {:.3e} → {:.3e} (relative RMS {:.1} %), {} iterations, noise scale {:.3}, correlation inflation {:.1}",
+            "{} fitted to {} lines in {:.1}–{:.1} Hz: misfit {:.3e} → {:.3e} (relative RMS {:.1} %), {} iterations in the last pass, noise scale {:.3}, correlation inflation {:.1}{grid}, {} iterations in all",
             self.law.name(),
             self.lines,
             self.band_hz[0],
@@ -294,7 +340,8 @@ impl FrfFit {
             100.0 * self.relative_rms,
             self.iterations,
             self.noise_scale,
-            self.inflation
+            self.inflation,
+            self.work[0]
         )
     }
 }
@@ -398,7 +445,90 @@ pub fn fit_core_to_frfs(
     }
     let mut fit = problem.conclude(run, data_scale, settings)?;
     fit.work = work;
+    if settings.grid_spread
+        && let Some(shifted) = fit.law.shifted_half_step()
+    {
+        let curve = |w: f64| fit.modulus(w / (2.0 * std::f64::consts::PI));
+        let alone = FrfFitSettings {
+            starts: 0,
+            grid_spread: false,
+            ..settings.clone()
+        };
+        match fit_core_to_frfs(
+            model,
+            set,
+            shifted,
+            assembled_modulus_pa,
+            Some(&curve),
+            &alone,
+        ) {
+            Ok(sibling) => {
+                fit.work = [fit.work[0] + sibling.work[0], fit.work[1] + sibling.work[1]];
+                fit.sibling = Some((sibling.law, sibling.u));
+            }
+            Err(e) => fit.sibling_failed = Some(e.to_string()),
+        }
+    }
     Ok(fit)
+}
+
+/// How laws fitted to the same FRFs compare ([`compare_laws`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LawComparison {
+    /// Index of the law kept: the lowest criterion.
+    pub chosen: usize,
+    /// Each fit's corrected Akaike criterion (lower is better).
+    pub akaike: Vec<f64>,
+    /// The effective number of independent residuals N/τ the criteria were taken on.
+    pub effective_residuals: f64,
+}
+
+/// Compares fits of different laws to the same FRFs by the corrected Akaike criterion
+/// [Hurvich & Tsai 1989] of a Gaussian misfit with unknown scale,
+///
+///   AICc = n ln(S_data/N) + 2p + 2p(p + 1)/(n − p − 1),  n = N/τ,
+///
+/// p the law's parameters (the inputs and gains are common to all), N the residuals and τ the
+/// largest of the fits' correlation inflations: residuals correlated along frequency count as
+/// n independent ones, so a law's extra terms must buy a drop of the misfit that the
+/// independent lines would show, not one the correlated residual counts many times over.
+///
+/// # Errors
+/// No fits, or fits of different data (their residual counts differ).
+pub fn compare_laws(fits: &[&FrfFit]) -> Result<LawComparison, FitError> {
+    let Some(first) = fits.first() else {
+        return Err(inconsistent(CONTEXT, "no fits to compare".into()));
+    };
+    if let Some(other) = fits.iter().find(|f| f.residuals != first.residuals) {
+        return Err(inconsistent(
+            CONTEXT,
+            format!(
+                "fits of different data cannot be compared: {} and {} residuals",
+                first.residuals, other.residuals
+            ),
+        ));
+    }
+    let tau = fits.iter().map(|f| f.inflation).fold(1.0, f64::max);
+    let n_total = first.residuals as f64;
+    let n = n_total / tau;
+    let akaike: Vec<f64> = fits
+        .iter()
+        .map(|f| {
+            let p = f.law.n_params() as f64;
+            if n <= p + 1.0 || f.data_misfit.is_nan() || f.data_misfit <= 0.0 {
+                return f64::INFINITY;
+            }
+            n * (f.data_misfit / n_total).ln() + 2.0 * p + 2.0 * p * (p + 1.0) / (n - p - 1.0)
+        })
+        .collect();
+    let chosen = (0..fits.len())
+        .min_by(|&a, &b| akaike[a].total_cmp(&akaike[b]))
+        .unwrap_or(0);
+    Ok(LawComparison {
+        chosen,
+        akaike,
+        effective_residuals: n,
+    })
 }
 
 /// Each prior's input as (its index among the model's inputs, its prior sd).
@@ -519,11 +649,16 @@ impl Problem<'_> {
     /// measurement, and where the misfit's rounding begins).
     fn data_noise_scale(&self, run: &LmOutcome) -> f64 {
         let n = self.data.n_residuals();
-        let s_data: f64 = run.residuals[..n].iter().map(|v| v * v).sum::<f64>()
-            / (self.data_weight * self.data_weight);
-        (s_data / n.saturating_sub(self.n_params()).max(1) as f64)
+        (self.data_misfit(run) / n.saturating_sub(self.n_params()).max(1) as f64)
             .sqrt()
             .max(1e-6)
+    }
+
+    /// S_data of `run`'s data rows on the data's own weights (the priors' rows left out).
+    fn data_misfit(&self, run: &LmOutcome) -> f64 {
+        let n = self.data.n_residuals();
+        run.residuals[..n].iter().map(|v| v * v).sum::<f64>()
+            / (self.data_weight * self.data_weight)
     }
 
     /// Residuals over every line plus the gains' prior rows, and their Jacobian.
@@ -633,6 +768,9 @@ impl Problem<'_> {
             .map(|curve| with_gains(self.law.closest_to(&self.data.omegas, curve)))
             .into_iter()
             .collect();
+        if settings.starts == 0 && !given.is_empty() {
+            return Ok(given);
+        }
         let n_l = self.data.n_lines();
         let step = n_l.div_ceil(settings.grid_lines.max(1)).max(1);
         let lines: Vec<usize> = (0..n_l).step_by(step).collect();
@@ -760,6 +898,8 @@ impl Problem<'_> {
             cost: [run.initial_cost, run.cost],
             relative_rms: self.data_noise_scale(&run)
                 * (self.data.n_residuals() as f64 / data_norm).sqrt(),
+            data_misfit: self.data_misfit(&run),
+            residuals: self.data.n_residuals(),
             iterations: run.iterations,
             evaluations: run.evaluations,
             work: [0, 0],
@@ -767,6 +907,8 @@ impl Problem<'_> {
             band_hz: settings.band_hz,
             assembled_modulus_pa: self.g_a,
             discretization_rel: settings.discretization_rel,
+            sibling: None,
+            sibling_failed: None,
             u,
         })
     }
