@@ -16,7 +16,7 @@
 
 use crate::chain::CorePoint;
 use lamdyn_ema::identify::Mode;
-use lamdyn_fit::frf_fit::{FrfFit, FrfLawPoint};
+use lamdyn_fit::frf_fit::{FrfFit, FrfLawPoint, LawComparison};
 use num_complex::Complex64;
 
 /// Modal damping ratio above which the pole route is not trusted (module docs): where the
@@ -290,6 +290,61 @@ pub struct FrfRoute {
     pub curves: Vec<FrfCurve>,
     /// Seconds of the basis build and of the fit.
     pub times_s: [f64; 2],
+    /// The laws fitted and which one was kept (`inverse.core_law = "auto"`).
+    pub laws: LawsCompared,
+}
+
+/// The laws the FRF fit tried and the one it kept.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LawsCompared {
+    /// One law, as the job asked.
+    One,
+    /// Several fitted to the same lines, the lowest corrected Akaike criterion kept
+    /// ([`lamdyn_fit::frf_fit::compare_laws`]).
+    Compared {
+        /// Each law's name, in the comparison's order.
+        names: Vec<&'static str>,
+        /// The comparison.
+        comparison: LawComparison,
+        /// Seconds the laws after the first took.
+        seconds: f64,
+    },
+    /// The second law's fit failed; the first is kept.
+    OtherFailed {
+        /// The law that failed.
+        name: &'static str,
+        /// Why.
+        error: String,
+    },
+}
+
+impl LawsCompared {
+    /// One clause for the run's line (empty for one law).
+    pub fn describe(&self) -> String {
+        match self {
+            Self::One => String::new(),
+            Self::Compared {
+                names,
+                comparison,
+                seconds,
+            } => {
+                let scores: Vec<String> = names
+                    .iter()
+                    .zip(&comparison.akaike)
+                    .map(|(n, a)| format!("{n} {a:.1}"))
+                    .collect();
+                format!(
+                    "; {} kept by the corrected Akaike criterion ({} on {:.0} independent residuals; the comparison took {seconds:.1} s)",
+                    names[comparison.chosen],
+                    scores.join(", "),
+                    comparison.effective_residuals
+                )
+            }
+            Self::OtherFailed { name, error } => {
+                format!("; {name} also tried, its fit failed: {error}")
+            }
+        }
+    }
 }
 
 impl FrfRoute {
@@ -402,8 +457,9 @@ impl FrfOutcome {
                     )
                 };
                 format!(
-                    "{role}; {}; model {}; {correction}; basis {:.1} s, fit {:.1} s",
+                    "{role}; {}{}; model {}; {correction}; basis {:.1} s, fit {:.1} s",
                     r.fit.describe(),
+                    r.laws.describe(),
                     r.model_line,
                     r.times_s[0],
                     r.times_s[1]

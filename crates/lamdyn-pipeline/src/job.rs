@@ -295,7 +295,8 @@ pub struct InverseOptions {
     /// The core's law fitted to all layered modes at once with the faces' inputs shared
     /// (lamdyn_fit::joint): `auto` (default: `fractional_zener` or `generalized_maxwell`, whichever
     /// the modes favour by Akaike's criterion), `fractional_zener`, `generalized_maxwell`,
-    /// `per_mode` or `none`.
+    /// `per_mode` or `none`. The FRF fit takes the same choice; where it names no law
+    /// (`per_mode`, `none`) the FRF fit chooses as under `auto`.
     #[serde(default)]
     pub core_law: CoreLawChoice,
     /// The core's law fitted to the measured FRFs through the layered model

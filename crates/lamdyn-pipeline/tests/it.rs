@@ -425,6 +425,13 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
             && line.contains("above inverse.layered_max_dofs = 5000"),
         "{line}"
     );
+    // The modes without a layered core call for the FRF fit, which refuses the same cap at
+    // once rather than build the model the ladder refused.
+    let frf = r.frf.describe();
+    assert!(
+        frf.starts_with("failed") && frf.contains("above inverse.layered_max_dofs = 5000"),
+        "{frf}"
+    );
     for p in &r.modal {
         let why = p.layered.as_ref().and_then(|l| l.as_ref().err());
         assert!(

@@ -13,8 +13,11 @@ use super::setup::{LayeredSetup, basis_modulus, input_rel_sd};
 use crate::Reporter;
 use crate::chain::CorePoint;
 use crate::error::{Context, Result};
-use crate::frf_route::{DiscretizationCorrection, FrfCurve, FrfRoute, WhyFrfFit};
-use lamdyn_fit::frf_fit::{FrfFit, FrfFitSettings, FrfLaw, InputPrior, fit_core_to_frfs};
+use crate::frf_route::{DiscretizationCorrection, FrfCurve, FrfRoute, LawsCompared, WhyFrfFit};
+use crate::job::CoreLawChoice;
+use lamdyn_fit::frf_fit::{
+    FrfFit, FrfFitSettings, FrfLaw, InputPrior, compare_laws, fit_core_to_frfs,
+};
 use lamdyn_fit::joint::CoreLawFit;
 use lamdyn_frf::{Channel, FrfSet};
 use lamdyn_layered::frf::{FrfBasis, MeasuredPoint, ObservedModel};
@@ -111,13 +114,7 @@ pub fn fit_to_frfs(
     why: Vec<WhyFrfFit>,
     spinner: &dyn Reporter,
 ) -> Result<FrfRoute> {
-    let level = input
-        .levels
-        .iter()
-        .filter(|l| l.1 <= FRF_MAX_DOFS)
-        .map(|l| l.0)
-        .next_back()
-        .unwrap_or(setup.start);
+    let level = fit_level(setup, input.levels)?;
     let (mut g_ref, mut ratios) = basis_moduli(setup, input);
     let f = input.set.freqs_hz();
     let spacing = if f.len() > 1 { f[1] - f[0] } else { 0.0 };
@@ -152,6 +149,9 @@ pub fn fit_to_frfs(
         let [lo, hi] = storage_range(&once.fit);
         let held = lo >= 0.8 * ratios[0] * g_ref && hi <= 1.25 * ratios[1] * g_ref;
         if held || round == MAX_RECENTRES {
+            let (fit, laws, other_s) = other_law(setup.core_law, &once, input.set, spinner);
+            times[1] += other_s;
+            let once = FitOnce { fit, ..once };
             let curves = shown_curves(&once.model, &once.fit, full)?;
             let inputs: Vec<&str> = once.model.inputs().iter().map(|i| i.name()).collect();
             let recentred = if round > 0 {
@@ -188,6 +188,7 @@ pub fn fit_to_frfs(
                 ),
                 curves,
                 times_s: times,
+                laws,
             });
         }
         round += 1;
@@ -201,6 +202,37 @@ pub fn fit_to_frfs(
     }
 }
 
+/// The level the fit's model is built on: the finest of the ladder's `levels` up to
+/// [`FRF_MAX_DOFS`] and `inverse.layered_max_dofs`; without levels (no ladder was built), the
+/// coarsest, if it is within `inverse.layered_max_dofs`.
+///
+/// # Errors
+/// The coarsest level above `inverse.layered_max_dofs` (the ladder refused it too), or a plan
+/// that cannot be meshed.
+fn fit_level(setup: &LayeredSetup, levels: &[([usize; 2], usize)]) -> Result<[usize; 2]> {
+    let cap = FRF_MAX_DOFS.min(setup.ladder.max_dofs);
+    if let Some(level) = levels
+        .iter()
+        .filter(|l| l.1 <= cap)
+        .map(|l| l.0)
+        .next_back()
+    {
+        return Ok(level);
+    }
+    let dofs = setup
+        .plate
+        .dofs(setup.start)
+        .context("cannot mesh the FRF fit's layered model")?;
+    if dofs > setup.ladder.max_dofs {
+        return Err(crate::err!(
+            "the layered model's coarsest mesh ({}) has {dofs} dofs, above inverse.layered_max_dofs = {}: raise it to run the FRF fit",
+            setup.plate.plan.level_label(setup.start),
+            setup.ladder.max_dofs
+        ));
+    }
+    Ok(setup.start)
+}
+
 /// Times the basis is built again about the fitted law ([`fit_to_frfs`]).
 pub const MAX_RECENTRES: usize = 2;
 
@@ -208,8 +240,108 @@ pub const MAX_RECENTRES: usize = 2;
 struct FitOnce {
     model: ObservedModel,
     fit: FrfFit,
+    /// The fit's settings (its band, the inputs' priors).
+    settings: FrfFitSettings,
+    /// The first law's failure where the fallback law was fitted instead.
+    first_failed: Option<LawsCompared>,
     /// Seconds of the build and of the fit.
     times_s: [f64; 2],
+}
+
+/// The law the fit starts with: the fractional Zener law where the job asks for it, else the
+/// generalized Maxwell law over the band (it follows any smooth law; `per_mode` and `none`,
+/// which name no law, take it too).
+fn first_law(choice: CoreLawChoice, band_hz: [f64; 2]) -> FrfLaw {
+    match choice {
+        CoreLawChoice::FractionalZener => FrfLaw::FractionalZener,
+        _ => FrfLaw::generalized_maxwell_over(band_hz[0], band_hz[1]),
+    }
+}
+
+/// Whether the job leaves the FRF fit's law open: `auto`, and `per_mode` and `none`, which
+/// name no law.
+fn law_is_open(choice: CoreLawChoice) -> bool {
+    !matches!(
+        choice,
+        CoreLawChoice::FractionalZener | CoreLawChoice::GeneralizedMaxwell
+    )
+}
+
+/// Where the job leaves the law open (`auto`, and `per_mode` or `none`, which name none): the
+/// fractional Zener law fitted on the same model and lines from the first fit's curve alone,
+/// and the law with the lower corrected Akaike criterion kept
+/// ([`lamdyn_fit::frf_fit::compare_laws`]). Returns the fit kept, the comparison, and the
+/// seconds the second fit took. A second fit that fails leaves the first, and says why.
+fn other_law(
+    choice: CoreLawChoice,
+    once: &FitOnce,
+    set: &FrfSet,
+    spinner: &dyn Reporter,
+) -> (FrfFit, LawsCompared, f64) {
+    if let Some(failed) = &once.first_failed {
+        return (once.fit.clone(), failed.clone(), 0.0);
+    }
+    if !law_is_open(choice) {
+        return (once.fit.clone(), LawsCompared::One, 0.0);
+    }
+    let law = FrfLaw::FractionalZener;
+    spinner.stage(&format!(
+        "FRF fit: {} from the {} curve, to compare",
+        law.name(),
+        once.fit.law.name()
+    ));
+    let t = Instant::now();
+    let first = &once.fit;
+    let curve = |w: f64| first.modulus(w / (2.0 * PI));
+    let alone = FrfFitSettings {
+        starts: 0,
+        ..once.settings.clone()
+    };
+    let name = law.name();
+    let other = fit_core_to_frfs(
+        &once.model,
+        set,
+        law,
+        first.assembled_modulus_pa,
+        Some(&curve),
+        &alone,
+    );
+    let seconds = t.elapsed().as_secs_f64();
+    let other = match other {
+        Ok(f) => f,
+        Err(e) => {
+            let error = e.to_string();
+            return (
+                first.clone(),
+                LawsCompared::OtherFailed { name, error },
+                seconds,
+            );
+        }
+    };
+    match compare_laws(&[first, &other]) {
+        Ok(comparison) => {
+            let names = vec![first.law.name(), other.law.name()];
+            let kept = if comparison.chosen == 0 {
+                first.clone()
+            } else {
+                other
+            };
+            let compared = LawsCompared::Compared {
+                names,
+                comparison,
+                seconds,
+            };
+            (kept, compared, seconds)
+        }
+        Err(e) => (
+            first.clone(),
+            LawsCompared::OtherFailed {
+                name,
+                error: e.to_string(),
+            },
+            seconds,
+        ),
+    }
 }
 
 /// Builds the model on `level` with its basis at `g_ref` × `ratios` (with more modes where the
@@ -276,7 +408,7 @@ fn fit_once(
             input.band_hz[1]
         ));
     }
-    let law = FrfLaw::generalized_maxwell_over(band_hz[0], band_hz[1]);
+    let law = first_law(setup.core_law, band_hz);
     let mut settings = FrfFitSettings::over(band_hz);
     settings.inputs = priors;
     spinner.stage(&format!(
@@ -287,10 +419,37 @@ fn fit_once(
         band_hz[1]
     ));
     let t = Instant::now();
-    let fit = fit_core_to_frfs(&model, set, law, g_ref, start, &settings)?;
+    let first_name = law.name();
+    let (fit, first_failed) = match fit_core_to_frfs(&model, set, law, g_ref, start, &settings) {
+        Ok(fit) => (fit, None),
+        Err(e) if law_is_open(setup.core_law) => {
+            // The Prony series's slowest and fastest terms can drift where the band does not
+            // see them; the four-parameter law is the fallback, from the same starts.
+            let failed = LawsCompared::OtherFailed {
+                name: first_name,
+                error: e.to_string(),
+            };
+            spinner.stage(&format!(
+                "FRF fit: {first_name} did not settle; fractional_zener"
+            ));
+            let fit = fit_core_to_frfs(
+                &model,
+                set,
+                FrfLaw::FractionalZener,
+                g_ref,
+                start,
+                &settings,
+            )
+            .map_err(|fz| crate::err!("{e}; the fractional Zener law neither: {fz}"))?;
+            (fit, Some(failed))
+        }
+        Err(e) => return Err(e.into()),
+    };
     Ok(FitOnce {
         model,
         fit,
+        settings,
+        first_failed,
         times_s: [build_s, t.elapsed().as_secs_f64()],
     })
 }

@@ -102,7 +102,8 @@ fn demo_finishes_with_stderr_on_a_terminal() {
 }
 
 /// A run where no inverse finds a core at some mode (here faces written ten times
-/// too stiff) used to exit 0; it exits 1 and names the modes.
+/// too stiff) used to exit 0; it exits 1 and names the modes. The FRF fit, which the rule would
+/// call for at a mode without a core, is switched off: this is the pole routes' verdict.
 #[test]
 fn run_exits_1_when_no_inverse_has_a_core_at_a_mode() {
     let dir = temp_dir("no-core");
@@ -113,7 +114,9 @@ fn run_exits_1_when_no_inverse_has_a_core_at_a_mode() {
         "{}{}",
         &text[..at],
         text[at..].replace("young_pa = 70000000000.0", "young_pa = 700000000000.0")
-    );
+    )
+    .replace("[inverse]\n", "[inverse]\nfrf_fit = \"never\"\n");
+    assert!(stiff.contains("frf_fit = \"never\""), "{stiff}");
     std::fs::write(&job, stiff).unwrap();
     let report = dir.join("stiff");
     let (code, _, err) = run_into(&job, &report, &[]);
