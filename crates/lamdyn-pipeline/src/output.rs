@@ -12,13 +12,16 @@
 //!    no longer produced), never an input and never anything else, and writes the new
 //!    manifest.
 //!
-//! With `--force`, foreign files are kept and lamdyn writes beside them (a foreign file with
-//! the name of one of lamdyn's outputs is replaced), and no earlier file is removed. An input is never written over, with or
-//! without `--force`.
+//! With `--force`, foreign files are kept and lamdyn writes beside them, never over them (a
+//! foreign file with the name of one of lamdyn's outputs is refused, named), and no earlier
+//! file is removed. An input is never written over, with or without `--force`. Inside the
+//! folder no write follows a symbolic link (a linked file or subfolder is refused, named), and a
+//! dangling link given as the folder is refused before any work.
 //!
-//! **Files** ([`write_file`]): a temporary file renamed over the target. A symlink is written
-//! through (its target is replaced, the link stays); a target that is not a regular file (a
-//! device, a FIFO, a folder) is refused, as is an input of the run.
+//! **Files** ([`write_file`]: a single file named by the user, such as `--json FILE`): a
+//! temporary file renamed over the target. A symlink is written through (its target is
+//! replaced, the link stays); a target that is not a regular file (a device, a FIFO, a folder)
+//! is refused, as is an input of the run.
 
 use crate::error::{Context, Result};
 use crate::{bail, err};
@@ -61,6 +64,15 @@ impl OutputDir {
             inputs,
             previous: BTreeSet::new(),
         };
+        if let Ok(link) = std::fs::symlink_metadata(dir)
+            && link.file_type().is_symlink()
+            && std::fs::metadata(dir).is_err()
+        {
+            bail!(
+                "--out '{}' is a symbolic link to nothing: give a folder for the results",
+                dir.display()
+            );
+        }
         match std::fs::metadata(dir) {
             Ok(m) if !m.is_dir() => bail!(
                 "--out '{}' is not a folder: give a folder for the results",
@@ -121,6 +133,42 @@ impl OutputDir {
         Ok(())
     }
 
+    /// Refuses to write `name` (relative, checked) where a file lamdyn did not write stands, or
+    /// through a symbolic link: at `name` itself or at any of its subfolders. `--force` lets
+    /// lamdyn write beside foreign files, never over them; a link in the folder would send the
+    /// write outside it.
+    fn check_owned(&self, name: &str) -> Result<()> {
+        let mut path = self.dir.clone();
+        let parts: Vec<&str> = name.split('/').collect();
+        for (k, part) in parts.iter().enumerate() {
+            path.push(part);
+            let Ok(meta) = std::fs::symlink_metadata(&path) else {
+                return Ok(());
+            };
+            let here = parts[..=k].join("/");
+            if meta.file_type().is_symlink() {
+                bail!(
+                    "cannot write '{name}' in '{}': '{here}' there is a symbolic link, and lamdyn does not write through links in its results folder; remove the link or choose another --out",
+                    self.dir.display()
+                );
+            }
+            let last = k + 1 == parts.len();
+            if last && path.canonicalize().is_ok_and(|c| self.inputs.contains(&c)) {
+                bail!(
+                    "cannot write '{}': it is an input of this run; write the results elsewhere",
+                    path.display()
+                );
+            }
+            if last && !self.previous.contains(name) {
+                bail!(
+                    "cannot write '{name}' in '{}': a file of that name is there that lamdyn did not write; --force lets lamdyn write beside such files, never over them: move it or choose another --out",
+                    self.dir.display()
+                );
+            }
+        }
+        Ok(())
+    }
+
     /// Writes `files` (paths relative to the folder, `/`-separated subfolders allowed): all to
     /// temporary names first, then renamed into place; the previous run's files that are not
     /// written again are removed; the manifest is rewritten.
@@ -141,6 +189,7 @@ impl OutputDir {
                 if !names.insert(name.clone()) {
                     bail!("'{name}' is written twice");
                 }
+                self.check_owned(&name)?;
                 let target = resolve_target(&self.dir.join(&name), &self.inputs)?;
                 if let Some(parent) = target.parent() {
                     std::fs::create_dir_all(parent)
@@ -516,6 +565,65 @@ mod tests {
         }
         let e = write_file(s.path(), b"x", &[]).unwrap_err().to_string();
         assert!(e.contains("(a folder)"), "{e}");
+    }
+
+    /// With --force a user's file named like one of lamdyn's outputs is refused and kept; a
+    /// linked file or subfolder in the folder is refused and its target untouched; a dangling
+    /// link as the folder is refused before any work.
+    #[test]
+    fn force_writes_beside_never_over_and_links_are_not_followed() {
+        let s = TempDir::new("force-links");
+        let dir = s.join("report");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("report.html"), "mine").unwrap();
+        let out = OutputDir::prepare(&dir, &[], true).unwrap();
+        let e = out
+            .write(&files(&[("a.txt", "1"), ("report.html", "<html/>")]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("'report.html'") && e.contains("lamdyn did not write"),
+            "{e}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join("report.html")).unwrap(),
+            "mine"
+        );
+        assert!(
+            !dir.join("a.txt").exists(),
+            "nothing written before the refusal"
+        );
+        let outside = s.join("outside");
+        std::fs::create_dir_all(&outside).unwrap();
+        std::fs::write(outside.join("f.svg"), "theirs").unwrap();
+        std::fs::remove_file(dir.join("report.html")).unwrap();
+        std::os::unix::fs::symlink(&outside, dir.join("figures")).unwrap();
+        let out = OutputDir::prepare(&dir, &[], true).unwrap();
+        let e = out
+            .write(&files(&[("figures/f.svg", "<svg/>")]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'figures' there is a symbolic link"), "{e}");
+        assert_eq!(
+            std::fs::read_to_string(outside.join("f.svg")).unwrap(),
+            "theirs"
+        );
+        std::os::unix::fs::symlink(outside.join("f.svg"), dir.join("table.csv")).unwrap();
+        let e = out
+            .write(&files(&[("table.csv", "x")]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'table.csv' there is a symbolic link"), "{e}");
+        assert_eq!(
+            std::fs::read_to_string(outside.join("f.svg")).unwrap(),
+            "theirs"
+        );
+        let dangling = s.join("gone");
+        std::os::unix::fs::symlink(s.join("nowhere"), &dangling).unwrap();
+        let e = OutputDir::prepare(&dangling, &[], true)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("symbolic link to nothing"), "{e}");
     }
 
     /// Names that leave the folder are refused; a file given as --out is refused.

@@ -57,8 +57,8 @@ pub struct RunArgs {
     /// a folder holding the job's inputs or other files (see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
-    /// input of the run is never written over).
+    /// Write into a results folder that holds files lamdyn did not write: beside them, never
+    /// over them (one named like an output is refused, as is a link), nor over an input.
     #[arg(long)]
     pub force: bool,
     /// Cache folder for the FE model and the EMA [default: `.lamdyn-cache` beside the job].
@@ -84,8 +84,8 @@ pub struct DemoArgs {
     /// Results folder: DIR/input (the simulated test and its job) and DIR/report.
     #[arg(long, value_name = "DIR", default_value = "lamdyn-demo")]
     pub out: PathBuf,
-    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
-    /// input of the run is never written over).
+    /// Write into a results folder that holds files lamdyn did not write: beside them, never
+    /// over them (one named like an output is refused, as is a link), nor over an input.
     #[arg(long)]
     pub force: bool,
     /// A test-bench description (TOML, as `lamdyn simulate`) instead of the built-in roof.
@@ -124,8 +124,8 @@ pub struct SimulateArgs {
     /// lamdyn did not write (see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
-    /// input of the run is never written over).
+    /// Write into a results folder that holds files lamdyn did not write: beside them, never
+    /// over them (one named like an output is refused, as is a link), nor over an input.
     #[arg(long)]
     pub force: bool,
     /// Skip the time signals even if the description has a `[hits]` section.
@@ -207,8 +207,8 @@ pub struct EmaArgs {
     /// files lamdyn did not write (see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
-    /// input of the run is never written over).
+    /// Write into a results folder that holds files lamdyn did not write: beside them, never
+    /// over them (one named like an output is refused, as is a link), nor over an input.
     #[arg(long)]
     pub force: bool,
     /// Band LO,HI in Hz [default: all lines above 0 Hz].
@@ -352,8 +352,8 @@ pub struct UffConvertArgs {
     /// Accept datasets 58 whose data holds fewer points than announced (keeps those found).
     #[arg(long)]
     pub lenient: bool,
-    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
-    /// input of the run is never written over).
+    /// Write into a results folder that holds files lamdyn did not write: beside them, never
+    /// over them (one named like an output is refused, as is a link), nor over an input.
     #[arg(long)]
     pub force: bool,
 }
@@ -392,8 +392,8 @@ pub struct FitArgs {
     /// is computed (never over files lamdyn did not write; see --force).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Write into a results folder that holds files lamdyn did not write (they are kept; an
-    /// input of the run is never written over).
+    /// Write into a results folder that holds files lamdyn did not write: beside them, never
+    /// over them (one named like an output is refused, as is a link), nor over an input.
     #[arg(long)]
     pub force: bool,
     /// Write the example as a job folder (job.toml, model.toml, channels.csv, frf.csv).
