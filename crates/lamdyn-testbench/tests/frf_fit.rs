@@ -4,10 +4,13 @@
 #[path = "common/glass_plate.rs"]
 mod glass_plate;
 
-use glass_plate::{bench, glass_plate, observed};
-use lamdyn_fit::frf_fit::{FrfFit, FrfFitSettings, FrfLaw, fit_core_to_frfs};
+use glass_plate::{bench, glass_plate, layered_plate, observed};
+use lamdyn_fit::frf_fit::{FrfFit, FrfFitSettings, FrfLaw, InputPrior, fit_core_to_frfs};
+use lamdyn_frf::FrfSet;
+use lamdyn_layered::frf::{FrfBasis, MeasuredPoint, ObservedModel};
 use lamdyn_layered::probe::SurfaceProbe;
 use lamdyn_layered::reduced::DirectSolver;
+use lamdyn_layered::sensitivity::Input;
 use lamdyn_testbench::description::Bench;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -103,4 +106,202 @@ fn damped_glass_plate_core_from_frfs() {
     let (e_g, e_eta) = worst_errors(&fit, &truth, &freqs);
     eprintln!("worst G' {:.2} %, eta {:.2} %", 100.0 * e_g, 100.0 * e_eta);
     assert!(e_g < 0.03 && e_eta < 0.05);
+}
+
+/// The channels as points the model is read or driven at.
+fn points(channels: &[lamdyn_frf::Channel]) -> Vec<MeasuredPoint<'_>> {
+    channels
+        .iter()
+        .map(|c| MeasuredPoint {
+            name: &c.name,
+            point_m: c.point_m,
+            direction: c.direction,
+        })
+        .collect()
+}
+
+/// A fixed xorshift sequence of standard normal draws (Box–Muller): the same on every machine.
+struct Normal(u64);
+
+impl Normal {
+    fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn draw(&mut self) -> f64 {
+        let (a, b) = (self.uniform(), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (2.0 * PI * b).cos()
+    }
+}
+
+/// Accelerances of `model` at `freqs` with the core `core(ω)` and the inputs changed by
+/// `deltas`, with complex Gaussian noise of `rel` × each curve's RMS added from `noise`.
+fn noisy_accelerance(
+    model: &ObservedModel,
+    template: &FrfSet,
+    freqs: &[f64],
+    (core, g_ref): (&dyn Fn(f64) -> Complex64, f64),
+    deltas: &[f64],
+    (rel, noise): (f64, &mut Normal),
+) -> FrfSet {
+    let (n_c, n_r) = (model.n_sensors(), model.n_references());
+    let mut curves = vec![Vec::with_capacity(freqs.len()); n_c * n_r];
+    for &f in freqs {
+        let w = 2.0 * PI * f;
+        let h = model
+            .receptance_with_inputs(w, core(w) / g_ref, deltas)
+            .unwrap()
+            .h;
+        for c in 0..n_c {
+            for r in 0..n_r {
+                let v = h[(c, r)];
+                curves[c * n_r + r].push(-w * w * Complex64::new(v.re, v.im));
+            }
+        }
+    }
+    let mut values = Vec::with_capacity(curves.len() * freqs.len());
+    for curve in curves {
+        let power: f64 = curve.iter().map(|v| v.norm_sqr()).sum();
+        let sd = rel * (power / curve.len() as f64).sqrt() / 2f64.sqrt();
+        values.extend(
+            curve
+                .iter()
+                .map(|v| v + sd * Complex64::new(noise.draw(), noise.draw())),
+        );
+    }
+    FrfSet::new(
+        freqs.to_vec(),
+        template.responses().to_vec(),
+        template.references().to_vec(),
+        lamdyn_frf::Quantity::Accelerance,
+        values,
+    )
+    .unwrap()
+}
+
+/// Coverage of the law's 95 % band over 20 seeds on the damped glass plate (modal damping
+/// 4–15 % over 20–150 Hz, overlapping modes, one hammer, 12 triaxial sensors, 1 % noise): each
+/// seed draws new noise and the faces' and core's inputs from their priors (the job's default
+/// tolerances: the faces' modulus 1 %, thicknesses 0.01 mm, densities 0.5 %), the inputs fitted
+/// under those priors beside the law. The truth must lie inside the band at ≥ 90 % of 40
+/// frequencies over the band, for G' and for η.
+///
+/// The data come from the identification's own mesh: this checks the band's noise, inputs and
+/// law form, what the fit's covariance and the grid's spread claim. The mesh's part comes from
+/// the ladder in a run (`frf_route::DiscretizationCorrection`, checked through the chain in the
+/// pipeline's test `damped_modes_take_the_frf_fit`).
+///
+/// Open (issue 44, docs/fit.md "Coverage"): the bands do not hold yet. Measured: 71 % (G') and
+/// 50 % (η) with the grid's spread (70 % and 30 % without it). The misses are the law's form (a
+/// Prony core between the fit's relaxation times: η ripples ±1 % about the truth identically at
+/// every seed) and the core's thickness, which the form's error pulls (fitted +1.3 % where the
+/// truth was −1.2 %, posterior sd 0.66 %): G'/t_c is what the modes see. About 10 s a seed on
+/// 2 cores; run with `cargo test -p lamdyn-testbench --test frf_fit -- --ignored`.
+#[test]
+#[ignore = "open: the FRF fit's bands cover 71 % (G') and 50 % (eta), not 90 % (issue 44); 4-7 min"]
+fn bands_cover_the_truth_over_twenty_seeds() {
+    let t0 = Instant::now();
+    let small = bench(&glass_plate([4, 3], 0.0, [4, 3], None, 5));
+    let template = small.frfs().unwrap();
+    let plate = layered_plate();
+    let priors: Vec<InputPrior> = [
+        (Input::FaceModulus, 0.01),
+        (Input::FaceThickness, 0.01e-3 / 3.0e-3),
+        (Input::CoreThickness, 0.01e-3 / 0.76e-3),
+        (Input::FaceDensity, 0.005),
+        (Input::CoreDensity, 0.005),
+    ]
+    .map(|(input, sd)| InputPrior { input, sd })
+    .to_vec();
+    let inputs: Vec<Input> = priors.iter().map(|p| p.input).collect();
+    let (sensors, references) = (points(template.responses()), points(template.references()));
+    let g_ref = 3.0e6;
+    let basis = FrfBasis {
+        modes: 20,
+        ratios: vec![0.5, 2.0],
+        ..FrfBasis::default()
+    };
+    let model = ObservedModel::build(
+        &plate,
+        [12, 9],
+        g_ref,
+        &basis,
+        (&sensors, &references),
+        &inputs,
+    )
+    .unwrap();
+    eprintln!("model {:.1?}: basis {}", t0.elapsed(), model.basis_size());
+    let band = [20.0, 150.0];
+    let freqs: Vec<f64> = (0..=65).map(|k| band[0] + 2.0 * k as f64).collect();
+    let core = |w: f64| small.core_law.modulus(w);
+    let settings = FrfFitSettings {
+        inputs: priors.clone(),
+        starts: 0,
+        ..FrfFitSettings::over(band)
+    };
+    let law = FrfLaw::generalized_maxwell_over(band[0], band[1]);
+    let probe: Vec<f64> = (0..40).map(|k| 25.0 + 125.0 * k as f64 / 39.0).collect();
+    let (mut covered, mut total) = ([0usize; 2], 0usize);
+    let (mut worst, mut width) = ([0.0f64; 2], [0.0f64; 2]);
+    let t1 = Instant::now();
+    let seeds: u64 = std::env::var("SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    let scale: f64 = std::env::var("INPUT_SCALE")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1.0);
+    for seed in 0..seeds {
+        let mut draws = Normal::new(100 + seed);
+        let truth_inputs: Vec<f64> = priors.iter().map(|p| scale * p.sd * draws.draw()).collect();
+        let data = noisy_accelerance(
+            &model,
+            &template,
+            &freqs,
+            (&core, g_ref),
+            &truth_inputs,
+            (0.01, &mut draws),
+        );
+        // Started from a constant modulus (the pole route's law in a run): 3 MPa, η 1.
+        let start = |_: f64| Complex64::new(g_ref, g_ref);
+        let tf = Instant::now();
+        let fit =
+            fit_core_to_frfs(&model, &data, law.clone(), g_ref, Some(&start), &settings).unwrap();
+        eprintln!(
+            "seed {seed} {:.1?}: {} work {:?}",
+            tf.elapsed(),
+            fit.describe(),
+            fit.work
+        );
+        for &f in &probe {
+            let t = core(2.0 * PI * f);
+            let p = fit.at(f);
+            let eta = t.im / t.re;
+            covered[0] += usize::from(p.storage_ci95[0] <= t.re && t.re <= p.storage_ci95[1]);
+            covered[1] += usize::from(p.loss_factor_ci95[0] <= eta && eta <= p.loss_factor_ci95[1]);
+            worst[0] = worst[0].max((p.storage_pa / t.re - 1.0).abs());
+            worst[1] = worst[1].max((p.loss_factor / eta - 1.0).abs());
+            width[0] += (p.storage_ci95[1] / p.storage_ci95[0]).ln() / 3.92;
+            width[1] += (p.loss_factor_ci95[1] / p.loss_factor_ci95[0]).ln() / 3.92;
+            total += 1;
+        }
+    }
+    let rate = covered.map(|c| c as f64 / total as f64);
+    eprintln!(
+        "20 seeds {:.1?}: coverage G' {:.1} %, eta {:.1} %; worst error G' {:.2} %, eta {:.2} %; mean band sd G' {:.2} %, eta {:.2} %",
+        t1.elapsed(),
+        100.0 * rate[0],
+        100.0 * rate[1],
+        100.0 * worst[0],
+        100.0 * worst[1],
+        100.0 * width[0] / total as f64,
+        100.0 * width[1] / total as f64
+    );
+    assert!(rate[0] >= 0.9 && rate[1] >= 0.9, "{rate:?}");
 }

@@ -98,3 +98,35 @@ pub fn observed(coarse: &Bench, set: &FrfSet, ratios: &[f64], modes: usize) -> O
     .unwrap();
     ObservedModel::new(model, &sensors, &references).unwrap()
 }
+
+/// The glass plate of [`glass_plate`] as the layered route models it (no supports, one element
+/// per layer through the thickness), for [`lamdyn_layered::frf::ObservedModel::build`].
+#[allow(dead_code)] // used by the test, not the bench
+pub fn layered_plate() -> lamdyn_layered::inverse::LayeredPlate {
+    use lamdyn_layered::inverse::{InverseLayer, LayeredPlate};
+    use lamdyn_layered::plan::Plan;
+    let glass = InverseLayer {
+        thickness_m: 3.0e-3,
+        density_kg_m3: 2500.0,
+        poisson: 0.23,
+        young_pa: Some(70e9),
+        loss_factor: 0.0,
+    };
+    let core = InverseLayer {
+        thickness_m: 0.76e-3,
+        density_kg_m3: 1070.0,
+        poisson: 0.49,
+        young_pa: None,
+        loss_factor: 0.0,
+    };
+    LayeredPlate {
+        plan: Plan::Rectangle {
+            plan_m: [1.2, 0.9],
+            radii_m: [f64::INFINITY; 2],
+            edge_grading: 0.0,
+        },
+        layers: vec![glass, core, glass],
+        supports: Vec::new(),
+        elements_per_layer: 1,
+    }
+}
