@@ -12,6 +12,11 @@
 //!    no longer produced), never an input and never anything else, and writes the new
 //!    manifest.
 //!
+//! From `prepare` to the end of the run the folder holds a lock ([`LOCK`]): a second run on
+//! the same folder is refused at once, naming the process that holds it (a lock whose process
+//! is gone is taken over), and the temporary files a killed run left are removed by the next
+//! run's write.
+//!
 //! With `--force`, foreign files are kept and lamdyn writes beside them, never over them (a
 //! foreign file with the name of one of lamdyn's outputs is refused, named), and no earlier
 //! file is removed. An input is never written over, with or without `--force`. Inside the
@@ -44,26 +49,117 @@ pub struct OutputDir {
     force: bool,
     inputs: Vec<PathBuf>,
     previous: BTreeSet<String>,
+    /// Held from `prepare` until the last clone is dropped.
+    _lock: std::sync::Arc<FolderLock>,
+}
+
+/// Name of the lock file in a results folder while a run may write there.
+pub const LOCK: &str = ".lamdyn-lock";
+
+/// A results folder's lock ([`LOCK`], holding the process id), released on drop; the folders
+/// the lock created are removed again if nothing was written into them.
+#[derive(Debug)]
+struct FolderLock {
+    path: PathBuf,
+    /// The folders created for it, innermost first.
+    created: Vec<PathBuf>,
+}
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+        for dir in &self.created {
+            // Only an empty folder is removed; a folder written into stops the walk.
+            if std::fs::remove_dir(dir).is_err() {
+                break;
+            }
+        }
+    }
+}
+
+/// Whether process `pid` is running (Linux: its `/proc` entry).
+fn process_alive(pid: u32) -> bool {
+    Path::new(&format!("/proc/{pid}")).exists()
+}
+
+impl FolderLock {
+    /// Takes `dir`'s lock, creating the folder if needed; a lock left by a process that is no
+    /// longer running is taken over.
+    ///
+    /// # Errors
+    /// Another run (its process named) holds the lock, or the folder or its lock cannot be
+    /// created.
+    fn acquire(dir: &Path) -> Result<Self> {
+        use std::io::Write;
+        let created: Vec<PathBuf> = dir
+            .ancestors()
+            .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+            .map(Path::to_path_buf)
+            .collect();
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create '{}'", dir.display()))?;
+        let path = dir.join(LOCK);
+        let lock = |created: Vec<PathBuf>| Self {
+            path: path.clone(),
+            created,
+        };
+        for _ in 0..2 {
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut file) => {
+                    let held = lock(created.clone());
+                    writeln!(file, "{}", std::process::id())
+                        .with_context(|| format!("cannot write '{}'", path.display()))?;
+                    return Ok(held);
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let holder = std::fs::read_to_string(&path)
+                        .ok()
+                        .and_then(|t| t.trim().parse::<u32>().ok());
+                    if let Some(pid) = holder.filter(|&p| process_alive(p)) {
+                        let who = if pid == std::process::id() {
+                            "another run in this process".to_string()
+                        } else {
+                            format!("another lamdyn (process {pid})")
+                        };
+                        bail!(
+                            "{who} is writing results into '{}': wait for it to finish, or choose another --out (if no such run is going, remove '{}')",
+                            dir.display(),
+                            path.display()
+                        );
+                    }
+                    // Left by a run that is gone (killed): taken over.
+                    let _ = std::fs::remove_file(&path);
+                }
+                Err(e) => {
+                    return Err(e).with_context(|| format!("cannot create '{}'", path.display()));
+                }
+            }
+        }
+        bail!(
+            "cannot take the lock '{}': it came back as it was removed",
+            path.display()
+        )
+    }
 }
 
 impl OutputDir {
     /// Checks `dir` before any work: writable, holding none of `inputs` and no foreign files
-    /// (unless `force`).
+    /// (unless `force`), and takes its lock ([`LOCK`]; the folder is created for it and
+    /// removed again if nothing was written) until the last clone is dropped.
     ///
     /// # Errors
-    /// The folder is a file, cannot be created or written, holds an input (named), or holds
-    /// files lamdyn did not write (the first few named) and `force` is off.
+    /// The folder is a file or a dangling link, cannot be created or written, another run
+    /// holds it (its process named), holds an input (named), or holds files lamdyn did not
+    /// write (the first few named) and `force` is off.
     pub fn prepare(dir: &Path, inputs: &[PathBuf], force: bool) -> Result<Self> {
         let inputs: Vec<PathBuf> = inputs
             .iter()
             .filter_map(|p| p.canonicalize().ok())
             .collect();
-        let mut out = Self {
-            dir: dir.to_path_buf(),
-            force,
-            inputs,
-            previous: BTreeSet::new(),
-        };
         if let Ok(link) = std::fs::symlink_metadata(dir)
             && link.file_type().is_symlink()
             && std::fs::metadata(dir).is_err()
@@ -78,13 +174,18 @@ impl OutputDir {
                 "--out '{}' is not a folder: give a folder for the results",
                 dir.display()
             ),
-            Ok(_) => {
-                out.previous = read_manifest(dir)?;
-                out.check_contents()?;
-                probe_writable(dir)?;
-            }
+            Ok(_) => probe_writable(dir)?,
             Err(_) => probe_writable(&nearest_existing(dir)?)?,
         }
+        let lock = FolderLock::acquire(dir)?;
+        let out = Self {
+            dir: dir.to_path_buf(),
+            force,
+            inputs,
+            previous: read_manifest(dir)?,
+            _lock: std::sync::Arc::new(lock),
+        };
+        out.check_contents()?;
         Ok(out)
     }
 
@@ -181,6 +282,7 @@ impl OutputDir {
             .with_context(|| format!("cannot create '{}'", self.dir.display()))?;
         // Checked again: the folder may have changed since `prepare` (another process).
         self.check_contents()?;
+        remove_orphans(&self.dir);
         let mut names = BTreeSet::new();
         let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(files.len());
         let result = (|| -> Result<()> {
@@ -409,6 +511,31 @@ fn list_files(dir: &Path) -> Result<Vec<String>> {
     Ok(out)
 }
 
+/// Removes the temporary files (`.NAME.lamdyn-tmp-PID`) under `dir` that a killed run left:
+/// those whose process is no longer running.
+fn remove_orphans(dir: &Path) {
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(path) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&path) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().to_string();
+            let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+            if is_dir {
+                stack.push(entry.path());
+                continue;
+            }
+            let pid = name
+                .rsplit_once(".lamdyn-tmp-")
+                .and_then(|(_, pid)| pid.parse::<u32>().ok());
+            if pid.is_some_and(|p| !process_alive(p)) {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
+}
+
 /// Removes a file of the previous run (a link itself, not its target) and its subfolders if
 /// they are left empty.
 fn remove_stale(dir: &Path, name: &str) {
@@ -476,14 +603,20 @@ mod tests {
         let out = OutputDir::prepare(&dir, &[], false).unwrap();
         out.write(&files(&[("a.txt", "1"), ("figures/f.svg", "<svg/>")]))
             .unwrap();
+        drop(out);
         let out = OutputDir::prepare(&dir, &[], false).unwrap();
         out.write(&files(&[("a.txt", "2")])).unwrap();
         assert_eq!(std::fs::read_to_string(dir.join("a.txt")).unwrap(), "2");
         assert!(!dir.join("figures").exists(), "stale figure folder left");
         let names = list_files(&dir).unwrap();
         assert_eq!(names, vec!["a.txt".to_string()]);
+        drop(out);
         let all: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
-        assert_eq!(all.len(), 2, "a.txt and the manifest only");
+        assert_eq!(
+            all.len(),
+            2,
+            "a.txt and the manifest only, the lock released"
+        );
     }
 
     /// A folder with a user's file is refused; with force the file is kept and lamdyn writes
@@ -508,7 +641,11 @@ mod tests {
             "mine"
         );
         // A later run without --force still refuses: notes.docx is not lamdyn's.
-        assert!(OutputDir::prepare(&dir, &[], false).is_err());
+        drop(out);
+        let e = OutputDir::prepare(&dir, &[], false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("did not write ('sub/notes.docx')"), "{e}");
     }
 
     /// The folder of the job's inputs is refused; even with force, an input is never written.
@@ -598,6 +735,7 @@ mod tests {
         std::fs::write(outside.join("f.svg"), "theirs").unwrap();
         std::fs::remove_file(dir.join("report.html")).unwrap();
         std::os::unix::fs::symlink(&outside, dir.join("figures")).unwrap();
+        drop(out);
         let out = OutputDir::prepare(&dir, &[], true).unwrap();
         let e = out
             .write(&files(&[("figures/f.svg", "<svg/>")]))
@@ -624,6 +762,33 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("symbolic link to nothing"), "{e}");
+    }
+
+    /// A second run on a folder is refused while the first holds it, naming the process; the
+    /// lock is released when the first is done, a lock of a process that is gone is taken
+    /// over, a folder the lock created is removed if nothing was written, and a killed run's
+    /// temporary files are removed by the next write.
+    #[test]
+    fn one_run_at_a_time_and_orphans_cleaned() {
+        let s = TempDir::new("lock");
+        let dir = s.join("out");
+        let first = OutputDir::prepare(&dir, &[], false).unwrap();
+        let e = OutputDir::prepare(&dir, &[], false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is writing results into"), "{e}");
+        drop(first);
+        assert!(!dir.exists(), "an empty folder the lock made is removed");
+        std::fs::create_dir_all(&dir).unwrap();
+        // pid_max is at most 2^22 on Linux: this process cannot exist.
+        std::fs::write(dir.join(LOCK), "4194305\n").unwrap();
+        std::fs::write(dir.join(".a.txt.lamdyn-tmp-4194305"), "half").unwrap();
+        let out = OutputDir::prepare(&dir, &[], false).unwrap();
+        out.write(&files(&[("a.txt", "1")])).unwrap();
+        assert!(!dir.join(".a.txt.lamdyn-tmp-4194305").exists());
+        drop(out);
+        assert!(!dir.join(LOCK).exists());
+        assert_eq!(std::fs::read_to_string(dir.join("a.txt")).unwrap(), "1");
     }
 
     /// Names that leave the folder are refused; a file given as --out is refused.
