@@ -86,7 +86,8 @@ pub struct Mode {
     pub loss_factor: f64,
     /// Pole λ, rad/s (exponential-window damping removed).
     pub pole: Complex64,
-    /// Stable poles in its column of the diagram (0 for a pole picked near a given frequency).
+    /// Stable poles in its column of the diagram (for a pole picked near a given frequency: the
+    /// stable poles within the window).
     pub stable_count: usize,
     /// Complex shape over the responses (reference 0; mass-normalised with a driving point), or
     /// over the references when there is one response and several (a roving hammer).

@@ -250,7 +250,8 @@ pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<Select
 }
 
 /// Selection near given frequencies (module docs); `None` where no stable pole lies within
-/// `window_hz`.
+/// `window_hz`. A pick's `count` is the stable poles within the window over all orders (its
+/// column), as an automatic pick's is its cluster's.
 pub fn select_near(
     diagram: &[DiagramPole],
     targets_hz: &[f64],
@@ -273,7 +274,7 @@ pub fn select_near(
                 pole: p.pole,
                 freq_hz: p.freq_hz,
                 damping: p.damping,
-                count: 1,
+                count: column.len(),
                 spread_hz: 0.0,
                 freq_range_hz: range_of(column.iter().copied(), |p| p.freq_hz),
                 damping_range: range_of(column.iter().copied(), |p| p.damping),

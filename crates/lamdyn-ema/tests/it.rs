@@ -4,7 +4,7 @@
 use lamdyn_ema::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz};
 use lamdyn_ema::lsfd::{frac, refine};
 use lamdyn_ema::shapes::{mac, mpc};
-use lamdyn_ema::stabilization::{StabilityCriteria, diagram, select_auto, select_near};
+use lamdyn_ema::stabilization::{Stability, StabilityCriteria, diagram, select_auto, select_near};
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -118,10 +118,18 @@ fn identify(snr_db: f64, seed: u64, auto: bool) -> Identified {
     } else {
         // The user's picks: the stable pole nearest each true frequency, where there is one.
         let targets: Vec<f64> = MODES.iter().map(|m| m.0).collect();
-        select_near(&d, &targets, 0.25)
-            .into_iter()
-            .flatten()
-            .collect()
+        let picks = select_near(&d, &targets, 0.25);
+        // A pick's stable count is its column's: the stable poles within the window.
+        for (t, pick) in targets.iter().zip(&picks) {
+            if let Some(pick) = pick {
+                let column = d
+                    .iter()
+                    .filter(|p| p.stability != Stability::New && (p.freq_hz - t).abs() <= 0.25)
+                    .count();
+                assert!(pick.count == column && column > 1, "{t} Hz: {pick:?}");
+            }
+        }
+        picks.into_iter().flatten().collect()
     };
     if auto {
         assert_eq!(selected.len(), MODES.len(), "selected {selected:?}");

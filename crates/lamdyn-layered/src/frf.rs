@@ -33,6 +33,8 @@ pub struct ObservedModel {
     loads: Mat<c64>,
     /// Vᵀ K_c V, complex for the products with complex vectors.
     core: Mat<c64>,
+    /// Which parts of each input's derivative are not zero (`ReducedModel::input_parts`).
+    input_parts: Vec<[bool; 5]>,
 }
 
 /// The receptance at one line and its derivatives with respect to the core's scale s and to
@@ -137,11 +139,15 @@ impl ObservedModel {
         let loads = Mat::from_fn(m, references.len(), |k, j| row(&references[j], k));
         let kc = model.core_matrix();
         let core = Mat::from_fn(m, m, |i, j| c64::new(kc[(i, j)], 0.0));
+        let input_parts = (0..model.inputs().len())
+            .map(|k| model.input_parts(k))
+            .collect();
         Ok(Self {
             model,
             sensors: sensors_r,
             loads,
             core,
+            input_parts,
         })
     }
 
@@ -261,7 +267,8 @@ impl ObservedModel {
             if f == 0.0 {
                 continue;
             }
-            self.model.add_input_derivative(k, at, f, &mut z);
+            self.model
+                .add_input_derivative(k, at, self.input_parts[k], f, &mut z);
             let dc = self.model.input_core_derivative(k);
             let c = core.get_or_insert_with(|| self.core.clone());
             for j in 0..dc.ncols() {
@@ -279,7 +286,9 @@ impl ObservedModel {
             .iter()
             .enumerate()
             .map(|(k, &df)| {
-                let dz_q = self.model.input_derivative_times(k, at, &q);
+                let dz_q = self
+                    .model
+                    .input_derivative_times(k, at, self.input_parts[k], &q);
                 let dh = &self.sensors * lu.solve(&dz_q);
                 let scale = c64::new(-df, 0.0);
                 Mat::from_fn(dh.nrows(), dh.ncols(), |i, j| dh[(i, j)] * scale)

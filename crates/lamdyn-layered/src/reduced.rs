@@ -373,59 +373,84 @@ impl ReducedModel {
         &self.derivatives[k].dk_core
     }
 
-    /// Entry (i, j) of ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s:
-    /// (1 + iη_e) ∂K_e + s ∂K_c − ω² ∂M + ∂K_s + iω ∂C_s.
-    fn input_derivative(
-        &self,
-        k: usize,
-        i: usize,
-        j: usize,
-        omega: f64,
-        s: Complex64,
-    ) -> Complex64 {
+    /// Which of the `k`-th input's parts (∂K_e, ∂K_c, ∂K_s, ∂M, ∂C_s) are not all zero: a
+    /// modulus moves one matrix, a density one, a support's input one or two.
+    pub(crate) fn input_parts(&self, k: usize) -> [bool; 5] {
         let d = &self.derivatives[k];
-        Complex64::new(1.0, self.elastic_loss) * d.dk_elastic[(i, j)]
-            + s * d.dk_core[(i, j)]
-            + Complex64::new(
-                d.dk_supports[(i, j)] - omega * omega * d.dmass[(i, j)],
-                omega * d.dc_supports[(i, j)],
-            )
+        let nonzero =
+            |m: &Mat<f64>| (0..m.ncols()).any(|j| (0..m.nrows()).any(|i| m[(i, j)] != 0.0));
+        [
+            nonzero(&d.dk_elastic),
+            nonzero(&d.dk_core),
+            nonzero(&d.dk_supports),
+            nonzero(&d.dmass),
+            nonzero(&d.dc_supports),
+        ]
     }
 
-    /// z += f ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s, entry by entry: the sum
-    /// without the derivative matrix formed (a line of the FRF fit adds one per input).
-    pub(crate) fn add_input_derivative(
+    /// ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s as its parts with their factors,
+    /// (1 + iη_e) ∂K_e + s ∂K_c + ∂K_s − ω² ∂M + iω ∂C_s, the parts not in `parts` left out
+    /// ([`Self::input_parts`]).
+    fn weighted_parts(
         &self,
         k: usize,
         (omega, core_scale): (f64, Complex64),
+        parts: [bool; 5],
+    ) -> Vec<(Complex64, &Mat<f64>)> {
+        let d = &self.derivatives[k];
+        [
+            (Complex64::new(1.0, self.elastic_loss), &d.dk_elastic),
+            (core_scale, &d.dk_core),
+            (Complex64::new(1.0, 0.0), &d.dk_supports),
+            (Complex64::new(-omega * omega, 0.0), &d.dmass),
+            (Complex64::new(0.0, omega), &d.dc_supports),
+        ]
+        .into_iter()
+        .zip(parts)
+        .filter_map(|(part, kept)| kept.then_some(part))
+        .collect()
+    }
+
+    /// z += f ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s, part by part: the sum without
+    /// the derivative matrix formed (a line of the FRF fit adds one per input); `parts` as
+    /// [`Self::input_parts`] gives them.
+    pub(crate) fn add_input_derivative(
+        &self,
+        k: usize,
+        at: (f64, Complex64),
+        parts: [bool; 5],
         f: f64,
         z: &mut Mat<c64>,
     ) {
-        let m = self.size();
-        for j in 0..m {
-            for i in 0..m {
-                let v = f * self.input_derivative(k, i, j, omega, core_scale);
-                z[(i, j)] += c64::new(v.re, v.im);
+        for (w, a) in self.weighted_parts(k, at, parts) {
+            let w = f * w;
+            let w = c64::new(w.re, w.im);
+            for j in 0..a.ncols() {
+                for i in 0..a.nrows() {
+                    z[(i, j)] += w * a[(i, j)];
+                }
             }
         }
     }
 
-    /// ∂(Vᵀ Z V)/∂ln θ_k · x at ω (rad/s) and core scale s for a block x (m × r), without the
-    /// derivative matrix formed.
+    /// ∂(Vᵀ Z V)/∂ln θ_k · x at ω (rad/s) and core scale s for a block x (m × r), part by
+    /// part, without the derivative matrix formed; `parts` as [`Self::input_parts`] gives them.
     pub(crate) fn input_derivative_times(
         &self,
         k: usize,
-        (omega, core_scale): (f64, Complex64),
+        at: (f64, Complex64),
+        parts: [bool; 5],
         x: &Mat<c64>,
     ) -> Mat<c64> {
-        let m = self.size();
-        let mut y = Mat::<c64>::zeros(m, x.ncols());
-        for c in 0..x.ncols() {
-            for j in 0..m {
-                let xj = Complex64::new(x[(j, c)].re, x[(j, c)].im);
-                for i in 0..m {
-                    let v = self.input_derivative(k, i, j, omega, core_scale) * xj;
-                    y[(i, c)] += c64::new(v.re, v.im);
+        let mut y = Mat::<c64>::zeros(self.size(), x.ncols());
+        for (w, a) in self.weighted_parts(k, at, parts) {
+            let w = c64::new(w.re, w.im);
+            for c in 0..x.ncols() {
+                for j in 0..a.ncols() {
+                    let wx = w * x[(j, c)];
+                    for i in 0..a.nrows() {
+                        y[(i, c)] += wx * a[(i, j)];
+                    }
                 }
             }
         }

@@ -332,7 +332,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
         ));
     }
     report.notes.push("zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and MPD 0 for a real (normal) mode.".into());
-    report.notes.push("stable: poles stable in frequency, damping and mode vector in the mode's column of the diagram (0 when picked with --near-hz).".into());
+    report.notes.push("stable: poles stable in frequency, damping and mode vector in the mode's column of the diagram (with --near-hz: within the window).".into());
     let cell = |v: f64| serde_json::json!(v);
     report.extra = Some(serde_json::json!({
         "modes": r.modes,
