@@ -373,23 +373,17 @@ impl ReducedModel {
         &self.derivatives[k].dk_core
     }
 
-    /// Which of the `k`-th input's parts (∂K_e, ∂K_c, ∂K_s, ∂M, ∂C_s) are not all zero: a
-    /// modulus moves one matrix, a density one, a support's input one or two.
+    /// Which of the `k`-th input's matrices ([`ReducedDerivative::matrices`]: ∂K_e, ∂K_c, ∂M,
+    /// ∂K_s, ∂C_s) are not all zero: a modulus moves one, a density one, a support's input one
+    /// or two.
     pub(crate) fn input_parts(&self, k: usize) -> [bool; 5] {
-        let d = &self.derivatives[k];
-        let nonzero =
-            |m: &Mat<f64>| (0..m.ncols()).any(|j| (0..m.nrows()).any(|i| m[(i, j)] != 0.0));
-        [
-            nonzero(&d.dk_elastic),
-            nonzero(&d.dk_core),
-            nonzero(&d.dk_supports),
-            nonzero(&d.dmass),
-            nonzero(&d.dc_supports),
-        ]
+        self.derivatives[k]
+            .matrices()
+            .map(|m| (0..m.ncols()).any(|j| (0..m.nrows()).any(|i| m[(i, j)] != 0.0)))
     }
 
-    /// ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s as its parts with their factors,
-    /// (1 + iη_e) ∂K_e + s ∂K_c + ∂K_s − ω² ∂M + iω ∂C_s, the parts not in `parts` left out
+    /// ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s as its matrices with their factors,
+    /// (1 + iη_e) ∂K_e + s ∂K_c − ω² ∂M + ∂K_s + iω ∂C_s, those not in `parts` left out
     /// ([`Self::input_parts`]).
     fn weighted_parts(
         &self,
@@ -397,18 +391,19 @@ impl ReducedModel {
         (omega, core_scale): (f64, Complex64),
         parts: [bool; 5],
     ) -> Vec<(Complex64, &Mat<f64>)> {
-        let d = &self.derivatives[k];
-        [
-            (Complex64::new(1.0, self.elastic_loss), &d.dk_elastic),
-            (core_scale, &d.dk_core),
-            (Complex64::new(1.0, 0.0), &d.dk_supports),
-            (Complex64::new(-omega * omega, 0.0), &d.dmass),
-            (Complex64::new(0.0, omega), &d.dc_supports),
-        ]
-        .into_iter()
-        .zip(parts)
-        .filter_map(|(part, kept)| kept.then_some(part))
-        .collect()
+        let factors = [
+            Complex64::new(1.0, self.elastic_loss),
+            core_scale,
+            Complex64::new(-omega * omega, 0.0),
+            Complex64::new(1.0, 0.0),
+            Complex64::new(0.0, omega),
+        ];
+        factors
+            .into_iter()
+            .zip(self.derivatives[k].matrices())
+            .zip(parts)
+            .filter_map(|(part, kept)| kept.then_some(part))
+            .collect()
     }
 
     /// z += f ∂(Vᵀ Z V)/∂ln θ_k at ω (rad/s) and core scale s, part by part: the sum without

@@ -160,21 +160,17 @@ impl OutputDir {
             .iter()
             .filter_map(|p| p.canonicalize().ok())
             .collect();
-        if let Ok(link) = std::fs::symlink_metadata(dir)
-            && link.file_type().is_symlink()
-            && std::fs::metadata(dir).is_err()
-        {
-            bail!(
-                "--out '{}' is a symbolic link to nothing: give a folder for the results",
-                dir.display()
-            );
-        }
         match std::fs::metadata(dir) {
             Ok(m) if !m.is_dir() => bail!(
                 "--out '{}' is not a folder: give a folder for the results",
                 dir.display()
             ),
             Ok(_) => probe_writable(dir)?,
+            // Something is there that cannot be followed: a link to nothing.
+            Err(_) if std::fs::symlink_metadata(dir).is_ok() => bail!(
+                "--out '{}' is a symbolic link to nothing: give a folder for the results",
+                dir.display()
+            ),
             Err(_) => probe_writable(&nearest_existing(dir)?)?,
         }
         let lock = FolderLock::acquire(dir)?;
@@ -253,14 +249,7 @@ impl OutputDir {
                     self.dir.display()
                 );
             }
-            let last = k + 1 == parts.len();
-            if last && path.canonicalize().is_ok_and(|c| self.inputs.contains(&c)) {
-                bail!(
-                    "cannot write '{}': it is an input of this run; write the results elsewhere",
-                    path.display()
-                );
-            }
-            if last && !self.previous.contains(name) {
+            if k + 1 == parts.len() && !self.previous.contains(name) {
                 bail!(
                     "cannot write '{name}' in '{}': a file of that name is there that lamdyn did not write; --force lets lamdyn write beside such files, never over them: move it or choose another --out",
                     self.dir.display()
@@ -291,8 +280,10 @@ impl OutputDir {
                 if !names.insert(name.clone()) {
                     bail!("'{name}' is written twice");
                 }
-                self.check_owned(&name)?;
+                // An input or a file that is not regular first (named as such), then a link
+                // or a foreign file in lamdyn's folder.
                 let target = resolve_target(&self.dir.join(&name), &self.inputs)?;
+                self.check_owned(&name)?;
                 if let Some(parent) = target.parent() {
                     std::fs::create_dir_all(parent)
                         .with_context(|| format!("cannot create '{}'", parent.display()))?;

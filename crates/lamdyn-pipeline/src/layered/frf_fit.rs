@@ -242,8 +242,8 @@ struct FitOnce {
     fit: FrfFit,
     /// The fit's settings (its band, the inputs' priors).
     settings: FrfFitSettings,
-    /// The first law's failure where the fallback law was fitted instead.
-    first_failed: Option<LawsCompared>,
+    /// The laws tried so far: one, or the first's failure where the fallback was fitted.
+    laws: LawsCompared,
     /// Seconds of the build and of the fit.
     times_s: [f64; 2],
 }
@@ -278,11 +278,8 @@ fn other_law(
     set: &FrfSet,
     spinner: &dyn Reporter,
 ) -> (FrfFit, LawsCompared, f64) {
-    if let Some(failed) = &once.first_failed {
-        return (once.fit.clone(), failed.clone(), 0.0);
-    }
-    if !law_is_open(choice) {
-        return (once.fit.clone(), LawsCompared::One, 0.0);
+    if once.laws != LawsCompared::One || !law_is_open(choice) {
+        return (once.fit.clone(), once.laws.clone(), 0.0);
     }
     let law = FrfLaw::FractionalZener;
     spinner.stage(&format!(
@@ -420,8 +417,8 @@ fn fit_once(
     ));
     let t = Instant::now();
     let first_name = law.name();
-    let (fit, first_failed) = match fit_core_to_frfs(&model, set, law, g_ref, start, &settings) {
-        Ok(fit) => (fit, None),
+    let (fit, laws) = match fit_core_to_frfs(&model, set, law, g_ref, start, &settings) {
+        Ok(fit) => (fit, LawsCompared::One),
         Err(e) if law_is_open(setup.core_law) => {
             // The Prony series's slowest and fastest terms can drift where the band does not
             // see them; the four-parameter law is the fallback, from the same starts.
@@ -441,7 +438,7 @@ fn fit_once(
                 &settings,
             )
             .map_err(|fz| crate::err!("{e}; the fractional Zener law neither: {fz}"))?;
-            (fit, Some(failed))
+            (fit, failed)
         }
         Err(e) => return Err(e.into()),
     };
@@ -449,7 +446,7 @@ fn fit_once(
         model,
         fit,
         settings,
-        first_failed,
+        laws,
         times_s: [build_s, t.elapsed().as_secs_f64()],
     })
 }
