@@ -272,18 +272,23 @@ impl OutputDir {
         // Checked again: the folder may have changed since `prepare` (another process).
         self.check_contents()?;
         remove_orphans(&self.dir);
+        // Every name and target checked before anything is written: a refusal leaves the
+        // folder as it was (no subfolder made for a file that is then not written).
         let mut names = BTreeSet::new();
+        let mut targets: Vec<PathBuf> = Vec::with_capacity(files.len());
+        for (name, _) in files {
+            let name = check_relative(name.as_ref())?;
+            if !names.insert(name.clone()) {
+                bail!("'{name}' is written twice");
+            }
+            // An input or a file that is not regular first (named as such), then a link or a
+            // foreign file in lamdyn's folder.
+            targets.push(resolve_target(&self.dir.join(&name), &self.inputs)?);
+            self.check_owned(&name)?;
+        }
         let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(files.len());
         let result = (|| -> Result<()> {
-            for (name, bytes) in files {
-                let name = check_relative(name.as_ref())?;
-                if !names.insert(name.clone()) {
-                    bail!("'{name}' is written twice");
-                }
-                // An input or a file that is not regular first (named as such), then a link
-                // or a foreign file in lamdyn's folder.
-                let target = resolve_target(&self.dir.join(&name), &self.inputs)?;
-                self.check_owned(&name)?;
+            for ((_, bytes), target) in files.iter().zip(targets) {
                 if let Some(parent) = target.parent() {
                     std::fs::create_dir_all(parent)
                         .with_context(|| format!("cannot create '{}'", parent.display()))?;
@@ -706,7 +711,11 @@ mod tests {
         std::fs::write(dir.join("report.html"), "mine").unwrap();
         let out = OutputDir::prepare(&dir, &[], true).unwrap();
         let e = out
-            .write(&files(&[("a.txt", "1"), ("report.html", "<html/>")]))
+            .write(&files(&[
+                ("a.txt", "1"),
+                ("figures/f.svg", "<svg/>"),
+                ("report.html", "<html/>"),
+            ]))
             .unwrap_err()
             .to_string();
         assert!(
@@ -718,8 +727,8 @@ mod tests {
             "mine"
         );
         assert!(
-            !dir.join("a.txt").exists(),
-            "nothing written before the refusal"
+            !dir.join("a.txt").exists() && !dir.join("figures").exists(),
+            "nothing written or made before the refusal"
         );
         let outside = s.join("outside");
         std::fs::create_dir_all(&outside).unwrap();
