@@ -431,16 +431,25 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     }
 }
 
+/// What marks a temporary file: `.NAME` + this + the writing process's id.
+const TEMPORARY: &str = ".lamdyn-tmp-";
+
 /// `.NAME.lamdyn-tmp-PID` beside `target`.
 fn temporary_beside(target: &Path) -> Result<PathBuf> {
     let name = target
         .file_name()
         .ok_or_else(|| err!("'{}' is not a file name", target.display()))?;
     Ok(target.with_file_name(format!(
-        ".{}.lamdyn-tmp-{}",
+        ".{}{TEMPORARY}{}",
         name.to_string_lossy(),
         std::process::id()
     )))
+}
+
+/// The id of the process that wrote the temporary file `name`, if it is one.
+fn temporary_writer(name: &str) -> Option<u32> {
+    name.rsplit_once(TEMPORARY)
+        .and_then(|(_, pid)| pid.parse().ok())
 }
 
 /// A relative, `/`-separated name inside the folder (no `..`, not absolute, not one of
@@ -488,7 +497,7 @@ fn list_files(dir: &Path) -> Result<Vec<String>> {
             let entry = entry.with_context(|| format!("cannot read '{}'", path.display()))?;
             empty = false;
             let name = entry.file_name().to_string_lossy().to_string();
-            if name.starts_with(".lamdyn") || name.contains(".lamdyn-tmp-") {
+            if name.starts_with(".lamdyn") || name.contains(TEMPORARY) {
                 continue;
             }
             let rel = format!("{prefix}{name}");
@@ -522,10 +531,7 @@ fn remove_orphans(dir: &Path) {
                 stack.push(entry.path());
                 continue;
             }
-            let pid = name
-                .rsplit_once(".lamdyn-tmp-")
-                .and_then(|(_, pid)| pid.parse::<u32>().ok());
-            if pid.is_some_and(|p| !process_alive(p)) {
+            if temporary_writer(&name).is_some_and(|p| !process_alive(p)) {
                 let _ = std::fs::remove_file(entry.path());
             }
         }
