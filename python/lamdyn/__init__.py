@@ -202,7 +202,9 @@ def ema(
 
     Returns a dict: ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,
     ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses), ``mpc``,
-    ``mpd_deg``, ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
+    ``mpd_deg``, ``freq_sd_hz`` and ``damping_sd`` (standard deviations from the fit's noise,
+    NaN without refinement), ``verdict`` (per mode: "sound", "doubtful" or "smear", the
+    reasons in ``modes[k]["quality"]``), ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
     ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json). The CMIF peaks
     listed are those whose topographic prominence in the band (as ``scipy.signal.find_peaks``
     on log sigma_1) is at least the factor ``cmif_prominence``.
@@ -236,6 +238,10 @@ def ema(
     r["shapes"] = np.array([_complex(m["shape"]) for m in modes_]) if modes_ else np.zeros((0, 0), complex)
     r["mpc"] = np.array([m["mpc"] for m in modes_])
     r["mpd_deg"] = np.array([m["mpd_deg"] for m in modes_])
+    sd = [m.get("sd") or {} for m in modes_]
+    r["freq_sd_hz"] = np.array([d.get("freq_hz", np.nan) for d in sd])
+    r["damping_sd"] = np.array([d.get("damping_ratio", np.nan) for d in sd])
+    r["verdict"] = [m["quality"]["verdict"].lower() for m in modes_]
     r["auto_mac"] = np.array(r["auto_mac"])
     r["cmif"] = np.array(r["cmif"])
     return r

@@ -45,6 +45,8 @@ def test_ema_equals_cli(repo, cli, tmp_path):
     assert len(r["freq_hz"]) == len(doc["rows"]) >= 4
     assert rel(r["freq_hz"], [row["freq_hz"] for row in doc["rows"]]) < TOL
     assert rel(r["damping_ratio"], [row["damping_ratio"] for row in doc["rows"]]) < TOL
+    assert rel(r["freq_sd_hz"], [row["freq_sd_hz"] for row in doc["rows"]]) < TOL
+    assert r["verdict"] == [row["verdict"].rstrip("*") for row in doc["rows"]]
 
 
 def test_modes_equal_cli(cli, tmp_path):

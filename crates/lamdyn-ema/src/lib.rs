@@ -8,6 +8,7 @@
 //! | [`lscf`] | LSCF / RFP-Z common-denominator poles at many orders in one pass |
 //! | [`stabilization`] | stabilization diagram, automatic and targeted pole selection |
 //! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC |
+//! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
 //! | [`spectra`] | H1/H2/Hv and coherence from hammer hits, force and exponential windows |
 //! | [`welch`] | H1/H2/Hv and coherence from continuous excitation (Welch averaging) |
@@ -22,6 +23,7 @@ mod error;
 pub mod identify;
 pub mod lscf;
 pub mod lsfd;
+pub mod quality;
 pub mod shapes;
 pub mod spectra;
 pub mod stabilization;

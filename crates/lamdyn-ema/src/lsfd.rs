@@ -186,6 +186,15 @@ impl ModalFit {
         h * factor(w, self.quantity)
     }
 
+    /// Mode r's term in curve `o` at `freq_hz`, in the curves' quantity:
+    /// (iω)^k [A_r/(iω − λ_r) + A_r*/(iω − λ_r*)].
+    pub fn mode_term(&self, o: usize, r: usize, freq_hz: f64) -> Complex64 {
+        let w = 2.0 * PI * freq_hz;
+        let s = Complex64::new(0.0, w);
+        let (p, a) = (self.poles[r], self.residues[o][r]);
+        (a / (s - p) + a.conj() / (s - p.conj())) * factor(w, self.quantity)
+    }
+
     /// Σ_o Σ_k |H_o − Ĥ_o|² over `lines`.
     pub fn cost(&self, freqs_hz: &[f64], curves: &[&[Complex64]], lines: &[usize]) -> f64 {
         curves
@@ -320,34 +329,9 @@ pub fn refine_with(
     iterations: usize,
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<ModalFit, EmaError> {
-    check_curves(freqs_hz, curves)?;
-    let lines = refinement_lines(
-        freqs_hz,
-        &crate::band::positive_lines(freqs_hz, band_hz),
-        poles,
-        fit_lines,
-    );
-    let to_poles = |u: &[f64]| -> Vec<Complex64> {
-        u.chunks(2)
-            .map(|c| Complex64::new(-c[0].exp(), c[1]))
-            .collect()
-    };
-    let residuals = |u: &[f64]| -> Option<Vec<f64>> {
-        let fit = lsfd_on(freqs_hz, curves, quantity, &to_poles(u), &lines).ok()?;
-        let mut r = Vec::with_capacity(2 * lines.len() * curves.len());
-        for (o, c) in curves.iter().enumerate() {
-            for &k in &lines {
-                let d = c[k] - fit.synthesize(o, freqs_hz[k]);
-                r.push(d.re);
-                r.push(d.im);
-            }
-        }
-        Some(r)
-    };
-    let mut u: Vec<f64> = poles
-        .iter()
-        .flat_map(|p| [(-p.re).max(1e-12).ln(), p.im])
-        .collect();
+    let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
+    let residuals = |u: &[f64]| projected_residuals(freqs_hz, curves, quantity, &lines, u);
+    let mut u = pole_parameters(poles);
     let Some(mut r) = residuals(&u) else {
         return lsfd(freqs_hz, curves, quantity, poles, band_hz);
     };
@@ -356,22 +340,7 @@ pub fn refine_with(
     let p = u.len();
     for k in 0..iterations {
         on_iteration(k + 1, iterations);
-        // Central-difference Jacobian, columns in parallel.
-        let cols: Vec<Option<Vec<f64>>> = {
-            use rayon::prelude::*;
-            (0..p)
-                .into_par_iter()
-                .map(|j| {
-                    let h = 1e-6 * u[j].abs().max(1.0);
-                    let (mut up, mut um) = (u.clone(), u.clone());
-                    up[j] += h;
-                    um[j] -= h;
-                    let (a, b) = (residuals(&up)?, residuals(&um)?);
-                    Some(a.iter().zip(&b).map(|(x, y)| (x - y) / (2.0 * h)).collect())
-                })
-                .collect()
-        };
-        let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else {
+        let Some(cols) = jacobian(&u, &residuals) else {
             break;
         };
         let jtj = Mat::from_fn(p, p, |a, b| {
@@ -414,4 +383,182 @@ pub fn refine_with(
         }
     }
     lsfd(freqs_hz, curves, quantity, &to_poles(&u), band_hz)
+}
+
+/// The curves checked ([`check_curves`]), then the lines the refinement fits
+/// ([`refinement_lines`]) in `band_hz`.
+fn checked_refinement_lines(
+    freqs_hz: &[f64],
+    curves: &[&[Complex64]],
+    poles: &[Complex64],
+    band_hz: [f64; 2],
+    fit_lines: RefineLines,
+) -> Result<Vec<usize>, EmaError> {
+    check_curves(freqs_hz, curves)?;
+    Ok(refinement_lines(
+        freqs_hz,
+        &crate::band::positive_lines(freqs_hz, band_hz),
+        poles,
+        fit_lines,
+    ))
+}
+
+/// The refinement's parameters of each pole: ln(−Re λ), Im λ.
+fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
+    poles
+        .iter()
+        .flat_map(|p| [(-p.re).max(1e-12).ln(), p.im])
+        .collect()
+}
+
+/// The poles of the refinement's parameters ([`pole_parameters`]).
+fn to_poles(u: &[f64]) -> Vec<Complex64> {
+    u.chunks(2)
+        .map(|c| Complex64::new(-c[0].exp(), c[1]))
+        .collect()
+}
+
+/// H_o − Ĥ_o (real, imaginary) on `lines`, curve after curve, for the poles of the parameters
+/// `u` with their LSFD residues (variable projection); None where the residue problem fails.
+fn projected_residuals(
+    freqs_hz: &[f64],
+    curves: &[&[Complex64]],
+    quantity: Quantity,
+    lines: &[usize],
+    u: &[f64],
+) -> Option<Vec<f64>> {
+    let fit = lsfd_on(freqs_hz, curves, quantity, &to_poles(u), lines).ok()?;
+    let mut r = Vec::with_capacity(2 * lines.len() * curves.len());
+    for (o, c) in curves.iter().enumerate() {
+        for &k in lines {
+            let d = c[k] - fit.synthesize(o, freqs_hz[k]);
+            r.push(d.re);
+            r.push(d.im);
+        }
+    }
+    Some(r)
+}
+
+/// Central-difference Jacobian of `residuals` at `u`, one column per parameter (computed in
+/// parallel); None where a residual fails.
+fn jacobian(
+    u: &[f64],
+    residuals: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
+) -> Option<Vec<Vec<f64>>> {
+    use rayon::prelude::*;
+    let cols: Vec<Option<Vec<f64>>> = (0..u.len())
+        .into_par_iter()
+        .map(|j| {
+            let h = 1e-6 * u[j].abs().max(1.0);
+            let (mut up, mut um) = (u.to_vec(), u.to_vec());
+            up[j] += h;
+            um[j] -= h;
+            let (a, b) = (residuals(&up)?, residuals(&um)?);
+            Some(a.iter().zip(&b).map(|(x, y)| (x - y) / (2.0 * h)).collect())
+        })
+        .collect();
+    cols.into_iter().collect()
+}
+
+/// Standard deviations of a pole's frequency and damping ratio.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PoleSd {
+    /// Of the natural frequency |λ|/2π, Hz.
+    pub freq_hz: f64,
+    /// Of the damping ratio −Re λ/|λ|.
+    pub damping_ratio: f64,
+}
+
+/// The standard deviations of `poles` as estimates of the refinement ([`refine`]) on the lines
+/// `fit_lines` chooses in `band_hz`: the covariance of the poles' parameters is the sandwich
+/// (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ with J the Jacobian of the projected residuals (the residues
+/// eliminated [Golub & Pereyra 1973]) and Σ each curve's residual variance (its sum of
+/// squares over its degrees of freedom: 2 × lines − its own unknowns − its share of the
+/// poles'), carried to f and ζ by their derivatives. It is the noise's part of the error: the
+/// estimator's bias (modes outside the band, the model's residual terms) is not in it. None
+/// where the Jacobian is singular or a residue problem fails.
+///
+/// # Errors
+/// As [`lsfd`].
+pub fn pole_deviations(
+    freqs_hz: &[f64],
+    curves: &[&[Complex64]],
+    quantity: Quantity,
+    poles: &[Complex64],
+    band_hz: [f64; 2],
+    fit_lines: RefineLines,
+) -> Result<Option<Vec<PoleSd>>, EmaError> {
+    let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
+    let residuals = |u: &[f64]| projected_residuals(freqs_hz, curves, quantity, &lines, u);
+    let u = pole_parameters(poles);
+    let (Some(r), Some(cols)) = (residuals(&u), jacobian(&u, &residuals)) else {
+        return Ok(None);
+    };
+    let rows = 2 * lines.len();
+    let own = (2 * poles.len() + 2) as f64 + u.len() as f64 / curves.len() as f64;
+    let dof = (rows as f64 - own).max(1.0);
+    let variance: Vec<f64> = r
+        .chunks(rows)
+        .map(|c| c.iter().map(|v| v * v).sum::<f64>() / dof)
+        .collect();
+    Ok(parameter_covariance(&cols, &variance, rows).map(|cov| {
+        poles
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                pole_sd(
+                    *p,
+                    [
+                        cov[(2 * k, 2 * k)],
+                        cov[(2 * k, 2 * k + 1)],
+                        cov[(2 * k + 1, 2 * k + 1)],
+                    ],
+                )
+            })
+            .collect()
+    }))
+}
+
+/// The sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of [`pole_deviations`] from the Jacobian's
+/// columns `cols` and each curve's variance (`rows` residuals per curve); None when JᵀJ is
+/// singular.
+fn parameter_covariance(cols: &[Vec<f64>], variance: &[f64], rows: usize) -> Option<Mat<f64>> {
+    let p = cols.len();
+    let jtj = Mat::from_fn(p, p, |a, b| {
+        cols[a]
+            .iter()
+            .zip(&cols[b])
+            .map(|(x, y)| x * y)
+            .sum::<f64>()
+    });
+    let meat = Mat::from_fn(p, p, |a, b| {
+        cols[a]
+            .iter()
+            .zip(&cols[b])
+            .enumerate()
+            .map(|(i, (x, y))| variance[i / rows] * x * y)
+            .sum::<f64>()
+    });
+    let inverse = jtj.full_piv_lu().solve(Mat::<f64>::identity(p, p));
+    let cov = &inverse * &meat * &inverse;
+    (0..p)
+        .all(|a| cov[(a, a)].is_finite() && cov[(a, a)] >= 0.0)
+        .then_some(cov)
+}
+
+/// f and ζ's standard deviations of pole `p` from the covariance [var a, cov ab, var b] of its
+/// parameters a = ln σ, b = ω_d (σ = −Re λ): ∂f/∂a = σ²/(2π|λ|), ∂f/∂b = ω_d/(2π|λ|),
+/// ∂ζ/∂a = σω_d²/|λ|³, ∂ζ/∂b = −σ²ω_d/|λ|³.
+fn pole_sd(p: Complex64, [vaa, vab, vbb]: [f64; 3]) -> PoleSd {
+    let (sigma, wd) = (-p.re, p.im);
+    let m = p.norm();
+    let spread = |ga: f64, gb: f64| {
+        (ga * ga * vaa + 2.0 * ga * gb * vab + gb * gb * vbb)
+            .max(0.0)
+            .sqrt()
+    };
+    PoleSd {
+        freq_hz: spread(sigma * sigma / (2.0 * PI * m), wd / (2.0 * PI * m)),
+        damping_ratio: spread(sigma * wd * wd / m.powi(3), -sigma * sigma * wd / m.powi(3)),
+    }
 }

@@ -79,6 +79,14 @@ pub struct Spectra {
     pub warnings: Vec<String>,
 }
 
+/// The warning for spectra averaged over one `what` (hit, segment): |S_yx|² = S_xx S_yy
+/// there, whatever the noise.
+pub(crate) fn one_average(what: &str) -> String {
+    format!(
+        "one {what} averaged: the coherence is 1 by definition and says nothing of the noise (average several {what}s)"
+    )
+}
+
 pub(crate) fn clipped(x: &[f64]) -> bool {
     let m = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     if m == 0.0 {
@@ -279,6 +287,9 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
     let freqs_hz = (0..nl)
         .map(|k| k as f64 * s.rate_hz / length as f64)
         .collect();
+    if hits.len() == 1 {
+        warnings.push(one_average("hit"));
+    }
     Ok(from_sums(freqs_hz, &sxx, &syx, &syy, warnings))
 }
 

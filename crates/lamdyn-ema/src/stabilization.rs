@@ -17,6 +17,11 @@
 //! represented by its pole at the median frequency (spurious poles of over-modelled noise
 //! wander and do not build long columns).
 //!
+//! **Peaks of the CMIF.** A peak of the first CMIF that no selected pole explains is a mode
+//! the criteria missed where the diagram holds it, stable in frequency but not in damping or
+//! vector (measured data): the columns of frequency-stable poles near it that pass the same
+//! order rule are added ([`rescue_cmif_peaks`]).
+//!
 //! **Selection near given frequencies.** For each given frequency, the stable pole nearest to
 //! it at the highest order where one exists within `window_hz`.
 
@@ -136,6 +141,31 @@ pub fn diagram(orders: &[OrderPoles], c: &StabilityCriteria) -> Vec<DiagramPole>
     out
 }
 
+/// How a pole was selected, and so what its stable count counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Pick {
+    /// The automatic selection: a column of poles stable in frequency, damping and vector
+    /// (each criterion the diagram has data for).
+    #[default]
+    Auto,
+    /// A peak of the first CMIF that no stable column explains, taken from a column of poles
+    /// stable in frequency ([`rescue_cmif_peaks`]).
+    CmifPeak,
+    /// Near a frequency given by the user: the poles stable in frequency within the window.
+    Near,
+}
+
+impl Pick {
+    /// What the stable count of a pole picked this way counts, for a table's footnote.
+    pub fn counts(self) -> &'static str {
+        match self {
+            Self::Auto => "poles stable in frequency, damping and mode vector in its column",
+            Self::CmifPeak => "poles stable in frequency in its column (picked at a CMIF peak)",
+            Self::Near => "poles stable in frequency within the window",
+        }
+    }
+}
+
 /// A selected physical mode.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SelectedPole {
@@ -153,6 +183,9 @@ pub struct SelectedPole {
     pub freq_range_hz: [f64; 2],
     /// Lowest and highest damping ratio of the cluster's poles.
     pub damping_range: [f64; 2],
+    /// How it was selected (what `count` counts).
+    #[serde(default)]
+    pub pick: Pick,
 }
 
 impl SelectedPole {
@@ -188,16 +221,28 @@ fn median_by<T: Copy>(v: &mut [T], key: impl Fn(&T) -> f64) -> T {
 
 /// Automatic selection (module docs).
 pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<SelectedPole> {
+    let mut out = physical_columns(diagram, c, DiagramPole::is_stable, Pick::Auto);
+    out.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
+    out
+}
+
+/// The columns of the poles that pass `admit` (module docs: one pole per order, the nearest
+/// column by median frequency within `freq_tol`) that hold such poles at no fewer than
+/// `min_fraction` of the orders above their first and at three orders at least, each as its
+/// pole at the median frequency.
+fn physical_columns(
+    diagram: &[DiagramPole],
+    c: &StabilityCriteria,
+    admit: impl Fn(&DiagramPole) -> bool,
+    pick: Pick,
+) -> Vec<SelectedPole> {
     let orders: Vec<usize> = {
         let mut o: Vec<usize> = diagram.iter().map(|p| p.order).collect();
         o.dedup();
         o
     };
-    // A column holds at most one pole per order: two stable poles of one order near one
-    // frequency are two modes (a close pair), never merged. Each pole joins the column nearest
-    // its frequency (median within freq_tol) that has no pole of its order yet.
     let mut clusters: Vec<Vec<DiagramPole>> = Vec::new();
-    for p in diagram.iter().filter(|p| p.is_stable()) {
+    for p in diagram.iter().filter(|p| admit(p)) {
         let median = |cl: &Vec<DiagramPole>| {
             let mut f: Vec<f64> = cl.iter().map(|q| q.freq_hz).collect();
             f.sort_by(f64::total_cmp);
@@ -219,7 +264,7 @@ pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<Select
             None => clusters.push(vec![*p]),
         }
     }
-    let mut out: Vec<SelectedPole> = clusters
+    clusters
         .into_iter()
         .filter_map(|mut cl| {
             let first = cl.iter().map(|p| p.order).min()?;
@@ -242,11 +287,56 @@ pub fn select_auto(diagram: &[DiagramPole], c: &StabilityCriteria) -> Vec<Select
                 spread_hz: freq_range_hz[1] - freq_range_hz[0],
                 freq_range_hz,
                 damping_range,
+                pick,
             })
         })
-        .collect();
-    out.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
-    out
+        .collect()
+}
+
+/// Whether a selected pole explains a CMIF peak at `peak_hz`: within twice the frequency
+/// tolerance or three half-power half-widths (ζ f) of it.
+fn explains(p: &SelectedPole, peak_hz: f64, c: &StabilityCriteria) -> bool {
+    (p.freq_hz - peak_hz).abs() <= (2.0 * c.freq_tol).max(3.0 * p.damping) * p.freq_hz
+}
+
+/// Adds to `selected` the modes behind the CMIF peaks it leaves unexplained (no selected pole
+/// within twice the frequency tolerance or three half-power half-widths ζf of the peak):
+/// within `reach` (relative, each side of a peak) the columns of poles stable in frequency
+/// alone that pass the selection's order rule (module docs), each kept unless a
+/// selected pole already lies within the frequency tolerance of it. Where measured data move
+/// the damping from order to order by more than its tolerance, a mode has a long column
+/// stable in frequency and too few fully stable poles to be selected: on the measured dam
+/// (26 channels, one reference) the strongest CMIF peak, a pair at 4.08 / 4.17 Hz, had 3 and 5
+/// fully stable poles over 20 orders and was dropped. Returns the poles added, by increasing
+/// frequency (`selected` sorted likewise).
+pub fn rescue_cmif_peaks(
+    diagram: &[DiagramPole],
+    selected: &mut Vec<SelectedPole>,
+    peaks_hz: &[f64],
+    c: &StabilityCriteria,
+    reach: f64,
+) -> Vec<SelectedPole> {
+    let mut added = Vec::new();
+    for &peak in peaks_hz {
+        if selected.iter().any(|p| explains(p, peak, c)) {
+            continue;
+        }
+        let near = |p: &DiagramPole| {
+            p.stability != Stability::New && (p.freq_hz - peak).abs() <= reach * peak
+        };
+        for col in physical_columns(diagram, c, near, Pick::CmifPeak) {
+            let taken = selected
+                .iter()
+                .any(|p| (p.freq_hz - col.freq_hz).abs() <= c.freq_tol * col.freq_hz);
+            if !taken {
+                selected.push(col);
+                added.push(col);
+            }
+        }
+    }
+    selected.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
+    added.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
+    added
 }
 
 /// Selection near given frequencies (module docs); `None` where no stable pole lies within
@@ -278,6 +368,7 @@ pub fn select_near(
                 spread_hz: 0.0,
                 freq_range_hz: range_of(column.iter().copied(), |p| p.freq_hz),
                 damping_range: range_of(column.iter().copied(), |p| p.damping),
+                pick: Pick::Near,
             })
         })
         .collect()
@@ -297,6 +388,7 @@ mod tests {
             spread_hz: f[1] - f[0],
             freq_range_hz: f,
             damping_range: z,
+            pick: Pick::Auto,
         }
     }
 

@@ -252,6 +252,13 @@ pub fn welch(records: &[Hit], s: &WelchSettings) -> Result<Spectra, EmaError> {
             "the force carries no energy (zero or constant in every record)".into(),
         ));
     }
+    let averaged: usize = records
+        .iter()
+        .map(|rec| starts(rec.force.len(), segment, overlap).len())
+        .sum();
+    if averaged == 1 {
+        warnings.push(crate::spectra::one_average("segment"));
+    }
     let freqs_hz: Vec<f64> = (0..nl)
         .map(|k| k as f64 * s.rate_hz / segment as f64)
         .collect();

@@ -245,14 +245,14 @@ pub fn modal_model(
     Ok((model, line))
 }
 
-/// Poles from a CSV table with columns `freq_hz` (Hz) and `damping_ratio` (others ignored):
-/// `lamdyn ema --out DIR` writes one as DIR/modes.csv.
+/// Poles from a CSV table with columns `freq_hz` (Hz) and `damping_ratio` (others ignored,
+/// text or numbers): `lamdyn ema --out DIR` writes one as DIR/modes.csv.
 ///
 /// # Errors
 /// The file's, naming it and the line: missing columns, a frequency that is not positive, a
 /// damping ratio outside [0, 1), no rows.
 pub fn read_poles(path: &Path) -> Result<Vec<Pole>> {
-    let table = CsvTable::read(path)?;
+    let table = CsvTable::read_columns(path, &["freq_hz", "damping_ratio"])?;
     let (f, z) = (
         table.require_any(&["freq_hz"])?,
         table.require_any(&["damping_ratio"])?,

@@ -10,7 +10,8 @@
 //! damping 6–15 % the per-mode answers were −17 … +113 % off in G'). The FRF fit needs no
 //! pole. The run takes it as the answer (`inverse.frf_fit = "auto"`) when any identified mode
 //! in the band is damped beyond [`DAMPED_ZETA`], when two neighbours' half-power bands overlap
-//! by more than [`OVERLAP_FACTOR`] of their spacing, or when a mode got no layered core; else
+//! by more than [`OVERLAP_FACTOR`] of their spacing, when the EMA set a pole aside as a smear
+//! over a cluster (`lamdyn_ema::quality`), or when a mode got no layered core; else
 //! the pole route stays the answer and the FRF fit is not run. `"always"` runs it and takes it;
 //! `"never"` does not run it.
 
@@ -47,6 +48,13 @@ pub enum WhyFrfFit {
         /// Their overlap (module docs).
         overlap: f64,
     },
+    /// A pole the EMA set aside as a smear over a cluster of modes.
+    Smear {
+        /// Its frequency, Hz.
+        freq_hz: f64,
+        /// Its shape's MPC.
+        mpc: f64,
+    },
     /// A mode the pole route gave no core.
     NoLayeredCore {
         /// Its frequency, Hz.
@@ -72,6 +80,10 @@ impl std::fmt::Display for WhyFrfFit {
                 "the modes at {:.2} and {:.2} Hz overlap (half-power half-widths {:.2} of their spacing, above {OVERLAP_FACTOR})",
                 freqs_hz[0], freqs_hz[1], overlap
             ),
+            Self::Smear { freq_hz, mpc } => write!(
+                f,
+                "the pole at {freq_hz:.2} Hz (MPC {mpc:.2}) is one pole over a cluster of modes, set aside"
+            ),
             Self::NoLayeredCore { freq_hz } => {
                 write!(f, "the pole route found no core at {freq_hz:.2} Hz")
             }
@@ -79,9 +91,9 @@ impl std::fmt::Display for WhyFrfFit {
     }
 }
 
-/// Why the identified `modes` (any order) and the pole route's `modal` points call for the FRF
-/// fit (module docs); empty: they do not.
-pub fn reasons(modes: &[Mode], modal: &[CorePoint]) -> Vec<WhyFrfFit> {
+/// Why the identified `modes` (any order), the poles the EMA `set_aside` as smears and the
+/// pole route's `modal` points call for the FRF fit (module docs); empty: they do not.
+pub fn reasons(modes: &[Mode], set_aside: &[Mode], modal: &[CorePoint]) -> Vec<WhyFrfFit> {
     let mut sorted: Vec<&Mode> = modes.iter().collect();
     sorted.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
     let mut why: Vec<WhyFrfFit> = sorted
@@ -108,6 +120,10 @@ pub fn reasons(modes: &[Mode], modal: &[CorePoint]) -> Vec<WhyFrfFit> {
             });
         }
     }
+    why.extend(set_aside.iter().map(|m| WhyFrfFit::Smear {
+        freq_hz: m.freq_hz,
+        mpc: m.mpc,
+    }));
     why.extend(
         modal
             .iter()
@@ -507,6 +523,9 @@ pub(crate) mod tests {
             real_shape: Vec::new(),
             mpc: 1.0,
             mpd_deg: 0.0,
+            sd: None,
+            pick: Default::default(),
+            quality: Default::default(),
         }
     }
 
@@ -515,10 +534,10 @@ pub(crate) mod tests {
     #[test]
     fn the_rule_names_damped_and_overlapping_modes() {
         let light = [mode(20.0, 0.01), mode(40.0, 0.02), mode(70.0, 0.01)];
-        assert!(reasons(&light, &[]).is_empty());
+        assert!(reasons(&light, &[], &[]).is_empty());
         let damped = [mode(20.0, 0.01), mode(40.0, 0.08)];
         assert_eq!(
-            reasons(&damped, &[]),
+            reasons(&damped, &[], &[]),
             vec![WhyFrfFit::Damped {
                 freq_hz: 40.0,
                 damping_ratio: 0.08
@@ -526,13 +545,27 @@ pub(crate) mod tests {
         );
         // 0.03 × 50 + 0.03 × 50 = 3 Hz of half-widths over 5 Hz: 0.6.
         let close = [mode(55.0, 0.03), mode(50.0, 0.03)];
-        let why = reasons(&close, &[]);
+        let why = reasons(&close, &[], &[]);
         assert!(
             matches!(why[..], [WhyFrfFit::Overlapping { freqs_hz, overlap }]
                 if freqs_hz == [50.0, 55.0] && (overlap - 0.63).abs() < 0.01),
             "{why:?}"
         );
         assert!(why[0].to_string().contains("overlap"), "{}", why[0]);
+        // A pole set aside as a smear calls for the fit, and says so.
+        let smear = Mode {
+            mpc: 0.1,
+            ..mode(150.0, 0.04)
+        };
+        let why = reasons(&light, &[smear], &[]);
+        assert_eq!(
+            why,
+            vec![WhyFrfFit::Smear {
+                freq_hz: 150.0,
+                mpc: 0.1
+            }]
+        );
+        assert!(why[0].to_string().contains("cluster"), "{}", why[0]);
     }
 
     /// The correction is each mode's c at the mode, log-linear between, held beyond; without

@@ -106,8 +106,23 @@ impl CsvTable {
         Self::parse(&path.display().to_string(), &read_text(path)?)
     }
 
+    /// Reads `path` where only the columns `wanted` must hold numbers: the others may hold
+    /// text or nothing (read as NaN), as a table another tool wrote with columns this reader
+    /// does not use.
+    pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Self> {
+        Self::parse_where(&path.display().to_string(), &read_text(path)?, &|h| {
+            wanted.contains(&h)
+        })
+    }
+
     /// Parses `text`, naming `path` in errors.
     pub fn parse(path: &str, text: &str) -> Result<Self> {
+        Self::parse_where(path, text, &|_| true)
+    }
+
+    /// [`CsvTable::parse`] where the columns `numeric` names must hold numbers and the others
+    /// are NaN where they do not.
+    fn parse_where(path: &str, text: &str, numeric: &dyn Fn(&str) -> bool) -> Result<Self> {
         let mut lines = data_lines(text);
         let Some((_, header)) = lines.next() else {
             bail!("'{path}' is empty: expected a header line of column names");
@@ -132,10 +147,12 @@ impl CsvTable {
             let values = fields
                 .iter()
                 .zip(&headers)
-                .map(|(f, h)| {
-                    dialect.number(f).ok_or_else(|| {
-                        err!("'{path}' line {line_no}: column '{h}': '{f}' is not a finite number")
-                    })
+                .map(|(f, h)| match dialect.number(f) {
+                    Some(v) => Ok(v),
+                    None if !numeric(h) => Ok(f64::NAN),
+                    None => Err(err!(
+                        "'{path}' line {line_no}: column '{h}': '{f}' is not a finite number"
+                    )),
                 })
                 .collect::<Result<Vec<f64>>>()?;
             rows.push((line_no, values));
@@ -259,6 +276,21 @@ mod tests {
         let t = CsvTable::parse("x.csv", "# comment\nf_hz, e\n\n1, 2\n3,4e9\n").unwrap();
         assert_eq!(t.rows(), &[(4, vec![1.0, 2.0]), (5, vec![3.0, 4e9])]);
         assert_eq!(t.find("e"), Some(1));
+    }
+
+    /// `lamdyn ema`'s modes.csv has text columns (pick, verdict) and empty cells (a pole
+    /// without a deviation): a reader of two columns takes it, and still names a bad number in
+    /// a column it reads.
+    #[test]
+    fn unused_columns_may_hold_text() {
+        let numeric = |h: &str| h != "pick";
+        let t = CsvTable::parse_where("m.csv", "f,pick,z\n1,Auto,0.1\n2,,0.2\n", &numeric).unwrap();
+        assert!(t.rows()[0].1[1].is_nan());
+        assert_eq!(t.rows()[1].1[2], 0.2);
+        let e = CsvTable::parse_where("m.csv", "f,pick,z\n1,Auto,x\n", &numeric)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "'m.csv' line 2: column 'z': 'x' is not a finite number");
     }
 
     #[test]

@@ -182,6 +182,11 @@ pub struct EmaOptions {
     /// Modes near these frequencies (support resonances) are reported as rejected, Hz.
     #[serde(default)]
     pub reject_hz: Vec<f64>,
+    /// Keep the poles judged smears over clusters of modes (low MPC, damped:
+    /// `lamdyn_ema::quality`) among the modes the inverses take [default: false, they are set
+    /// aside, named in the report, and make the FRF fit the answer].
+    #[serde(default)]
+    pub keep_smears: bool,
 }
 
 fn default_max_order() -> usize {
@@ -194,6 +199,7 @@ impl Default for EmaOptions {
             band_hz: None,
             max_order: default_max_order(),
             reject_hz: vec![],
+            keep_smears: false,
         }
     }
 }

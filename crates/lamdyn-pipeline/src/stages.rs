@@ -453,7 +453,7 @@ fn frf_fit_stage(
     law: Option<&std::result::Result<lamdyn_fit::joint::CoreLawFit, FitError>>,
 ) -> FrfOutcome {
     use crate::job::FrfFitChoice;
-    let mut why = frf_route::reasons(&data.ema.modes, modal);
+    let mut why = frf_route::reasons(&data.ema.modes, &data.ema.set_aside, modal);
     match job.inverse.frf_fit {
         FrfFitChoice::Never => return FrfOutcome::NotRun("inverse.frf_fit = \"never\""),
         FrfFitChoice::Always => why.insert(0, WhyFrfFit::Asked),
@@ -672,9 +672,16 @@ fn run_ema_to_order(
     for h in set.data() {
         key = key.f64(h.re).f64(h.im);
     }
+    let keep_smears = job.ema.keep_smears;
+    let set_aside = |mut r: EmaResult| {
+        if !keep_smears {
+            r.set_aside_smears();
+        }
+        r
+    };
     if let Some(bytes) = cache.get("ema", key) {
         if let Ok(r) = serde_json::from_slice::<EmaResult>(&bytes) {
-            return Ok((r, true));
+            return Ok((set_aside(r), true));
         }
     }
     let r = identify_with(set, &settings, &|step| {
@@ -682,7 +689,7 @@ fn run_ema_to_order(
     })
     .context("modal identification")?;
     cache.put("ema", key, &serde_json::to_vec(&r)?)?;
-    Ok((r, false))
+    Ok((set_aside(r), false))
 }
 
 /// The modal model of the FE model on the measured channels, cached.
@@ -1047,6 +1054,14 @@ fn collect_warnings(
             "EMA: pole at {:.3} Hz (zeta {:.2} %) rejected as a support resonance (ema.reject_hz)",
             m.freq_hz,
             100.0 * m.damping_ratio
+        ));
+    }
+    for m in &ema.set_aside {
+        out.push(format!(
+            "EMA: pole at {:.3} Hz (zeta {:.2} %, MPC {:.2}) set aside from the inverses: one pole over a cluster of modes (ema.keep_smears = true keeps it)",
+            m.freq_hz,
+            100.0 * m.damping_ratio,
+            m.mpc
         ));
     }
     for f in &ema.missing_hz {

@@ -663,12 +663,16 @@ fn a_pair_fit_to_the_frfs_recovers_the_core_its_poles_miss() {
         real_shape: Vec::new(),
         mpc: 1.0,
         mpd_deg: 0.0,
+        sd: None,
+        pick: Default::default(),
+        quality: Default::default(),
     };
     let ema = EmaResult {
         band_hz: [1.0, 500.0],
         diagram: Vec::new(),
         modes: given.iter().map(|&t| ema_mode(t)).collect(),
         rejected: Vec::new(),
+        set_aside: Vec::new(),
         auto_mac: Vec::new(),
         correlation: Vec::new(),
         curve_names: Vec::new(),

@@ -1026,9 +1026,18 @@ pub fn build(r: &ChainResult) -> Result<Files> {
             "MPC",
             "MPD [deg]",
             "stable",
+            "FRAC drop",
+            "verdict",
         ],
         modes,
     );
+    let verdicts = verdict_sentences(r);
+    if !verdicts.is_empty() {
+        html.paragraph(&format!(
+            "Mode verdicts (lamdyn_ema::quality): {}",
+            verdicts.join(" ")
+        ));
+    }
     files.push(("ema_modes.csv".into(), modes_csv.into_bytes()));
     for (name, caption, chart) in shape_charts(r) {
         add_figure(&mut html, &mut files, &name, &caption, &chart)?;
@@ -1224,23 +1233,37 @@ fn table3(r: &ChainResult) -> (Vec<Vec<String>>, String) {
     (rows, csv)
 }
 
+/// The identified modes, then the poles set aside as smears (marked "set aside"), as table
+/// rows and as `ema_modes.csv`.
 fn ema_table(r: &ChainResult) -> (Vec<Vec<String>>, String) {
-    let mut csv = String::from("mode,f_hz,damping_ratio,loss_factor,mpc,mpd_deg,stable_count\n");
-    let rows = r
-        .ema
-        .modes
-        .iter()
+    let mut csv = String::from(
+        "mode,f_hz,f_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_count,frac_drop,verdict,in_chain\n",
+    );
+    let numbered = r.ema.modes.iter().map(|m| (m, true));
+    let aside = r.ema.set_aside.iter().map(|m| (m, false));
+    let rows = numbered
+        .chain(aside)
         .enumerate()
-        .map(|(k, m)| {
+        .map(|(k, (m, in_chain))| {
             csv.push_str(&csv_line(&[
                 (k + 1).to_string(),
                 format!("{}", m.freq_hz),
+                m.sd.map_or(String::new(), |d| format!("{:e}", d.freq_hz)),
                 format!("{:e}", m.damping_ratio),
+                m.sd.map_or(String::new(), |d| format!("{:e}", d.damping_ratio)),
                 format!("{:e}", m.loss_factor),
                 format!("{}", m.mpc),
                 format!("{}", m.mpd_deg),
                 m.stable_count.to_string(),
+                format!("{:e}", m.quality.frac_drop),
+                m.quality.verdict.label().to_string(),
+                in_chain.to_string(),
             ]));
+            let verdict = if in_chain {
+                m.quality.verdict.label().to_string()
+            } else {
+                format!("{} (set aside)", m.quality.verdict.label())
+            };
             vec![
                 (k + 1).to_string(),
                 format!("{:.4}", m.freq_hz),
@@ -1249,8 +1272,38 @@ fn ema_table(r: &ChainResult) -> (Vec<Vec<String>>, String) {
                 format!("{:.4}", m.mpc),
                 format!("{:.2}", m.mpd_deg),
                 m.stable_count.to_string(),
+                format!("{:.1e}", m.quality.frac_drop),
+                verdict,
             ]
         })
         .collect();
     (rows, csv)
+}
+
+/// One sentence per mode that is not sound (why), set-aside poles first; empty when all are.
+fn verdict_sentences(r: &ChainResult) -> Vec<String> {
+    let aside = r.ema.set_aside.iter().map(|m| (m, true));
+    let doubtful = r
+        .ema
+        .modes
+        .iter()
+        .filter(|m| m.quality.verdict != lamdyn_ema::quality::Verdict::Sound)
+        .map(|m| (m, false));
+    aside
+        .chain(doubtful)
+        .map(|(m, set_aside)| {
+            let why: Vec<String> = m.quality.flags.iter().map(ToString::to_string).collect();
+            format!(
+                "{:.3} Hz is {}{}: {}.",
+                m.freq_hz,
+                m.quality.verdict.label(),
+                if set_aside {
+                    ", set aside from the inverses (ema.keep_smears = true keeps it)"
+                } else {
+                    ""
+                },
+                why.join("; ")
+            )
+        })
+        .collect()
 }

@@ -8,8 +8,10 @@ use crate::cli::{EmaArgs, Estimator, ExcitationArg, QuantityArg, WindowArg};
 use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
-use lamdyn_ema::identify::{EmaResult, EmaSettings, identify_with};
+use lamdyn_ema::identify::{EmaResult, EmaSettings, Mode, identify_with};
+use lamdyn_ema::quality::Verdict;
 use lamdyn_ema::spectra::Spectra;
+use lamdyn_ema::stabilization::Pick;
 use lamdyn_ema::welch::Window;
 use lamdyn_fem::eigen::Progress;
 use lamdyn_frf::FrfSet;
@@ -205,17 +207,62 @@ pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     )
 }
 
+/// The verdict cell: the verdict, with `*` for a pole picked at a CMIF peak.
+fn verdict_cell(m: &Mode) -> String {
+    let mark = if m.pick == Pick::CmifPeak { "*" } else { "" };
+    format!("{}{mark}", m.quality.verdict.label())
+}
+
+/// One line per mode that is not sound: its number, frequency, verdict and reasons.
+fn verdict_lines(modes: &[Mode]) -> Vec<(Verdict, String)> {
+    modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.quality.verdict != Verdict::Sound)
+        .map(|(k, m)| {
+            let why: Vec<String> = m.quality.flags.iter().map(ToString::to_string).collect();
+            let line = format!(
+                "mode {} ({:.4} Hz) is {}: {}.",
+                k + 1,
+                m.freq_hz,
+                m.quality.verdict.label(),
+                why.join("; ")
+            );
+            (m.quality.verdict, line)
+        })
+        .collect()
+}
+
+/// What the `stable` column counts, for each way the modes' poles were picked.
+fn stable_footnote(modes: &[Mode]) -> String {
+    let mut picks: Vec<Pick> = modes.iter().map(|m| m.pick).collect();
+    picks.sort_by_key(|p| *p as u8);
+    picks.dedup();
+    let what: Vec<String> = picks
+        .iter()
+        .map(|p| match p {
+            Pick::CmifPeak => format!("marked * in verdict: {}", p.counts()),
+            _ => p.counts().to_string(),
+        })
+        .collect();
+    format!("stable: {}.", what.join("; "))
+}
+
 fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> Report {
     let mut report = Report::new(
         "ema",
         vec![
             Column::new("mode", "mode", "", Fmt::Fixed(0)),
             Column::new("freq_hz", "f", "Hz", Fmt::Fixed(4)),
+            Column::new("freq_sd_hz", "sd(f)", "Hz", Fmt::Sci(1)),
             Column::new("damping_ratio", "zeta", "%", Fmt::Fixed(4)).scaled(0.01),
+            Column::new("damping_sd", "sd(zeta)", "%", Fmt::Sci(1)).scaled(0.01),
             Column::new("loss_factor", "eta", "", Fmt::Sci(4)),
             Column::new("mpc", "MPC", "", Fmt::Fixed(4)),
             Column::new("mpd_deg", "MPD", "deg", Fmt::Fixed(2)),
             Column::new("stable_poles", "stable", "", Fmt::Fixed(0)),
+            Column::new("frac_drop", "FRAC drop", "", Fmt::Sci(2)),
+            Column::new("verdict", "verdict", "", Fmt::Fixed(0)),
         ],
     );
     report.input("data", source.to_string());
@@ -270,12 +317,23 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
         report.row(vec![
             ((k + 1) as f64).into(),
             m.freq_hz.into(),
+            m.sd.map(|d| d.freq_hz).into(),
             m.damping_ratio.into(),
+            m.sd.map(|d| d.damping_ratio).into(),
             m.loss_factor.into(),
             m.mpc.into(),
             m.mpd_deg.into(),
             (m.stable_count as f64).into(),
+            m.quality.frac_drop.into(),
+            verdict_cell(m).into(),
         ]);
+    }
+    for (verdict, line) in verdict_lines(&r.modes) {
+        if verdict == Verdict::Smear {
+            report.warnings.push(line);
+        } else {
+            report.notes.push(line);
+        }
     }
     let mut corr = Section::new(
         "correlation",
@@ -332,7 +390,9 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
         ));
     }
     report.notes.push("zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and MPD 0 for a real (normal) mode.".into());
-    report.notes.push("stable: poles stable in frequency, damping and mode vector in the mode's column of the diagram (with --near-hz: within the window).".into());
+    report.notes.push("sd(f), sd(zeta): standard deviations from the fit's noise (the refinement's covariance); they leave out the estimator's bias (modes outside the band, an unmodelled mode).".into());
+    report.notes.push(stable_footnote(&r.modes));
+    report.notes.push("FRAC drop: the mean FRAC the regenerated FRFs lose without the mode; verdict: sound, doubtful (kept; the reasons above) or smear (one pole over a cluster of modes: its f and zeta describe no mode).".into());
     let cell = |v: f64| serde_json::json!(v);
     report.extra = Some(serde_json::json!({
         "modes": r.modes,
@@ -414,18 +474,25 @@ fn write_results(
     time: Option<&TimeInfo>,
 ) -> Result<()> {
     use lamdyn_report::ema::{cmif_chart, stabilization_chart};
-    let mut modes =
-        String::from("mode,freq_hz,damping_ratio,loss_factor,mpc,mpd_deg,stable_poles\n");
+    let mut modes = String::from(
+        "mode,freq_hz,freq_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_poles,pick,frac_drop,verdict\n",
+    );
+    let sd = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for (k, m) in r.modes.iter().enumerate() {
         modes += &format!(
-            "{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{:?},{},{}\n",
             k + 1,
             m.freq_hz,
+            sd(m.sd.map(|d| d.freq_hz)),
             m.damping_ratio,
+            sd(m.sd.map(|d| d.damping_ratio)),
             m.loss_factor,
             m.mpc,
             m.mpd_deg,
-            m.stable_count
+            m.stable_count,
+            m.pick,
+            m.quality.frac_drop,
+            m.quality.verdict.label()
         );
     }
     let mut diagram = String::from("order,freq_hz,damping_ratio,stability,vector_mac\n");
