@@ -191,20 +191,25 @@ def ema(
     refine: bool = True,
     driving: Optional[int] = None,
     cmif_prominence: float = 2.0,
+    poles: str = "checked",
 ) -> dict:
     """Modal identification of FRFs, as ``lamdyn ema``.
 
     Poles by PolyMAX (several references) or LSCF over ``orders`` (lowest, highest, step; the
     default matches sdypy-EMA's ``pol_order_high=30``), the stable columns of the
     stabilization diagram selected automatically (or the stable pole nearest each of
-    ``near_hz``), then LSFD residues and a Levenberg-Marquardt refinement of the poles
-    (``refine=False``: LSFD on the diagram's poles).
+    ``near_hz``), then LSFD residues and a Levenberg-Marquardt refinement of the poles,
+    each refined pole kept where it fits significantly better than the diagram's in the
+    diagram's highest-order LSCF model (``poles="checked"``; ``"refined"``: every refined pole;
+    ``"diagram"`` or ``refine=False``: the diagram's poles).
 
     Returns a dict: ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,
     ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses), ``mpc``,
     ``mpd_deg``, ``freq_sd_hz`` and ``damping_sd`` (standard deviations from the fit's noise,
     NaN without refinement), ``verdict`` (per mode: "sound", "doubtful" or "smear", the
-    reasons in ``modes[k]["quality"]``), ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
+    reasons in ``modes[k]["quality"]``), ``diagram_freq_hz`` and ``diagram_damping_ratio`` (the
+    diagram's pole each mode started from) and ``refined`` (whether the reported pole is the
+    refined one), ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
     ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json). The CMIF peaks
     listed are those whose topographic prominence in the band (as ``scipy.signal.find_peaks``
     on log sigma_1) is at least the factor ``cmif_prominence``.
@@ -217,6 +222,7 @@ def ema(
         "window_hz": float(window_hz),
         "polymax": bool(polymax),
         "refine": bool(refine),
+        "estimator": poles,
         "driving": driving,
         "cmif_prominence": float(cmif_prominence),
     }
@@ -242,6 +248,10 @@ def ema(
     r["freq_sd_hz"] = np.array([d.get("freq_hz", np.nan) for d in sd])
     r["damping_sd"] = np.array([d.get("damping_ratio", np.nan) for d in sd])
     r["verdict"] = [m["quality"]["verdict"].lower() for m in modes_]
+    diagram_poles = np.array([complex(*m["diagram_pole"]) for m in modes_])
+    r["diagram_freq_hz"] = np.abs(diagram_poles) / (2 * np.pi)
+    r["diagram_damping_ratio"] = -diagram_poles.real / np.maximum(np.abs(diagram_poles), 1e-300)
+    r["refined"] = np.array([bool(m["refined"]) for m in modes_], dtype=bool)
     r["auto_mac"] = np.array(r["auto_mac"])
     r["cmif"] = np.array(r["cmif"])
     return r

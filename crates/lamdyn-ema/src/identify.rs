@@ -3,8 +3,9 @@
 //! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
 //! correlation with the measured ones, and the CMIF.
 
+use crate::context::{LscfContext, refine_checked};
 use crate::error::{EmaError, invalid};
-use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz};
+use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz, sample_interval};
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, frac, lsfd, pole_deviations, refine_with};
 use crate::quality::{Measured, ModeEvidence, ModeQuality, assess};
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode};
@@ -44,6 +45,8 @@ pub struct EmaSettings {
     pub reject_hz: Vec<f64>,
     /// Levenberg–Marquardt iterations of the pole refinement (0: LSFD on the diagram's poles).
     pub refine_iterations: usize,
+    /// How the selected poles are finally estimated.
+    pub estimator: PoleEstimator,
     /// The lines the refinement's iterations fit (long records: the poles' neighbourhoods and
     /// a thinned band; the residues always on every line).
     pub refine_lines: RefineLines,
@@ -69,12 +72,28 @@ impl Default for EmaSettings {
             window_hz: 1.0,
             reject_hz: vec![],
             refine_iterations: 30,
+            estimator: PoleEstimator::default(),
             refine_lines: RefineLines::default(),
             driving: None,
             exp_tau_s: None,
             cmif_prominence: 2.0,
         }
     }
+}
+
+/// The final estimate of each selected pole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PoleEstimator {
+    /// The diagram's pole.
+    Diagram,
+    /// The refined pole ([`crate::lsfd::refine`]: the output error beside real residual
+    /// terms), unchecked.
+    Refined,
+    /// The refined pole where the LSCF model's context says it fits the curves significantly
+    /// better than the diagram's, the diagram's pole elsewhere ([`crate::context`]).
+    #[default]
+    Checked,
 }
 
 /// One identified mode.
@@ -111,6 +130,13 @@ pub struct Mode {
     /// How its pole was selected (what `stable_count` counts).
     #[serde(default)]
     pub pick: Pick,
+    /// The diagram's pole it started from, rad/s (exponential-window damping removed): equal
+    /// to `pole` where the diagram's pole was kept ([`PoleEstimator`]).
+    #[serde(default)]
+    pub diagram_pole: Complex64,
+    /// Whether `pole` is the refined pole (false: the diagram's).
+    #[serde(default)]
+    pub refined: bool,
     /// The verdict on it: sound, doubtful or a smear over a cluster ([`crate::quality`]).
     #[serde(default)]
     pub quality: ModeQuality,
@@ -289,22 +315,54 @@ fn first_cmif_peaks(
     }
 }
 
-/// The modal model of the selected poles: refined (`s.refine_iterations` > 0) or LSFD on the
-/// diagram's poles, each refined pole that left its column put back
+/// The modal model of the selected poles: refined (`s.refine_iterations` > 0; in `context`
+/// where given) or LSFD on the diagram's poles, each refined pole that left its column put back
 /// ([`keep_poles_in_their_columns`]); with one warning per pole put back.
+#[allow(clippy::too_many_arguments)]
 fn fit_selected(
     freqs: &[f64],
     curves: &[&[Complex64]],
     quantity: lamdyn_frf::Quantity,
     band: [f64; 2],
     selected: &[SelectedPole],
+    context: Option<&LscfContext>,
     s: &EmaSettings,
     on_stage: &dyn Fn(&str),
-) -> Result<(ModalFit, Vec<String>), EmaError> {
+) -> Result<SelectedFit, EmaError> {
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
-    let fit = if s.refine_iterations > 0 {
-        let n = poles.len();
-        refine_with(
+    let n = poles.len();
+    let progress = |k: usize, max: usize| {
+        on_stage(&format!(
+            "refining {n} poles: iteration {k} of at most {max}"
+        ))
+    };
+    let estimator = if s.refine_iterations == 0 {
+        PoleEstimator::Diagram
+    } else {
+        s.estimator
+    };
+    let mut refined = None;
+    let fit = match (estimator, context) {
+        (PoleEstimator::Diagram, _) => {
+            on_stage("residues (LSFD)");
+            lsfd(freqs, curves, quantity, &poles, band)?
+        }
+        (PoleEstimator::Checked, Some(c)) => {
+            let (fit, all) = refine_checked(
+                freqs,
+                curves,
+                quantity,
+                &poles,
+                band,
+                s.refine_lines,
+                c,
+                s.refine_iterations,
+                &progress,
+            )?;
+            refined = Some(all);
+            fit
+        }
+        _ => refine_with(
             freqs,
             curves,
             quantity,
@@ -312,19 +370,40 @@ fn fit_selected(
             band,
             s.refine_lines,
             s.refine_iterations,
-            &|k, max| {
-                on_stage(&format!(
-                    "refining {n} poles: iteration {k} of at most {max}"
-                ))
-            },
-        )?
-    } else {
-        on_stage("residues (LSFD)");
-        lsfd(freqs, curves, quantity, &poles, band)?
+            &progress,
+        )?,
     };
-    keep_poles_in_their_columns(fit, selected, &s.criteria, |p| {
+    let (fit, warnings) = keep_poles_in_their_columns(fit, selected, &s.criteria, |p| {
         lsfd(freqs, curves, quantity, p, band)
+    })?;
+    Ok(SelectedFit {
+        fit,
+        warnings,
+        refined,
     })
+}
+
+/// The modal model of the selected poles ([`fit_selected`]) and what the refinement made of
+/// them.
+struct SelectedFit {
+    fit: ModalFit,
+    /// One line per refined pole put back into its column.
+    warnings: Vec<String>,
+    /// With the checked estimator: the refined poles, index-aligned with the selection, taken
+    /// or not.
+    refined: Option<Vec<Complex64>>,
+}
+
+/// The standard deviation `sd` of a mode whose reported pole `pole` is the diagram's while the
+/// refinement found `refined`: widened by the two estimates' difference,
+/// √(sd² + (diagram − refined)²), in f and ζ. The check found neither significantly better, so
+/// the truth may lie by either; `sd` is the refinement's and describes its scatter only.
+fn widened_by_the_refinement(sd: PoleSd, pole: Complex64, refined: Complex64) -> PoleSd {
+    let spread = |s: f64, d: f64| s.hypot(d);
+    PoleSd {
+        freq_hz: spread(sd.freq_hz, pole_freq_hz(pole) - pole_freq_hz(refined)),
+        damping_ratio: spread(sd.damping_ratio, pole_damping(pole) - pole_damping(refined)),
+    }
 }
 
 /// One mode split in two poles: neighbours of `fit` whose half-power bands overlap
@@ -450,6 +529,10 @@ pub fn identify_with(
         },
     )?;
     let diag = diagram(&orders, &s.criteria);
+    let context = orders.last().map(|top| LscfContext {
+        dt: sample_interval(band),
+        roots: top.roots.clone(),
+    });
     let cmif: Vec<Vec<f64>> = (0..freqs.len())
         .map(|k| {
             let h: Vec<Complex64> = curves.iter().map(|c| c[k]).collect();
@@ -458,7 +541,7 @@ pub fn identify_with(
         .collect();
     let band_peaks = first_cmif_peaks(freqs, &cmif, band, s.cmif_prominence);
     let mut warnings = Vec::new();
-    let (selected, missing_hz): (Vec<SelectedPole>, Vec<f64>) = match &s.near_hz {
+    let (mut selected, missing_hz): (Vec<SelectedPole>, Vec<f64>) = match &s.near_hz {
         Some(targets) => {
             let picks = select_near(&diag, targets, s.window_hz);
             let missing = targets
@@ -494,18 +577,31 @@ pub fn identify_with(
     }
     let t_poles = clock.elapsed().as_secs_f64();
     let fit_poles = |selected: &[SelectedPole]| {
-        fit_selected(freqs, &curves, set.quantity(), band, selected, s, on_stage)
+        fit_selected(
+            freqs,
+            &curves,
+            set.quantity(),
+            band,
+            selected,
+            context.as_ref(),
+            s,
+            on_stage,
+        )
     };
-    let (mut fit, mut kept) = fit_poles(&selected)?;
-    let mut selected = selected;
+    let mut fitted = fit_poles(&selected)?;
     if s.near_hz.is_none() {
-        let (fewer, merged) = merge_split_modes(selected, &fit);
+        let (fewer, merged) = merge_split_modes(selected, &fitted.fit);
         selected = fewer;
         if !merged.is_empty() {
             warnings.extend(merged);
-            (fit, kept) = fit_poles(&selected)?;
+            fitted = fit_poles(&selected)?;
         }
     }
+    let SelectedFit {
+        fit,
+        warnings: kept,
+        refined,
+    } = fitted;
     let lines = crate::band::lines(freqs, band);
     let correlation = (0..curves.len())
         .map(|o| {
@@ -545,9 +641,12 @@ pub fn identify_with(
             } else {
                 (0..nr).map(|i| all[i * nf]).collect()
             };
-            let pole = s.exp_tau_s.map_or(fit.poles[r], |tau| {
-                correct_exponential_window(fit.poles[r], tau)
-            });
+            let corrected = |p: Complex64| {
+                s.exp_tau_s
+                    .map_or(p, |tau| correct_exponential_window(p, tau))
+            };
+            let pole = corrected(fit.poles[r]);
+            let diagram_pole = selected.get(r).map_or(fit.poles[r], |p| p.pole);
             let z = pole_damping(pole);
             let evidence = ModeEvidence {
                 freq_hz: pole_freq_hz(pole),
@@ -573,8 +672,18 @@ pub fn identify_with(
                 mpc: evidence.mpc,
                 mpd_deg: evidence.mpd_deg,
                 shape,
-                sd: deviations.as_ref().and_then(|d| d.get(r).copied()),
+                sd: deviations
+                    .as_ref()
+                    .and_then(|d| d.get(r).copied())
+                    .map(|sd| match refined.as_ref().and_then(|p| p.get(r)) {
+                        Some(&q) if fit.poles[r] != q => {
+                            widened_by_the_refinement(sd, fit.poles[r], q)
+                        }
+                        _ => sd,
+                    }),
                 pick: selected.get(r).map_or(Pick::Auto, |p| p.pick),
+                diagram_pole: corrected(diagram_pole),
+                refined: diagram_pole != fit.poles[r],
                 quality: assess(&fit, r, &evidence, data, &band_peaks),
             }
         })

@@ -7,7 +7,8 @@
 //! | [`identify`] | the whole chain on an FRF set: diagram, selection, refinement, modes |
 //! | [`lscf`] | LSCF / RFP-Z common-denominator poles at many orders in one pass |
 //! | [`stabilization`] | stabilization diagram, automatic and targeted pole selection |
-//! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC |
+//! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC, pole refinement |
+//! | [`context`] | pole refinement in the LSCF model's context (its other roots fixed) |
 //! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
 //! | [`spectra`] | H1/H2/Hv and coherence from hammer hits, force and exponential windows |
@@ -19,6 +20,7 @@
 
 pub mod band;
 mod companion;
+pub mod context;
 mod error;
 pub mod identify;
 pub mod lscf;

@@ -53,6 +53,16 @@ pub struct OrderPoles {
     /// Mode vector ψ of each pole over the outputs (module docs); empty unless asked for.
     #[serde(skip)]
     pub vectors: Vec<Vec<Complex64>>,
+    /// Every root x_r of det A in the Ω domain: both of each conjugate pair, the real ones and
+    /// the computational ones (the model's whole denominator, [`crate::context`]).
+    #[serde(skip)]
+    pub roots: Vec<Complex64>,
+}
+
+/// The sampling interval Δt = 1/(2 f_hi) of the z-domain model over the band [f_lo, f_hi]
+/// (module docs), s.
+pub fn sample_interval(band_hz: [f64; 2]) -> f64 {
+    1.0 / (2.0 * band_hz[1])
 }
 
 /// Natural frequency (Hz) of a pole: |λ|/2π.
@@ -302,7 +312,7 @@ pub fn lscf(
             ),
         ));
     }
-    let dt = 1.0 / (2.0 * hi);
+    let dt = sample_interval([lo, hi]);
     let band_freqs: Vec<f64> = lines.iter().map(|&k| freqs_hz[k]).collect();
     let omega_dt: Vec<f64> = band_freqs.iter().map(|f| 2.0 * PI * f * dt).collect();
     let band_curves: Vec<Vec<Complex64>> = curves
@@ -339,13 +349,14 @@ pub fn lscf(
         .cumulative
         .par_iter()
         .map(|(n, gram)| {
-            let (poles, vectors) = model(*n, gram)
+            let (poles, vectors, roots) = model(*n, gram)
                 .map(|m| m.poles(dt, [lo, hi], settings.mode_vectors))
                 .unwrap_or_default();
             OrderPoles {
                 order: *n,
                 poles,
                 vectors,
+                roots,
             }
         })
         .collect();
@@ -483,19 +494,21 @@ struct OrderModel<'a> {
 }
 
 impl OrderModel<'_> {
-    /// Physical poles in `band` (Hz), increasing frequency, and their mode vectors if `vectors`.
+    /// Physical poles in `band` (Hz), increasing frequency, their mode vectors if `vectors`,
+    /// and every root of the denominator ([`OrderPoles::roots`]).
     fn poles(
         &self,
         dt: f64,
         band: [f64; 2],
         vectors: bool,
-    ) -> (Vec<Complex64>, Vec<Vec<Complex64>>) {
+    ) -> (Vec<Complex64>, Vec<Vec<Complex64>>, Vec<Complex64>) {
         let Some(roots) = self.poly.roots() else {
-            return (vec![], vec![]);
+            return (vec![], vec![], vec![]);
         };
         let (lo, hi) = (2.0 * PI * band[0], 2.0 * PI * band[1]);
         let mut kept: Vec<(Complex64, Complex64)> = roots
-            .into_iter()
+            .iter()
+            .copied()
             .map(|x| (-x.ln() / dt, x))
             .filter(|(p, _)| p.im > 0.0 && p.re < 0.0 && p.norm() >= lo && p.norm() <= hi)
             .collect();
@@ -506,7 +519,7 @@ impl OrderModel<'_> {
         } else {
             vec![]
         };
-        (kept.into_iter().map(|(p, _)| p).collect(), vecs)
+        (kept.into_iter().map(|(p, _)| p).collect(), vecs, roots)
     }
 
     /// The mode vectors ψ_o(x_r) = B_o(x_r) v_r of the roots `xs` over every output at once.

@@ -331,16 +331,37 @@ pub fn refine_with(
 ) -> Result<ModalFit, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
     let residuals = |u: &[f64]| projected_residuals(freqs_hz, curves, quantity, &lines, u);
+    let refined = levenberg_marquardt(poles, &residuals, iterations, on_iteration);
+    lsfd(
+        freqs_hz,
+        curves,
+        quantity,
+        refined.as_deref().unwrap_or(poles),
+        band_hz,
+    )
+}
+
+/// The residuals of a pole problem at the poles' parameters ([`pole_parameters`]), curve
+/// after curve (the same number of rows each); None where they cannot be computed.
+pub(crate) type PoleResiduals<'a> = dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync + 'a;
+
+/// Levenberg–Marquardt on the poles' parameters ([`pole_parameters`]) from `poles`, minimising
+/// the sum of squares of `residuals`, at most `iterations` steps (`on_iteration(k, max)` as
+/// step k starts); the refined poles, or None where the residuals fail at the start.
+pub(crate) fn levenberg_marquardt(
+    poles: &[Complex64],
+    residuals: &PoleResiduals,
+    iterations: usize,
+    on_iteration: &dyn Fn(usize, usize),
+) -> Option<Vec<Complex64>> {
     let mut u = pole_parameters(poles);
-    let Some(mut r) = residuals(&u) else {
-        return lsfd(freqs_hz, curves, quantity, poles, band_hz);
-    };
+    let mut r = residuals(&u)?;
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
     let p = u.len();
     for k in 0..iterations {
         on_iteration(k + 1, iterations);
-        let Some(cols) = jacobian(&u, &residuals) else {
+        let Some(cols) = jacobian(&u, residuals) else {
             break;
         };
         let jtj = Mat::from_fn(p, p, |a, b| {
@@ -382,12 +403,12 @@ pub fn refine_with(
             break;
         }
     }
-    lsfd(freqs_hz, curves, quantity, &to_poles(&u), band_hz)
+    Some(to_poles(&u))
 }
 
 /// The curves checked ([`check_curves`]), then the lines the refinement fits
 /// ([`refinement_lines`]) in `band_hz`.
-fn checked_refinement_lines(
+pub(crate) fn checked_refinement_lines(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     poles: &[Complex64],
@@ -404,7 +425,7 @@ fn checked_refinement_lines(
 }
 
 /// The refinement's parameters of each pole: ln(−Re λ), Im λ.
-fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
+pub(crate) fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
     poles
         .iter()
         .flat_map(|p| [(-p.re).max(1e-12).ln(), p.im])
@@ -412,7 +433,7 @@ fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
 }
 
 /// The poles of the refinement's parameters ([`pole_parameters`]).
-fn to_poles(u: &[f64]) -> Vec<Complex64> {
+pub(crate) fn to_poles(u: &[f64]) -> Vec<Complex64> {
     u.chunks(2)
         .map(|c| Complex64::new(-c[0].exp(), c[1]))
         .collect()
@@ -420,7 +441,7 @@ fn to_poles(u: &[f64]) -> Vec<Complex64> {
 
 /// H_o − Ĥ_o (real, imaginary) on `lines`, curve after curve, for the poles of the parameters
 /// `u` with their LSFD residues (variable projection); None where the residue problem fails.
-fn projected_residuals(
+pub(crate) fn projected_residuals(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     quantity: Quantity,
@@ -441,10 +462,7 @@ fn projected_residuals(
 
 /// Central-difference Jacobian of `residuals` at `u`, one column per parameter (computed in
 /// parallel); None where a residual fails.
-fn jacobian(
-    u: &[f64],
-    residuals: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
-) -> Option<Vec<Vec<f64>>> {
+fn jacobian(u: &[f64], residuals: &PoleResiduals) -> Option<Vec<Vec<f64>>> {
     use rayon::prelude::*;
     let cols: Vec<Option<Vec<f64>>> = (0..u.len())
         .into_par_iter()
@@ -490,18 +508,34 @@ pub fn pole_deviations(
 ) -> Result<Option<Vec<PoleSd>>, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
     let residuals = |u: &[f64]| projected_residuals(freqs_hz, curves, quantity, &lines, u);
+    Ok(deviations(
+        poles,
+        &residuals,
+        2 * lines.len(),
+        2 * poles.len() + 2,
+        curves.len(),
+    ))
+}
+
+/// The standard deviations of `poles` as the least-squares estimate of `residuals` (rows per
+/// curve `rows`, `own` linear unknowns per curve besides the poles; the sandwich covariance of
+/// [`pole_deviations`]). None where the Jacobian is singular or the residuals fail.
+pub(crate) fn deviations(
+    poles: &[Complex64],
+    residuals: &PoleResiduals,
+    rows: usize,
+    own: usize,
+    curves: usize,
+) -> Option<Vec<PoleSd>> {
     let u = pole_parameters(poles);
-    let (Some(r), Some(cols)) = (residuals(&u), jacobian(&u, &residuals)) else {
-        return Ok(None);
-    };
-    let rows = 2 * lines.len();
-    let own = (2 * poles.len() + 2) as f64 + u.len() as f64 / curves.len() as f64;
+    let (r, cols) = (residuals(&u)?, jacobian(&u, residuals)?);
+    let own = own as f64 + u.len() as f64 / curves as f64;
     let dof = (rows as f64 - own).max(1.0);
     let variance: Vec<f64> = r
         .chunks(rows)
         .map(|c| c.iter().map(|v| v * v).sum::<f64>() / dof)
         .collect();
-    Ok(parameter_covariance(&cols, &variance, rows).map(|cov| {
+    parameter_covariance(&cols, &variance, rows).map(|cov| {
         poles
             .iter()
             .enumerate()
@@ -516,7 +550,7 @@ pub fn pole_deviations(
                 )
             })
             .collect()
-    }))
+    })
 }
 
 /// The sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of [`pole_deviations`] from the Jacobian's

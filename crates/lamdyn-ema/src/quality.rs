@@ -128,6 +128,14 @@ pub struct ModeQuality {
     pub cmif_peak_hz: Option<f64>,
 }
 
+impl ModeQuality {
+    /// Why the mode is not sound, one clause per flag joined by "; " (empty when sound).
+    pub fn reasons(&self) -> String {
+        let why: Vec<String> = self.flags.iter().map(ToString::to_string).collect();
+        why.join("; ")
+    }
+}
+
 impl Default for ModeQuality {
     /// Sound, no evidence (a mode read from a file written before verdicts existed).
     fn default() -> Self {

@@ -525,6 +525,8 @@ pub(crate) mod tests {
             mpd_deg: 0.0,
             sd: None,
             pick: Default::default(),
+            diagram_pole: Complex64::new(0.0, 0.0),
+            refined: false,
             quality: Default::default(),
         }
     }

@@ -660,6 +660,7 @@ fn run_ema_to_order(
         band_hz: ema_band(job),
         orders: (2, max_order, 2),
         reject_hz: job.ema.reject_hz.clone(),
+        estimator: job.ema.poles,
         ..Default::default()
     };
     let mut key = Key::new(concat!("ema ", env!("CARGO_PKG_VERSION")))

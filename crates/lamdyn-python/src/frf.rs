@@ -249,6 +249,7 @@ struct EmaOptions {
     window_hz: Option<f64>,
     polymax: Option<bool>,
     refine: Option<bool>,
+    estimator: Option<lamdyn_ema::identify::PoleEstimator>,
     driving: Option<usize>,
     cmif_prominence: Option<f64>,
 }
@@ -281,6 +282,7 @@ fn ema(
         } else {
             0
         },
+        estimator: o.estimator.unwrap_or(d.estimator),
         driving: o.driving,
         cmif_prominence: o.cmif_prominence.unwrap_or(d.cmif_prominence),
         ..d

@@ -241,9 +241,14 @@ pub struct EmaArgs {
     /// with --time the window is applied to the records here.
     #[arg(long, value_name = "S", value_parser = finite, allow_negative_numbers = true)]
     pub exp_tau_s: Option<f64>,
-    /// Skip the refinement of the poles (LSFD on the diagram's poles only).
+    /// Skip the refinement of the poles (LSFD on the diagram's poles only; as --poles diagram).
     #[arg(long)]
     pub no_refine: bool,
+    /// The poles reported: the diagram's, the refined ones, or each refined pole checked in the
+    /// LSCF model's context (kept where it fits the curves significantly better than the
+    /// diagram's; docs/ema.md, "Damped poles").
+    #[arg(long, value_enum, default_value_t = PolesArg::Checked)]
+    pub poles: PolesArg,
     /// CMIF peaks listed: those standing at least this factor above the lower of their two
     /// bases (topographic prominence within the band; 2 = 6 dB).
     #[arg(long, default_value_t = 2.0, value_parser = finite)]
@@ -251,6 +256,27 @@ pub struct EmaArgs {
     /// Output format (JSON adds the diagram, shapes and auto-MAC).
     #[command(flatten)]
     pub output: OutputArgs,
+}
+
+/// Which poles `lamdyn ema` reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PolesArg {
+    /// The stabilization diagram's poles.
+    Diagram,
+    /// The refined poles (output error beside real residual terms), unchecked.
+    Refined,
+    /// Each refined pole where it fits significantly better in the LSCF model's context.
+    Checked,
+}
+
+impl From<PolesArg> for lamdyn_ema::identify::PoleEstimator {
+    fn from(p: PolesArg) -> Self {
+        match p {
+            PolesArg::Diagram => Self::Diagram,
+            PolesArg::Refined => Self::Refined,
+            PolesArg::Checked => Self::Checked,
+        }
+    }
 }
 
 /// How time data were excited.

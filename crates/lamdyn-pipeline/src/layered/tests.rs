@@ -665,6 +665,8 @@ fn a_pair_fit_to_the_frfs_recovers_the_core_its_poles_miss() {
         mpd_deg: 0.0,
         sd: None,
         pick: Default::default(),
+        diagram_pole: Complex64::new(0.0, 0.0),
+        refined: false,
         quality: Default::default(),
     };
     let ema = EmaResult {

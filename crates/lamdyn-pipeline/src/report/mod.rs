@@ -1292,7 +1292,6 @@ fn verdict_sentences(r: &ChainResult) -> Vec<String> {
     aside
         .chain(doubtful)
         .map(|(m, set_aside)| {
-            let why: Vec<String> = m.quality.flags.iter().map(ToString::to_string).collect();
             format!(
                 "{:.3} Hz is {}{}: {}.",
                 m.freq_hz,
@@ -1302,7 +1301,7 @@ fn verdict_sentences(r: &ChainResult) -> Vec<String> {
                 } else {
                     ""
                 },
-                why.join("; ")
+                m.quality.reasons()
             )
         })
         .collect()

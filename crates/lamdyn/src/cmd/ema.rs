@@ -8,7 +8,8 @@ use crate::cli::{EmaArgs, Estimator, ExcitationArg, QuantityArg, WindowArg};
 use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
-use lamdyn_ema::identify::{EmaResult, EmaSettings, Mode, identify_with};
+use lamdyn_ema::identify::{EmaResult, EmaSettings, Mode, PoleEstimator, identify_with};
+use lamdyn_ema::lscf::{pole_damping, pole_freq_hz};
 use lamdyn_ema::quality::Verdict;
 use lamdyn_ema::spectra::Spectra;
 use lamdyn_ema::stabilization::Pick;
@@ -109,6 +110,7 @@ fn settings(args: &EmaArgs, set: &FrfSet) -> Result<EmaSettings> {
         };
         s.band_hz = Some([lo, hi]);
     }
+    s.estimator = args.poles.into();
     if args.no_refine {
         s.refine_iterations = 0;
     }
@@ -213,6 +215,11 @@ fn verdict_cell(m: &Mode) -> String {
     format!("{}{mark}", m.quality.verdict.label())
 }
 
+/// Where the mode's pole comes from: "refined" or "diagram".
+fn pole_source(m: &Mode) -> &'static str {
+    if m.refined { "refined" } else { "diagram" }
+}
+
 /// One line per mode that is not sound: its number, frequency, verdict and reasons.
 fn verdict_lines(modes: &[Mode]) -> Vec<(Verdict, String)> {
     modes
@@ -220,13 +227,12 @@ fn verdict_lines(modes: &[Mode]) -> Vec<(Verdict, String)> {
         .enumerate()
         .filter(|(_, m)| m.quality.verdict != Verdict::Sound)
         .map(|(k, m)| {
-            let why: Vec<String> = m.quality.flags.iter().map(ToString::to_string).collect();
             let line = format!(
                 "mode {} ({:.4} Hz) is {}: {}.",
                 k + 1,
                 m.freq_hz,
                 m.quality.verdict.label(),
-                why.join("; ")
+                m.quality.reasons()
             );
             (m.quality.verdict, line)
         })
@@ -248,6 +254,18 @@ fn stable_footnote(modes: &[Mode]) -> String {
     format!("stable: {}.", what.join("; "))
 }
 
+/// The method's last step, in words.
+fn estimator_text(s: &EmaSettings) -> &'static str {
+    match s.estimator {
+        _ if s.refine_iterations == 0 => "LSFD residues on the diagram's poles",
+        PoleEstimator::Diagram => "LSFD residues on the diagram's poles",
+        PoleEstimator::Refined => "poles refined with LSFD residues (variable projection)",
+        PoleEstimator::Checked => {
+            "poles refined with LSFD residues (variable projection), each refined pole kept only where it fits significantly better than the diagram's in the LSCF model's own context"
+        }
+    }
+}
+
 fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> Report {
     let mut report = Report::new(
         "ema",
@@ -263,6 +281,15 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
             Column::new("stable_poles", "stable", "", Fmt::Fixed(0)),
             Column::new("frac_drop", "FRAC drop", "", Fmt::Sci(2)),
             Column::new("verdict", "verdict", "", Fmt::Fixed(0)),
+            Column::new("pole", "pole", "", Fmt::Fixed(0)),
+            Column::new("diagram_freq_hz", "f (diagram)", "Hz", Fmt::Fixed(4)),
+            Column::new(
+                "diagram_damping_ratio",
+                "zeta (diagram)",
+                "%",
+                Fmt::Fixed(4),
+            )
+            .scaled(0.01),
         ],
     );
     report.input("data", source.to_string());
@@ -294,7 +321,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
             100.0 * s.criteria.damping_tol,
             if s.mode_vectors { format!(", 1 - MAC(mode vectors) <= {} %", 100.0 * s.criteria.vector_tol) } else { String::new() },
             if s.near_hz.is_some() { "poles picked near the given frequencies" } else { "automatic selection (clusters stable over half the orders)" },
-            if s.refine_iterations > 0 { "poles refined with LSFD residues (variable projection)" } else { "LSFD residues on the diagram's poles" }
+            estimator_text(s)
         ),
     );
     if let Some(t) = s.exp_tau_s {
@@ -326,6 +353,9 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
             (m.stable_count as f64).into(),
             m.quality.frac_drop.into(),
             verdict_cell(m).into(),
+            pole_source(m).into(),
+            pole_freq_hz(m.diagram_pole).into(),
+            pole_damping(m.diagram_pole).into(),
         ]);
     }
     for (verdict, line) in verdict_lines(&r.modes) {
@@ -392,6 +422,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
     report.notes.push("zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and MPD 0 for a real (normal) mode.".into());
     report.notes.push("sd(f), sd(zeta): standard deviations from the fit's noise (the refinement's covariance); they leave out the estimator's bias (modes outside the band, an unmodelled mode).".into());
     report.notes.push(stable_footnote(&r.modes));
+    report.notes.push("pole: refined, or diagram where the refinement did not fit the curves significantly better in the LSCF model's context (or was not run); f and zeta (diagram): the diagram's pole it started from.".into());
     report.notes.push("FRAC drop: the mean FRAC the regenerated FRFs lose without the mode; verdict: sound, doubtful (kept; the reasons above) or smear (one pole over a cluster of modes: its f and zeta describe no mode).".into());
     let cell = |v: f64| serde_json::json!(v);
     report.extra = Some(serde_json::json!({
@@ -475,12 +506,12 @@ fn write_results(
 ) -> Result<()> {
     use lamdyn_report::ema::{cmif_chart, stabilization_chart};
     let mut modes = String::from(
-        "mode,freq_hz,freq_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_poles,pick,frac_drop,verdict\n",
+        "mode,freq_hz,freq_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_poles,pick,frac_drop,verdict,pole,diagram_freq_hz,diagram_damping_ratio\n",
     );
     let sd = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for (k, m) in r.modes.iter().enumerate() {
         modes += &format!(
-            "{},{},{},{},{},{},{},{},{},{:?},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{}\n",
             k + 1,
             m.freq_hz,
             sd(m.sd.map(|d| d.freq_hz)),
@@ -492,7 +523,10 @@ fn write_results(
             m.stable_count,
             m.pick,
             m.quality.frac_drop,
-            m.quality.verdict.label()
+            m.quality.verdict.label(),
+            pole_source(m),
+            pole_freq_hz(m.diagram_pole),
+            pole_damping(m.diagram_pole),
         );
     }
     let mut diagram = String::from("order,freq_hz,damping_ratio,stability,vector_mac\n");

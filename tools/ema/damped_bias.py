@@ -1,0 +1,175 @@
+#!/usr/bin/env python3
+"""Bias and scatter of identified poles on virtual tests with modal damping 0.1 %, 2 %, 8 % and
+15 %: lamdyn's diagram pole (LSFD on the stabilization diagram's pole), lamdyn's final pole (the
+refinement) and sdypy-EMA 0.31 (its LSCF, orders 2-60, select_closest_poles), on the same FRFs.
+
+The virtual part is a simply supported plate (modal model, unit modal masses, proportional
+damping): nine modes in the band 20-200 Hz, among them two close pairs (102.5 / 105.6 Hz, 3 %
+apart, and 150.6 / 152.5 Hz, 1.2 % apart), and eight modes above the band up to 400 Hz. Twelve
+responses, one reference (the driving point) or three; accelerance on 0.1 Hz lines, 0-250 Hz;
+complex Gaussian noise of 1 % of each curve's RMS over the band (or none). Every estimator picks
+its pole nearest each true frequency (lamdyn: `near_hz`, a window of 40 % of the distance to the
+nearest neighbour, at most 5 % of f), so the table compares estimators, not selections.
+
+Usage: python3 tools/ema/damped_bias.py [--seeds N] [--levels 0.001,0.02,...] [--no-sdypy]
+  -> markdown tables (docs/ema.md, "Damped poles"): per damping level, reference count and
+     noise, per mode: bias and standard deviation of f and zeta relative to the truth over the
+     seeds, and how many seeds found the mode.
+"""
+import argparse
+import time
+import warnings
+
+import numpy as np
+
+import lamdyn
+
+#: Natural frequencies f_mn = 10 (m^2 + (n / 0.8)^2) Hz of the plate's modes, (m, n) up to 400 Hz.
+MODES = sorted(
+    ((10.0 * (m * m + (n / 0.8) ** 2), m, n) for m in range(1, 7) for n in range(1, 6)
+     if 10.0 * (m * m + (n / 0.8) ** 2) <= 400.0)
+)
+BAND_HZ = (20.0, 200.0)
+#: Response points (x, y) on the unit plate (width 1, height 0.8): away from every nodal line.
+POINTS = [(x, y) for y in (0.13, 0.41, 0.67) for x in (0.11, 0.33, 0.57, 0.83)]
+DF_HZ = 0.1
+F_MAX_HZ = 250.0
+
+
+def true_modes(band=BAND_HZ):
+    """(f, m, n) of the modes in the band."""
+    return [t for t in MODES if band[0] <= t[0] <= band[1]]
+
+
+def plate_frf(zeta, references, snr_rel, rng):
+    """Accelerance FRFs, shape (responses, references, lines), and the lines, Hz."""
+    f = np.arange(1, int(F_MAX_HZ / DF_HZ) + 1) * DF_HZ
+    w = 2 * np.pi * f
+    phi = np.array([[np.sin(m * np.pi * x) * np.sin(n * np.pi * y / 0.8) for (x, y) in POINTS]
+                    for (_, m, n) in MODES])  # modes x points
+    h = np.zeros((len(POINTS), len(references), len(f)), complex)
+    for r, (fr, _, _) in enumerate(MODES):
+        wr = 2 * np.pi * fr
+        den = wr * wr - w * w + 2j * zeta * wr * w
+        h += np.einsum("o,j,k->ojk", phi[r], phi[r, references], -w * w / den)
+    if snr_rel > 0:
+        band = (f >= BAND_HZ[0]) & (f <= BAND_HZ[1])
+        rms = np.sqrt(np.mean(np.abs(h[:, :, band]) ** 2, axis=2, keepdims=True))
+        noise = rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)
+        h = h + snr_rel * rms * noise / np.sqrt(2)
+    return f, h
+
+
+def windows(targets):
+    """Per target: 40 % of the distance to its nearest neighbour, at most 5 % of f, Hz."""
+    out = []
+    for i, t in enumerate(targets):
+        gaps = [abs(t - u) for j, u in enumerate(targets) if j != i]
+        out.append(min(0.4 * min(gaps), 0.05 * t))
+    return out
+
+
+def nearest(found_f, found_z, targets, win):
+    """(f, zeta) of the found pole nearest each target within its window, else NaN."""
+    out = np.full((len(targets), 2), np.nan)
+    for i, (t, w) in enumerate(zip(targets, win)):
+        if len(found_f) == 0:
+            continue
+        k = int(np.argmin(np.abs(np.asarray(found_f) - t)))
+        if abs(found_f[k] - t) <= w:
+            out[i] = found_f[k], found_z[k]
+    return out
+
+
+def lamdyn_poles(f, h, targets, refine, estimator=None):
+    """lamdyn's poles near each target (the narrowest window of all targets: select_near takes
+    one), NaN where none was found or the identification failed."""
+    win = windows(targets)
+    try:
+        r = lamdyn.ema(f, h, band_hz=BAND_HZ, orders=(2, 60, 2), near_hz=targets,
+                       window_hz=min(win), refine=refine, poles=estimator or "checked")
+    except Exception:  # noqa: BLE001 - a failed identification finds nothing
+        return np.full((len(targets), 2), np.nan)
+    return nearest(r["freq_hz"], r["damping_ratio"], targets, win)
+
+
+def sdypy_poles(f, h, targets):
+    """sdypy-EMA's poles near each target: LSCF over every curve (orders 2-60), then
+    select_closest_poles."""
+    import sdypy.EMA as EMA
+
+    curves = h.reshape(-1, h.shape[2])
+    freq = np.concatenate([[0.0], f])
+    frf = np.concatenate([np.zeros((curves.shape[0], 1), complex), curves], axis=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            m = EMA.Model(frf=frf, freq=freq, lower=BAND_HZ[0], upper=BAND_HZ[1], pol_order_high=30,
+                          frf_type="accelerance")
+            m.get_poles(show_progress=False)
+            m.select_closest_poles(list(targets))
+        except Exception:  # noqa: BLE001
+            return np.full((len(targets), 2), np.nan)
+    return nearest(np.asarray(m.nat_freq), np.asarray(m.nat_xi), targets, windows(targets))
+
+
+def run(zeta, references, snr_rel, seeds, with_sdypy=True):
+    """Per estimator: relative errors (seeds, modes, [f, zeta])."""
+    modes = true_modes()
+    targets = [t[0] for t in modes]
+    truth = np.array([[t, zeta] for t in targets])
+    errors = {"diagram": [], "refined": [], "checked": []}
+    if with_sdypy:
+        errors["sdypy"] = []
+    for seed in range(seeds):
+        rng = np.random.default_rng(1000 + seed)
+        f, h = plate_frf(zeta, references, snr_rel, rng)
+        errors["diagram"].append(lamdyn_poles(f, h, targets, refine=False) / truth - 1)
+        for e in ("refined", "checked"):
+            errors[e].append(lamdyn_poles(f, h, targets, True, e) / truth - 1)
+        if with_sdypy:
+            errors["sdypy"].append(sdypy_poles(f, h, targets) / truth - 1)
+    return targets, {k: np.array(v) for k, v in errors.items()}
+
+
+def rms(e):
+    """Root mean square over the seeds that found the mode, per mode and quantity."""
+    return np.sqrt(np.nanmean(e ** 2, axis=0))
+
+
+def table(targets, errors):
+    names = list(errors)
+    head = "| mode f [Hz] | " + " | ".join(f"{n}: f bias / sd [%] | {n}: zeta bias / sd [%]" for n in names)
+    lines = [head + " | found |", "|---" * (1 + 2 * len(names)) + "|---|"]
+    for i, t in enumerate(targets):
+        cells = []
+        for n in names:
+            e = errors[n][:, i, :]
+            for q in (0, 1):
+                v = e[:, q]
+                v = v[np.isfinite(v)]
+                cells.append("–" if len(v) == 0 else f"{100 * v.mean():+.3f} / {100 * v.std():.3f}")
+        found = " / ".join(str(int(np.isfinite(errors[n][:, i, 0]).sum())) for n in names)
+        lines.append(f"| {t:.1f} | " + " | ".join(cells) + f" | {found} |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--levels", default="0.001,0.02,0.08,0.15")
+    ap.add_argument("--no-sdypy", action="store_true")
+    a = ap.parse_args()
+    for zeta in map(float, a.levels.split(",")):
+        for refs in ([0], [0, 5, 10]):
+            for snr in (0.0, 0.01):
+                t = time.perf_counter()
+                targets, errors = run(zeta, refs, snr, 1 if snr == 0 else a.seeds, not a.no_sdypy)
+                print(f"\n### zeta {100 * zeta:g} %, {len(refs)} reference(s), "
+                      f"{'noise-free' if snr == 0 else f'{100 * snr:g} % noise, {a.seeds} seeds'}"
+                      f" ({time.perf_counter() - t:.0f} s)\n")
+                print(table(targets, errors))
+
+
+if __name__ == "__main__":
+    main()
