@@ -40,9 +40,7 @@
 //! estimator's bias does.
 
 use crate::error::EmaError;
-use crate::lsfd::{
-    ModalFit, RefineLines, checked_refinement_lines, levenberg_marquardt, lsfd, projected_residuals,
-};
+use crate::lsfd::{ModalFit, RefineLines, checked_refinement_lines, lsfd};
 use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use lamdyn_frf::Quantity;
@@ -282,31 +280,27 @@ fn chi_square_99(dof: usize) -> f64 {
     v * (1.0 - a + 2.326_348 * a.sqrt()).powi(3)
 }
 
-/// The poles of [`crate::lsfd::refine_with`] (the same lines and iterations, `on_iteration(k,
-/// max)` as step k starts), each checked against its diagram pole in `poles` in the LSCF
-/// model's `context` (module docs): the modal model of the poles taken ([`lsfd`]) and the
-/// refined poles (all of them, taken or not; the diagram's where the refinement failed).
+/// The refined poles `refined` of [`crate::lsfd::refine_with`] (index-aligned with their
+/// diagram poles `diagram`, on the lines `fit_lines` chooses in `band_hz`), each checked against
+/// its diagram pole in the LSCF model's `context` (module docs): the modal model of the poles
+/// taken ([`lsfd`]).
 ///
 /// # Errors
 /// As [`lsfd`].
 #[allow(clippy::too_many_arguments)]
-pub fn refine_checked(
+pub fn check_refined(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     quantity: Quantity,
-    poles: &[Complex64],
+    diagram: &[Complex64],
+    refined: &[Complex64],
     band_hz: [f64; 2],
     fit_lines: RefineLines,
     context: &LscfContext,
-    iterations: usize,
-    on_iteration: &dyn Fn(usize, usize),
-) -> Result<(ModalFit, Vec<Complex64>), EmaError> {
-    let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
-    let residuals = |u: &[f64]| projected_residuals(freqs_hz, curves, quantity, &lines, u);
-    let refined = levenberg_marquardt(poles, &residuals, iterations, on_iteration)
-        .unwrap_or_else(|| poles.to_vec());
-    let taken = checked_poles(freqs_hz, curves, &lines, context, poles, &refined);
-    Ok((lsfd(freqs_hz, curves, quantity, &taken, band_hz)?, refined))
+) -> Result<ModalFit, EmaError> {
+    let lines = checked_refinement_lines(freqs_hz, curves, diagram, band_hz, fit_lines)?;
+    let taken = checked_poles(freqs_hz, curves, &lines, context, diagram, refined);
+    lsfd(freqs_hz, curves, quantity, &taken, band_hz)
 }
 
 #[cfg(test)]

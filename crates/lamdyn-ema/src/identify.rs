@@ -3,7 +3,7 @@
 //! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
 //! correlation with the measured ones, and the CMIF.
 
-use crate::context::{LscfContext, refine_checked};
+use crate::context::{LscfContext, check_refined};
 use crate::error::{EmaError, invalid};
 use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz, sample_interval};
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, frac, lsfd, pole_deviations, refine_with};
@@ -341,46 +341,48 @@ fn fit_selected(
     } else {
         s.estimator
     };
-    let mut refined = None;
-    let fit = match (estimator, context) {
-        (PoleEstimator::Diagram, _) => {
-            on_stage("residues (LSFD)");
-            lsfd(freqs, curves, quantity, &poles, band)?
-        }
+    let in_columns = |fit: ModalFit, refined: Option<Vec<Complex64>>| {
+        let (fit, warnings) = keep_poles_in_their_columns(fit, selected, &s.criteria, |p| {
+            lsfd(freqs, curves, quantity, p, band)
+        })?;
+        Ok(SelectedFit {
+            fit,
+            warnings,
+            refined,
+        })
+    };
+    if estimator == PoleEstimator::Diagram {
+        on_stage("residues (LSFD)");
+        let fit = lsfd(freqs, curves, quantity, &poles, band)?;
+        return in_columns(fit, None);
+    }
+    let fit = refine_with(
+        freqs,
+        curves,
+        quantity,
+        &poles,
+        band,
+        s.refine_lines,
+        s.refine_iterations,
+        &progress,
+    )?;
+    match (estimator, context) {
         (PoleEstimator::Checked, Some(c)) => {
-            let (fit, all) = refine_checked(
+            let refined = fit.poles.clone();
+            let fit = check_refined(
                 freqs,
                 curves,
                 quantity,
                 &poles,
+                &refined,
                 band,
                 s.refine_lines,
                 c,
-                s.refine_iterations,
-                &progress,
             )?;
-            refined = Some(all);
-            fit
+            in_columns(fit, Some(refined))
         }
-        _ => refine_with(
-            freqs,
-            curves,
-            quantity,
-            &poles,
-            band,
-            s.refine_lines,
-            s.refine_iterations,
-            &progress,
-        )?,
-    };
-    let (fit, warnings) = keep_poles_in_their_columns(fit, selected, &s.criteria, |p| {
-        lsfd(freqs, curves, quantity, p, band)
-    })?;
-    Ok(SelectedFit {
-        fit,
-        warnings,
-        refined,
-    })
+        _ => in_columns(fit, None),
+    }
 }
 
 /// The modal model of the selected poles ([`fit_selected`]) and what the refinement made of

@@ -343,12 +343,12 @@ pub fn refine_with(
 
 /// The residuals of a pole problem at the poles' parameters ([`pole_parameters`]), curve
 /// after curve (the same number of rows each); None where they cannot be computed.
-pub(crate) type PoleResiduals<'a> = dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync + 'a;
+type PoleResiduals<'a> = dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync + 'a;
 
 /// Levenberg–Marquardt on the poles' parameters ([`pole_parameters`]) from `poles`, minimising
 /// the sum of squares of `residuals`, at most `iterations` steps (`on_iteration(k, max)` as
 /// step k starts); the refined poles, or None where the residuals fail at the start.
-pub(crate) fn levenberg_marquardt(
+fn levenberg_marquardt(
     poles: &[Complex64],
     residuals: &PoleResiduals,
     iterations: usize,
@@ -441,7 +441,7 @@ pub(crate) fn to_poles(u: &[f64]) -> Vec<Complex64> {
 
 /// H_o − Ĥ_o (real, imaginary) on `lines`, curve after curve, for the poles of the parameters
 /// `u` with their LSFD residues (variable projection); None where the residue problem fails.
-pub(crate) fn projected_residuals(
+fn projected_residuals(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     quantity: Quantity,
@@ -520,7 +520,7 @@ pub fn pole_deviations(
 /// The standard deviations of `poles` as the least-squares estimate of `residuals` (rows per
 /// curve `rows`, `own` linear unknowns per curve besides the poles; the sandwich covariance of
 /// [`pole_deviations`]). None where the Jacobian is singular or the residuals fail.
-pub(crate) fn deviations(
+fn deviations(
     poles: &[Complex64],
     residuals: &PoleResiduals,
     rows: usize,
