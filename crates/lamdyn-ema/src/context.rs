@@ -4,11 +4,10 @@
 //! **Why.** The refinement ([`crate::lsfd::refine`]) fits the poles with real lower and upper
 //! residual terms beside them (the maximum-likelihood estimate for white noise *if* that model
 //! held). The modes outside the band and the damped modes' tails do not fit those terms, and a
-//! damped pole, broad and flat, takes up the misfit: on the noise-free curves of a virtual plate
-//! (`tools/ema/damped_bias.py`, docs/ema.md) it moved ζ by up to +11.6 % (2 % damping, the mode
-//! next to the band's edge) where the diagram's pole is exact to 1e-6. The diagram's pole has
-//! the opposite weakness: the linearised LSCF is biased by noise (ζ −8 % at 0.1 % damping and
-//! 1 % noise, where the refinement is within 0.3 %).
+//! damped pole, broad and flat, takes up the misfit where the diagram's pole is exact. The
+//! diagram's pole has the opposite weakness: the linearised LSCF is biased by noise, which the
+//! refinement removes. The measurements, and the alternatives measured worse, are in
+//! docs/ema.md ("Damped poles").
 //!
 //! **The context.** The LSCF model of order n is H_o(Ω) = B_o(Ω) A(Ω)⁻¹ with Ω = e^{−iωΔt} and
 //! real coefficients ([`crate::lscf`]). Its partial fractions
@@ -28,19 +27,14 @@
 //! and, pole by pole, with one refined pole in place of its diagram pole. The refined pole is
 //! taken where J drops by more than the 99 % point of χ² with two degrees of freedom times the
 //! residual variance (J/dof at the diagram's poles): more than moving one pole's two parameters
-//! takes from noise alone. Close poles are coupled (a pair 0.14 % apart: moving one alone fits
+//! takes from noise alone. Close poles are coupled (one of a close pair moved alone can fit
 //! worse), so neighbours whose half-power bands overlap and neither of which passed alone are
-//! tried together, with the χ² point of four degrees of freedom. (Trying groups of neighbours
-//! within a bandwidth together first was measured worse at 15 % damping: all modes one group,
-//! the refinement's bias let through, ζ 1.05 % off on noise-free FRFs where the diagram is
-//! within 0.1 %.) (Taking the refined frequency or decay rate alone, each with the
-//! one-parameter threshold, was measured worse: ζ 33 % off at one mode of the 8 % plate with
-//! three references, where the joint check keeps 8.6 %.) On noise-free curves the diagram's poles already fit the context
-//! model, and the refinement's moves bring no significant drop; with noise the linearised
-//! estimator's bias does.
+//! tried together, with the χ² point of four degrees of freedom. On noise-free curves the
+//! diagram's poles already fit the context model, and the refinement's moves bring no
+//! significant drop; with noise the linearised estimator's bias does.
 
 use crate::error::EmaError;
-use crate::lsfd::{ModalFit, RefineLines, checked_refinement_lines, lsfd};
+use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
 use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use lamdyn_frf::Quantity;
@@ -66,8 +60,7 @@ enum FixedRoot {
 impl LscfContext {
     /// The roots held fixed beside `poles` (rad/s): one of each conjugate pair and the real
     /// roots, less the root nearest each pole (its own root at this order) where one lies
-    /// within three half-power half-widths or 1 % of |λ|. (Removing every root that near, the
-    /// computational ones too, was measured no better.)
+    /// within three half-power half-widths or 1 % of |λ|.
     fn fixed_roots(&self, poles: &[Complex64]) -> Vec<FixedRoot> {
         let real = |x: &Complex64| x.im.abs() <= 1e-12 * x.norm().max(1e-300);
         let mut pairs: Vec<Complex64> = self
@@ -281,9 +274,9 @@ fn chi_square_99(dof: usize) -> f64 {
 }
 
 /// The refined poles `refined` of [`crate::lsfd::refine_with`] (index-aligned with their
-/// diagram poles `diagram`, on the lines `fit_lines` chooses in `band_hz`), each checked against
-/// its diagram pole in the LSCF model's `context` (module docs): the modal model of the poles
-/// taken ([`lsfd`]).
+/// diagram poles `diagram`; the curves already checked by it), each checked against its diagram
+/// pole in the LSCF model's `context` on the lines `fit_lines` chooses in `band_hz` (module
+/// docs): the modal model of the poles taken ([`lsfd`]).
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -298,7 +291,8 @@ pub fn check_refined(
     fit_lines: RefineLines,
     context: &LscfContext,
 ) -> Result<ModalFit, EmaError> {
-    let lines = checked_refinement_lines(freqs_hz, curves, diagram, band_hz, fit_lines)?;
+    let band = crate::band::positive_lines(freqs_hz, band_hz);
+    let lines = refinement_lines(freqs_hz, &band, diagram, fit_lines);
     let taken = checked_poles(freqs_hz, curves, &lines, context, diagram, refined);
     lsfd(freqs_hz, curves, quantity, &taken, band_hz)
 }

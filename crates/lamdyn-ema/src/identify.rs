@@ -315,9 +315,10 @@ fn first_cmif_peaks(
     }
 }
 
-/// The modal model of the selected poles: refined (`s.refine_iterations` > 0; in `context`
-/// where given) or LSFD on the diagram's poles, each refined pole that left its column put back
-/// ([`keep_poles_in_their_columns`]); with one warning per pole put back.
+/// The modal model of the selected poles by `s.estimator` (the diagram's poles when
+/// `s.refine_iterations` is 0; the check needs `context`, without it the refined poles are
+/// taken), each refined pole that left its column put back ([`keep_poles_in_their_columns`]);
+/// with one warning per pole put back.
 #[allow(clippy::too_many_arguments)]
 fn fit_selected(
     freqs: &[f64],
@@ -531,9 +532,9 @@ pub fn identify_with(
         },
     )?;
     let diag = diagram(&orders, &s.criteria);
-    let context = orders.last().map(|top| LscfContext {
+    let context = orders.into_iter().last().map(|top| LscfContext {
         dt: sample_interval(band),
-        roots: top.roots.clone(),
+        roots: top.roots,
     });
     let cmif: Vec<Vec<f64>> = (0..freqs.len())
         .map(|k| {

@@ -286,7 +286,7 @@ impl Default for RefineLines {
 }
 
 /// The lines the refinement fits (see [`RefineLines`]).
-fn refinement_lines(
+pub(crate) fn refinement_lines(
     freqs_hz: &[f64],
     band: &[usize],
     poles: &[Complex64],
@@ -408,7 +408,7 @@ fn levenberg_marquardt(
 
 /// The curves checked ([`check_curves`]), then the lines the refinement fits
 /// ([`refinement_lines`]) in `band_hz`.
-pub(crate) fn checked_refinement_lines(
+fn checked_refinement_lines(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     poles: &[Complex64],
@@ -425,7 +425,7 @@ pub(crate) fn checked_refinement_lines(
 }
 
 /// The refinement's parameters of each pole: ln(−Re λ), Im λ.
-pub(crate) fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
+fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
     poles
         .iter()
         .flat_map(|p| [(-p.re).max(1e-12).ln(), p.im])
@@ -433,7 +433,7 @@ pub(crate) fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
 }
 
 /// The poles of the refinement's parameters ([`pole_parameters`]).
-pub(crate) fn to_poles(u: &[f64]) -> Vec<Complex64> {
+fn to_poles(u: &[f64]) -> Vec<Complex64> {
     u.chunks(2)
         .map(|c| Complex64::new(-c[0].exp(), c[1]))
         .collect()
