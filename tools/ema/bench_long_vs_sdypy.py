@@ -4,7 +4,8 @@ FRFs x 50 001 lines (0.02-1000 Hz), four modes (51.5, 142.2, 278.7, 460.4 Hz; ze
 40 dB complex noise, band 20-1000 Hz, orders 2-60 (sdypy: pol_order_high = 30).
 
 - lamdyn: `lamdyn ema --uff long.uff --band-hz 20,1000 --json` (binary 58b, the automatic
-  selection, the refinement, residues, CMIF), one process per run.
+  selection, the checked refinement, residues, sds, verdicts, CMIF), one process per run; its
+  step times from the JSON (details.seconds).
 - sdypy-EMA: `python3 -c ...` reading the same FRFs from .npy (its fastest input), LSCF,
   select_closest_poles at the true frequencies (it has no automatic selection), its LSFD
   (get_constants), one process per run (Python start-up and imports included, as a user pays).
@@ -88,11 +89,12 @@ def main():
         np.save(fn, f)
         np.save(hn, frf)
         truth = [m[0] for m in MODES]
-        lam_t, sd_t = [], []
+        lam_t, sd_t, steps = [], [], []
         for _ in range(REPEATS):
             dt, out = timed([LAMDYN, "ema", "--uff", uff, "--band-hz", "20,1000", "--json"])
             lam_t.append(dt)
             lam = json.loads(out)
+            steps.append(lam["details"]["seconds"])
             dt, out = timed([sys.executable, "-c", SDYPY, fn, hn, json.dumps(truth)])
             sd_t.append(dt)
             sd = json.loads(out)
@@ -100,7 +102,10 @@ def main():
     lz = [r["damping_ratio"] for r in lam["rows"]]
     tl, ts = statistics.median(lam_t), statistics.median(sd_t)
     print(f"9 FRFs x {f.size} lines, band 20-1000 Hz, orders 2-60, {os.cpu_count()} cores, median of {REPEATS}")
-    print(f"whole process: lamdyn {tl:.2f} s, sdypy-EMA {ts:.2f} s, ratio {ts / tl:.1f}x")
+    print(f"whole process: lamdyn {tl:.3f} s, sdypy-EMA {ts:.3f} s, ratio {ts / tl:.1f}x")
+    order = ["read", "diagram", "selection", "refinement", "check", "residues", "deviations", "modes"]
+    print("lamdyn steps (median, s): " + ", ".join(
+        f"{k} {statistics.median(s[k] for s in steps):.3f}" for k in order))
     print("| mode | true f [Hz] | lamdyn f err | sdypy f err | true zeta [%] | lamdyn zeta err | sdypy zeta err |")
     print("|---|---|---|---|---|---|---|")
     for k, (ft, zt) in enumerate(MODES):

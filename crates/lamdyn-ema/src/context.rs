@@ -35,8 +35,9 @@
 
 use crate::error::EmaError;
 use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
+use crate::projection::apply_transpose_q;
 use faer::Mat;
-use faer::linalg::solvers::SolveLstsq;
+use faer::linalg::solvers::{Qr, SolveLstsq};
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -105,13 +106,18 @@ impl LscfContext {
 }
 
 /// The context model on the refinement's lines: the data with the fixed columns projected out.
+/// With the QR F = Q R of the fixed columns F (rows × k), the projection is taken in Q's
+/// coordinates: Qᵀ(I − Q₁Q₁ᵀ)X is Qᵀ X with its first k rows zeroed, so the problem of the free
+/// columns is that of the last rows of Qᵀ P and Qᵀ B, and Q is applied as its Householder
+/// reflections, never formed.
 struct ContextProblem<'a> {
     context: &'a LscfContext,
     /// Ω_k of each line.
     omega: Vec<Complex64>,
-    /// Orthonormal basis of the fixed columns (direct term and fixed roots), rows × k.
-    q: Mat<f64>,
-    /// The data with the fixed columns projected out, rows × curves.
+    /// The QR of the fixed columns (direct term and fixed roots).
+    fixed: Qr<f64>,
+    /// The last rows − k rows of Qᵀ B: the data with the fixed columns projected out, in Q's
+    /// coordinates, one column per curve.
     data: Mat<f64>,
 }
 
@@ -140,16 +146,16 @@ impl<'a> ContextProblem<'a> {
             }
         }
         let rows = 2 * lines.len();
-        let q = scaled_real_matrix(&cols, rows).qr().compute_thin_Q();
+        let fixed = scaled_real_matrix(&cols, rows).qr();
         let b = Mat::from_fn(rows, curves.len(), |row, o| {
             let h = curves[o][lines[row / 2]];
             if row % 2 == 0 { h.re } else { h.im }
         });
-        let data = &b - &q * (q.transpose() * &b);
+        let data = projected_out(&fixed, b);
         Self {
             context,
             omega,
-            q,
+            fixed,
             data,
         }
     }
@@ -163,8 +169,7 @@ impl<'a> ContextProblem<'a> {
             cols.push(g1);
             cols.push(g2);
         }
-        let p = scaled_real_matrix(&cols, 2 * self.omega.len());
-        let p = &p - &self.q * (self.q.transpose() * &p);
+        let p = projected_out(&self.fixed, scaled_real_matrix(&cols, 2 * self.omega.len()));
         let x = p.qr().solve_lstsq(&self.data);
         let r = &self.data - &p * &x;
         let j = r.squared_norm_l2();
@@ -174,9 +179,17 @@ impl<'a> ContextProblem<'a> {
     /// Degrees of freedom of the residuals with `poles` physical poles.
     fn dof(&self, poles: usize) -> usize {
         let per_curve = 2 * self.omega.len();
-        let unknowns = self.q.ncols() + 2 * poles;
+        let unknowns = self.fixed.thin_R().nrows() + 2 * poles;
         (self.data.ncols() * per_curve.saturating_sub(unknowns)).max(1)
     }
+}
+
+/// The last rows of Qᵀ `m` for the QR `fixed` (rows × k): `m` with the span of the fixed
+/// columns projected out, in Q's coordinates ([`ContextProblem`]).
+fn projected_out(fixed: &Qr<f64>, mut m: Mat<f64>) -> Mat<f64> {
+    apply_transpose_q(fixed, &mut m);
+    let k = fixed.thin_R().nrows();
+    m.subrows(k, m.nrows() - k).to_owned()
 }
 
 /// The two real-coefficient columns of the conjugate pair (x, x̄) over the lines Ω (module

@@ -6,8 +6,8 @@
 use crate::context::{LscfContext, check_refined};
 use crate::error::{EmaError, invalid};
 use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz, sample_interval};
-use crate::lsfd::{ModalFit, PoleSd, RefineLines, frac, lsfd, pole_deviations, refine_with};
-use crate::quality::{Measured, ModeEvidence, ModeQuality, assess};
+use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
+use crate::quality::{Measured, ModeEvidence, ModeQuality, assess, contributions};
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
@@ -175,8 +175,59 @@ pub struct EmaResult {
     /// What the identification noticed (refined poles that left their column, ...).
     #[serde(default)]
     pub warnings: Vec<String>,
-    /// Wall time: poles and diagram, then refinement and residues, s.
-    pub seconds: [f64; 2],
+    /// Wall-clock time of each step (zero in a result stored before they were kept).
+    #[serde(default)]
+    pub timings: EmaTimings,
+}
+
+/// Wall-clock seconds of each step of [`identify`]; a step run twice (the fit after split modes
+/// are merged) counts both times.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct EmaTimings {
+    /// The LSCF at every order and the stabilization diagram.
+    pub diagram: f64,
+    /// The CMIF, its peaks and the selection of poles.
+    pub selection: f64,
+    /// The poles' refinement (Levenberg–Marquardt with the residues eliminated); with the
+    /// refined estimator, the residues of its poles.
+    pub refinement: f64,
+    /// The check of each refined pole in the LSCF model's context, and the residues of the
+    /// poles it takes.
+    pub check: f64,
+    /// The residues of the diagram's poles (without refinement), and those fitted again where
+    /// a refined pole left its column and was put back.
+    pub residues: f64,
+    /// The poles' standard deviations.
+    pub deviations: f64,
+    /// Shapes, quality verdicts and the regenerated FRFs' correlation.
+    pub modes: f64,
+}
+
+impl EmaTimings {
+    /// The steps' labels and seconds, in the order they run.
+    pub fn steps(&self) -> [(&'static str, f64); 7] {
+        [
+            ("diagram", self.diagram),
+            ("selection", self.selection),
+            ("refinement", self.refinement),
+            ("check", self.check),
+            ("residues", self.residues),
+            ("deviations", self.deviations),
+            ("modes", self.modes),
+        ]
+    }
+
+    /// The sum of the steps.
+    pub fn total(&self) -> f64 {
+        self.steps().iter().map(|(_, t)| t).sum()
+    }
+}
+
+/// Seconds since `clock` started, restarting it.
+fn lap(clock: &mut Instant) -> f64 {
+    let t = clock.elapsed().as_secs_f64();
+    *clock = Instant::now();
+    t
 }
 
 impl EmaResult {
@@ -329,7 +380,9 @@ fn fit_selected(
     context: Option<&LscfContext>,
     s: &EmaSettings,
     on_stage: &dyn Fn(&str),
+    timings: &mut EmaTimings,
 ) -> Result<SelectedFit, EmaError> {
+    let mut clock = Instant::now();
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
     let n = poles.len();
     let progress = |k: usize, max: usize| {
@@ -342,22 +395,27 @@ fn fit_selected(
     } else {
         s.estimator
     };
-    let in_columns = |fit: ModalFit, refined: Option<Vec<Complex64>>| {
+    let in_columns = |fit: ModalFit, refined: Option<Vec<Complex64>>, clock: &mut Instant| {
         let (fit, warnings) = keep_poles_in_their_columns(fit, selected, &s.criteria, |p| {
             lsfd(freqs, curves, quantity, p, band)
         })?;
-        Ok(SelectedFit {
-            fit,
-            warnings,
-            refined,
-        })
+        Ok::<_, EmaError>((
+            SelectedFit {
+                fit,
+                warnings,
+                refined,
+            },
+            lap(clock),
+        ))
     };
     if estimator == PoleEstimator::Diagram {
         on_stage("residues (LSFD)");
         let fit = lsfd(freqs, curves, quantity, &poles, band)?;
-        return in_columns(fit, None);
+        let (fitted, t) = in_columns(fit, None, &mut clock)?;
+        timings.residues += t;
+        return Ok(fitted);
     }
-    let fit = refine_with(
+    let refined = refined_poles(
         freqs,
         curves,
         quantity,
@@ -367,9 +425,9 @@ fn fit_selected(
         s.refine_iterations,
         &progress,
     )?;
-    match (estimator, context) {
+    let (fitted, t) = match (estimator, context) {
         (PoleEstimator::Checked, Some(c)) => {
-            let refined = fit.poles.clone();
+            timings.refinement += lap(&mut clock);
             let fit = check_refined(
                 freqs,
                 curves,
@@ -380,10 +438,17 @@ fn fit_selected(
                 s.refine_lines,
                 c,
             )?;
-            in_columns(fit, Some(refined))
+            timings.check += lap(&mut clock);
+            in_columns(fit, Some(refined), &mut clock)?
         }
-        _ => in_columns(fit, None),
-    }
+        _ => {
+            let fit = lsfd(freqs, curves, quantity, &refined, band)?;
+            timings.refinement += lap(&mut clock);
+            in_columns(fit, None, &mut clock)?
+        }
+    };
+    timings.residues += t;
+    Ok(fitted)
 }
 
 /// The modal model of the selected poles ([`fit_selected`]) and what the refinement made of
@@ -482,7 +547,8 @@ pub fn identify_with(
     s: &EmaSettings,
     on_stage: &dyn Fn(&str),
 ) -> Result<EmaResult, EmaError> {
-    let clock = Instant::now();
+    let mut clock = Instant::now();
+    let mut timings = EmaTimings::default();
     let freqs = set.freqs_hz();
     let (nr, nf) = (set.responses().len(), set.references().len());
     if let Some(d) = s.driving {
@@ -536,6 +602,7 @@ pub fn identify_with(
         dt: sample_interval(band),
         roots: top.roots,
     });
+    timings.diagram = lap(&mut clock);
     let cmif: Vec<Vec<f64>> = (0..freqs.len())
         .map(|k| {
             let h: Vec<Complex64> = curves.iter().map(|c| c[k]).collect();
@@ -578,8 +645,8 @@ pub fn identify_with(
             ),
         ));
     }
-    let t_poles = clock.elapsed().as_secs_f64();
-    let fit_poles = |selected: &[SelectedPole]| {
+    timings.selection = lap(&mut clock);
+    let fit_poles = |selected: &[SelectedPole], timings: &mut EmaTimings| {
         fit_selected(
             freqs,
             &curves,
@@ -589,15 +656,16 @@ pub fn identify_with(
             context.as_ref(),
             s,
             on_stage,
+            timings,
         )
     };
-    let mut fitted = fit_poles(&selected)?;
+    let mut fitted = fit_poles(&selected, &mut timings)?;
     if s.near_hz.is_none() {
         let (fewer, merged) = merge_split_modes(selected, &fitted.fit);
         selected = fewer;
         if !merged.is_empty() {
             warnings.extend(merged);
-            fitted = fit_poles(&selected)?;
+            fitted = fit_poles(&selected, &mut timings)?;
         }
     }
     let SelectedFit {
@@ -605,13 +673,20 @@ pub fn identify_with(
         warnings: kept,
         refined,
     } = fitted;
-    let lines = crate::band::lines(freqs, band);
-    let correlation = (0..curves.len())
-        .map(|o| {
-            let syn: Vec<Complex64> = freqs.iter().map(|f| fit.synthesize(o, *f)).collect();
-            frac(curves[o], &syn, &lines)
-        })
-        .collect();
+    clock = Instant::now();
+    let positive = crate::band::positive_lines(freqs, band);
+    let contributions = contributions(
+        &fit,
+        Measured {
+            freqs_hz: freqs,
+            curves: &curves,
+            lines: &positive,
+        },
+    );
+    let line_spacing_hz = match positive[..] {
+        [a, b, ..] => (freqs[b] - freqs[a]).abs(),
+        _ => 0.0,
+    };
     // Shapes over the responses for reference 0 (curve index i·nf).
     // A roving-hammer test (one response, several references): the shapes are over the
     // references — by reciprocity the residues of the response to each hammer point.
@@ -622,7 +697,7 @@ pub fn identify_with(
             "one response and {nf} references (a roving-hammer test): the shapes, MPC, MPD and auto-MAC are over the references (by reciprocity, the residues of the response to each hammer point)"
         ));
     }
-    let positive = crate::band::positive_lines(freqs, band);
+    timings.modes = lap(&mut clock);
     let deviations = if s.refine_iterations > 0 {
         on_stage("the poles' standard deviations");
         pole_deviations(
@@ -636,6 +711,7 @@ pub fn identify_with(
     } else {
         None
     };
+    timings.deviations = lap(&mut clock);
     let all_modes: Vec<Mode> = (0..fit.poles.len())
         .map(|r| {
             let all = fit.shape(r, s.driving.map(|d| d * nf));
@@ -658,11 +734,8 @@ pub fn identify_with(
                 mpd_deg: mpd(&shape),
                 shape_len: shape.len(),
                 stable_count: selected.get(r).map_or(0, |p| p.count),
-            };
-            let data = Measured {
-                freqs_hz: freqs,
-                curves: &curves,
-                lines: &positive,
+                frac_drop: contributions.frac_drop[r],
+                line_spacing_hz,
             };
             Mode {
                 freq_hz: evidence.freq_hz,
@@ -687,7 +760,7 @@ pub fn identify_with(
                 pick: selected.get(r).map_or(Pick::Auto, |p| p.pick),
                 diagram_pole: corrected(diagram_pole),
                 refined: diagram_pole != fit.poles[r],
-                quality: assess(&fit, r, &evidence, data, &band_peaks),
+                quality: assess(&evidence, &band_peaks),
             }
         })
         .collect();
@@ -696,20 +769,22 @@ pub fn identify_with(
             .iter()
             .any(|f| (m.freq_hz - f).abs() <= s.window_hz)
     });
+    let auto_mac = auto_mac(&modes);
+    timings.modes += lap(&mut clock);
     Ok(EmaResult {
         band_hz: band,
         diagram: diag,
-        auto_mac: auto_mac(&modes),
+        auto_mac,
         modes,
         rejected,
         set_aside: vec![],
-        correlation,
+        correlation: contributions.frac,
         curve_names: names,
         cmif,
         cmif_peaks: band_peaks,
         missing_hz,
         fit: Some(fit),
         warnings,
-        seconds: [t_poles, clock.elapsed().as_secs_f64() - t_poles],
+        timings,
     })
 }

@@ -8,6 +8,7 @@
 //! | [`lscf`] | LSCF / RFP-Z common-denominator poles at many orders in one pass |
 //! | [`stabilization`] | stabilization diagram, automatic and targeted pole selection |
 //! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC, pole refinement |
+//! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
 //! | [`context`] | pole refinement in the LSCF model's context (its other roots fixed) |
 //! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
@@ -25,6 +26,7 @@ mod error;
 pub mod identify;
 pub mod lscf;
 pub mod lsfd;
+mod projection;
 pub mod quality;
 pub mod shapes;
 pub mod spectra;

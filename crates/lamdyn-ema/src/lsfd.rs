@@ -22,8 +22,9 @@
 //! A_r = φ φᵀ/(2iω_d) give φ_p = √(2iω_d A_r,pp) and φ_o = 2iω_d A_r,op/φ_p.
 
 use crate::error::{EmaError, check_curves, invalid};
+use crate::projection::{LineSamples, quantity_factor, solve_by_blocks};
 use faer::Mat;
-use faer::linalg::solvers::{Solve, SolveLstsq};
+use faer::linalg::solvers::Solve;
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -42,22 +43,6 @@ pub struct ModalFit {
     pub upper: Vec<f64>,
     /// The quantity of the curves.
     pub quantity: Quantity,
-}
-
-fn basis(w: f64, p: Complex64) -> (Complex64, Complex64) {
-    let s = Complex64::new(0.0, w);
-    let (a, b) = (1.0 / (s - p), 1.0 / (s - p.conj()));
-    (a + b, Complex64::i() * (a - b))
-}
-
-/// (iω)^k of the quantity: receptance 1, mobility iω, accelerance (iω)².
-fn factor(w: f64, q: Quantity) -> Complex64 {
-    let s = Complex64::new(0.0, w);
-    match q {
-        Quantity::Receptance => Complex64::new(1.0, 0.0),
-        Quantity::Mobility => s,
-        Quantity::Accelerance => s * s,
-    }
 }
 
 /// Fits residues and residuals of `curves` (values of `quantity` at `freqs_hz`) for `poles`,
@@ -101,98 +86,87 @@ fn lsfd_on(
             format!("{} lines for {} unknowns per curve", lines.len(), unknowns),
         ));
     }
-    let nr = poles.len();
-    let rows = 2 * lines.len();
-    let a = Mat::from_fn(rows, unknowns, |row, c| {
-        let k = lines[row / 2];
-        let w = 2.0 * PI * freqs_hz[k];
-        let v = factor(w, quantity)
-            * if c < 2 * nr {
-                let (g1, g2) = basis(w, poles[c / 2]);
-                if c % 2 == 0 { g1 } else { g2 }
-            } else if c == 2 * nr {
-                Complex64::new(-1.0 / (w * w), 0.0)
-            } else {
-                Complex64::new(1.0, 0.0)
-            };
-        if row % 2 == 0 { v.re } else { v.im }
-    });
-    let b = Mat::from_fn(rows, curves.len(), |row, o| {
-        let k = lines[row / 2];
-        let h = curves[o][k];
-        if row % 2 == 0 { h.re } else { h.im }
-    });
-    if (0..rows).any(|r| (0..curves.len()).any(|o| !b[(r, o)].is_finite())) {
-        return Err(invalid("FRFs", "a value in the band is not finite".into()));
-    }
-    // Column scaling for conditioning.
-    let scale: Vec<f64> = (0..unknowns)
-        .map(|c| {
-            (0..rows)
-                .map(|r| a[(r, c)] * a[(r, c)])
-                .sum::<f64>()
-                .sqrt()
-                .max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let a = Mat::from_fn(rows, unknowns, |r, c| a[(r, c)] / scale[c]);
-    let x = a.qr().solve_lstsq(&b);
-    if (0..unknowns).any(|r| (0..curves.len()).any(|o| !x[(r, o)].is_finite())) {
-        return Err(invalid(
+    let x = solve_by_blocks(freqs_hz, curves, quantity, lines, poles)?.ok_or_else(|| {
+        invalid(
             "poles",
             "the residue problem is singular (two poles on one mode?)".into(),
-        ));
-    }
-    let residues = (0..curves.len())
-        .map(|o| {
-            (0..nr)
-                .map(|r| {
-                    Complex64::new(
-                        x[(2 * r, o)] / scale[2 * r],
-                        x[(2 * r + 1, o)] / scale[2 * r + 1],
-                    )
-                })
-                .collect()
-        })
-        .collect();
+        )
+    })?;
+    let nr = poles.len();
+    let curves = 0..x.ncols();
     Ok(ModalFit {
         poles: poles.to_vec(),
-        residues,
-        lower: (0..curves.len())
-            .map(|o| x[(2 * nr, o)] / scale[2 * nr])
+        residues: curves
+            .clone()
+            .map(|o| {
+                (0..nr)
+                    .map(|r| Complex64::new(x[(2 * r, o)], x[(2 * r + 1, o)]))
+                    .collect()
+            })
             .collect(),
-        upper: (0..curves.len())
-            .map(|o| x[(2 * nr + 1, o)] / scale[2 * nr + 1])
-            .collect(),
+        lower: curves.clone().map(|o| x[(2 * nr, o)]).collect(),
+        upper: curves.map(|o| x[(2 * nr + 1, o)]).collect(),
         quantity,
     })
+}
+
+/// What every curve's synthesis at one line shares ([`ModalFit::line_basis`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineBasis {
+    /// (iω)^k of the quantity.
+    factor: Complex64,
+    /// The lower residual's −1/ω² (0 at 0 Hz).
+    lower: f64,
+    /// 1/(iω − λ_r) and 1/(iω − λ_r*) of each pole.
+    fractions: Vec<(Complex64, Complex64)>,
 }
 
 impl ModalFit {
     /// The synthesized value of curve `o` at `freq_hz`, in the curves' quantity.
     pub fn synthesize(&self, o: usize, freq_hz: f64) -> Complex64 {
+        self.synthesize_on(&self.line_basis(freq_hz), o)
+    }
+
+    /// The poles' partial fractions at `freq_hz`, computed once for every curve's synthesis
+    /// there ([`Self::synthesize_on`], [`Self::mode_term_on`]).
+    pub fn line_basis(&self, freq_hz: f64) -> LineBasis {
         let w = 2.0 * PI * freq_hz;
         let s = Complex64::new(0.0, w);
-        let mut h: Complex64 = self
-            .poles
-            .iter()
-            .zip(&self.residues[o])
-            .map(|(p, a)| a / (s - p) + a.conj() / (s - p.conj()))
-            .sum();
-        if w > 0.0 {
-            h += Complex64::new(-self.lower[o] / (w * w), 0.0);
+        LineBasis {
+            factor: quantity_factor(w, self.quantity),
+            lower: if w > 0.0 { -1.0 / (w * w) } else { 0.0 },
+            fractions: self
+                .poles
+                .iter()
+                .map(|p| (1.0 / (s - p), 1.0 / (s - p.conj())))
+                .collect(),
         }
-        h += self.upper[o];
-        h * factor(w, self.quantity)
+    }
+
+    /// [`Self::synthesize`] on a line's basis.
+    pub fn synthesize_on(&self, basis: &LineBasis, o: usize) -> Complex64 {
+        let modes: Complex64 = (0..self.poles.len())
+            .map(|r| self.pair_on(basis, o, r))
+            .sum();
+        (modes + basis.lower * self.lower[o] + self.upper[o]) * basis.factor
+    }
+
+    /// [`Self::mode_term`] on a line's basis.
+    pub fn mode_term_on(&self, basis: &LineBasis, o: usize, r: usize) -> Complex64 {
+        self.pair_on(basis, o, r) * basis.factor
+    }
+
+    /// A_r/(iω − λ_r) + A_r*/(iω − λ_r*) of curve `o` on a line's basis.
+    fn pair_on(&self, basis: &LineBasis, o: usize, r: usize) -> Complex64 {
+        let a = self.residues[o][r];
+        let (t, tc) = basis.fractions[r];
+        a * t + a.conj() * tc
     }
 
     /// Mode r's term in curve `o` at `freq_hz`, in the curves' quantity:
     /// (iω)^k [A_r/(iω − λ_r) + A_r*/(iω − λ_r*)].
     pub fn mode_term(&self, o: usize, r: usize, freq_hz: f64) -> Complex64 {
-        let w = 2.0 * PI * freq_hz;
-        let s = Complex64::new(0.0, w);
-        let (p, a) = (self.poles[r], self.residues[o][r]);
-        (a / (s - p) + a.conj() / (s - p.conj())) * factor(w, self.quantity)
+        self.mode_term_on(&self.line_basis(freq_hz), o, r)
     }
 
     /// Σ_o Σ_k |H_o − Ĥ_o|² over `lines`.
@@ -300,12 +274,14 @@ pub(crate) fn refinement_lines(
     }
     let df = (freqs_hz[band[band.len() - 1]] - freqs_hz[band[0]]) / (band.len() - 1) as f64;
     let step = (2 * band.len()).div_ceil(max).max(1);
-    let near = |f: f64| {
-        poles.iter().any(|p| {
+    let windows: Vec<(f64, f64)> = poles
+        .iter()
+        .map(|p| {
             let (fp, z) = (p.norm() / (2.0 * PI), -p.re / p.norm());
-            (f - fp).abs() <= 5.0 * z * fp + 20.0 * df
+            (fp, 5.0 * z * fp + 20.0 * df)
         })
-    };
+        .collect();
+    let near = |f: f64| windows.iter().any(|&(fp, reach)| (f - fp).abs() <= reach);
     band.iter()
         .enumerate()
         .filter(|(i, k)| i % step == 0 || near(freqs_hz[**k]))
@@ -329,51 +305,64 @@ pub fn refine_with(
     iterations: usize,
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<ModalFit, EmaError> {
-    let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
-    let residuals = |u: &[f64]| projected_residuals(freqs_hz, curves, quantity, &lines, u);
-    let refined = levenberg_marquardt(poles, &residuals, iterations, on_iteration);
-    lsfd(
+    let refined = refined_poles(
         freqs_hz,
         curves,
         quantity,
-        refined.as_deref().unwrap_or(poles),
+        poles,
         band_hz,
+        fit_lines,
+        iterations,
+        on_iteration,
+    )?;
+    lsfd(freqs_hz, curves, quantity, &refined, band_hz)
+}
+
+/// The poles of [`refine_with`] without their residues (`poles` themselves where the residue
+/// problem fails at the start).
+///
+/// # Errors
+/// As [`lsfd`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refined_poles(
+    freqs_hz: &[f64],
+    curves: &[&[Complex64]],
+    quantity: Quantity,
+    poles: &[Complex64],
+    band_hz: [f64; 2],
+    fit_lines: RefineLines,
+    iterations: usize,
+    on_iteration: &dyn Fn(usize, usize),
+) -> Result<Vec<Complex64>, EmaError> {
+    let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
+    let samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
+    Ok(
+        levenberg_marquardt(&samples, poles, iterations, on_iteration)
+            .unwrap_or_else(|| poles.to_vec()),
     )
 }
 
-/// The residuals of a pole problem at the poles' parameters ([`pole_parameters`]), curve
-/// after curve (the same number of rows each); None where they cannot be computed.
-type PoleResiduals<'a> = dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync + 'a;
-
 /// Levenberg–Marquardt on the poles' parameters ([`pole_parameters`]) from `poles`, minimising
-/// the sum of squares of `residuals`, at most `iterations` steps (`on_iteration(k, max)` as
-/// step k starts); the refined poles, or None where the residuals fail at the start.
+/// the residual sum of squares of the residue problem on `samples` with the residues eliminated
+/// (its exact Jacobian: [`crate::projection::Projection::jacobian`]), at most `iterations` steps
+/// (`on_iteration(k, max)` as step k starts); the refined poles, or None where the residue
+/// problem fails at the start.
 fn levenberg_marquardt(
+    samples: &LineSamples,
     poles: &[Complex64],
-    residuals: &PoleResiduals,
     iterations: usize,
     on_iteration: &dyn Fn(usize, usize),
 ) -> Option<Vec<Complex64>> {
     let mut u = pole_parameters(poles);
-    let mut r = residuals(&u)?;
-    let mut cost: f64 = r.iter().map(|v| v * v).sum();
+    let mut at = samples.project(&to_poles(&u))?;
+    let mut cost = at.cost();
     let mut lambda = 1e-3;
     let p = u.len();
     for k in 0..iterations {
         on_iteration(k + 1, iterations);
-        let Some(cols) = jacobian(&u, residuals) else {
-            break;
-        };
-        let jtj = Mat::from_fn(p, p, |a, b| {
-            cols[a]
-                .iter()
-                .zip(&cols[b])
-                .map(|(x, y)| x * y)
-                .sum::<f64>()
-        });
-        let jtr: Vec<f64> = (0..p)
-            .map(|a| cols[a].iter().zip(&r).map(|(x, y)| x * y).sum())
-            .collect();
+        let jacobian = at.jacobian(samples);
+        let jtj = jacobian.transpose() * &jacobian;
+        let jtr = jacobian.transpose() * at.residual_vector();
         let mut improved = false;
         for _ in 0..8 {
             let m = Mat::from_fn(p, p, |a, b| {
@@ -384,14 +373,14 @@ fn levenberg_marquardt(
                         0.0
                     }
             });
-            let rhs = Mat::from_fn(p, 1, |a, _| -jtr[a]);
+            let rhs = Mat::from_fn(p, 1, |a, _| -jtr[(a, 0)]);
             let step = m.full_piv_lu().solve(&rhs);
             let trial: Vec<f64> = (0..p).map(|a| u[a] + step[(a, 0)]).collect();
-            if let Some(rt) = residuals(&trial) {
-                let ct: f64 = rt.iter().map(|v| v * v).sum();
+            if let Some(next) = samples.project(&to_poles(&trial)) {
+                let ct = next.cost();
                 if ct < cost {
                     let rel = (cost - ct) / cost;
-                    (u, r, cost) = (trial, rt, ct);
+                    (u, at, cost) = (trial, next, ct);
                     lambda = (lambda / 3.0).max(1e-12);
                     improved = rel > 1e-10;
                     break;
@@ -439,45 +428,6 @@ fn to_poles(u: &[f64]) -> Vec<Complex64> {
         .collect()
 }
 
-/// H_o − Ĥ_o (real, imaginary) on `lines`, curve after curve, for the poles of the parameters
-/// `u` with their LSFD residues (variable projection); None where the residue problem fails.
-fn projected_residuals(
-    freqs_hz: &[f64],
-    curves: &[&[Complex64]],
-    quantity: Quantity,
-    lines: &[usize],
-    u: &[f64],
-) -> Option<Vec<f64>> {
-    let fit = lsfd_on(freqs_hz, curves, quantity, &to_poles(u), lines).ok()?;
-    let mut r = Vec::with_capacity(2 * lines.len() * curves.len());
-    for (o, c) in curves.iter().enumerate() {
-        for &k in lines {
-            let d = c[k] - fit.synthesize(o, freqs_hz[k]);
-            r.push(d.re);
-            r.push(d.im);
-        }
-    }
-    Some(r)
-}
-
-/// Central-difference Jacobian of `residuals` at `u`, one column per parameter (computed in
-/// parallel); None where a residual fails.
-fn jacobian(u: &[f64], residuals: &PoleResiduals) -> Option<Vec<Vec<f64>>> {
-    use rayon::prelude::*;
-    let cols: Vec<Option<Vec<f64>>> = (0..u.len())
-        .into_par_iter()
-        .map(|j| {
-            let h = 1e-6 * u[j].abs().max(1.0);
-            let (mut up, mut um) = (u.to_vec(), u.to_vec());
-            up[j] += h;
-            um[j] -= h;
-            let (a, b) = (residuals(&up)?, residuals(&um)?);
-            Some(a.iter().zip(&b).map(|(x, y)| (x - y) / (2.0 * h)).collect())
-        })
-        .collect();
-    cols.into_iter().collect()
-}
-
 /// Standard deviations of a pole's frequency and damping ratio.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PoleSd {
@@ -507,33 +457,22 @@ pub fn pole_deviations(
     fit_lines: RefineLines,
 ) -> Result<Option<Vec<PoleSd>>, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
-    let residuals = |u: &[f64]| projected_residuals(freqs_hz, curves, quantity, &lines, u);
-    Ok(deviations(
-        poles,
-        &residuals,
-        2 * lines.len(),
-        2 * poles.len() + 2,
-        curves.len(),
-    ))
+    let samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
+    Ok(deviations(&samples, poles))
 }
 
-/// The standard deviations of `poles` as the least-squares estimate of `residuals` (rows per
-/// curve `rows`, `own` linear unknowns per curve besides the poles; the sandwich covariance of
-/// [`pole_deviations`]). None where the Jacobian is singular or the residuals fail.
-fn deviations(
-    poles: &[Complex64],
-    residuals: &PoleResiduals,
-    rows: usize,
-    own: usize,
-    curves: usize,
-) -> Option<Vec<PoleSd>> {
+/// The standard deviations of `poles` as the least-squares estimate of the residue problem on
+/// `samples` (the sandwich covariance of [`pole_deviations`]). None where the Jacobian is
+/// singular or the residue problem fails.
+fn deviations(samples: &LineSamples, poles: &[Complex64]) -> Option<Vec<PoleSd>> {
     let u = pole_parameters(poles);
-    let (r, cols) = (residuals(&u)?, jacobian(&u, residuals)?);
-    let own = own as f64 + u.len() as f64 / curves as f64;
+    let at = samples.project(&to_poles(&u))?;
+    let cols = at.jacobian(samples);
+    let rows = samples.rows();
+    let own = (2 * poles.len() + 2) as f64 + u.len() as f64 / samples.curves() as f64;
     let dof = (rows as f64 - own).max(1.0);
-    let variance: Vec<f64> = r
-        .chunks(rows)
-        .map(|c| c.iter().map(|v| v * v).sum::<f64>() / dof)
+    let variance: Vec<f64> = (0..samples.curves())
+        .map(|o| at.curve_cost(o) / dof)
         .collect();
     parameter_covariance(&cols, &variance, rows).map(|cov| {
         poles
@@ -553,26 +492,16 @@ fn deviations(
     })
 }
 
-/// The sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of [`pole_deviations`] from the Jacobian's
-/// columns `cols` and each curve's variance (`rows` residuals per curve); None when JᵀJ is
-/// singular.
-fn parameter_covariance(cols: &[Vec<f64>], variance: &[f64], rows: usize) -> Option<Mat<f64>> {
-    let p = cols.len();
-    let jtj = Mat::from_fn(p, p, |a, b| {
-        cols[a]
-            .iter()
-            .zip(&cols[b])
-            .map(|(x, y)| x * y)
-            .sum::<f64>()
+/// The sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of [`pole_deviations`] from the Jacobian
+/// `jacobian` (one column per parameter) and each curve's variance (`rows` residuals per curve);
+/// None when JᵀJ is singular.
+fn parameter_covariance(jacobian: &Mat<f64>, variance: &[f64], rows: usize) -> Option<Mat<f64>> {
+    let p = jacobian.ncols();
+    let jtj = jacobian.transpose() * jacobian;
+    let weighted = Mat::from_fn(jacobian.nrows(), p, |i, j| {
+        variance[i / rows].sqrt() * jacobian[(i, j)]
     });
-    let meat = Mat::from_fn(p, p, |a, b| {
-        cols[a]
-            .iter()
-            .zip(&cols[b])
-            .enumerate()
-            .map(|(i, (x, y))| variance[i / rows] * x * y)
-            .sum::<f64>()
-    });
+    let meat = weighted.transpose() * &weighted;
     let inverse = jtj.full_piv_lu().solve(Mat::<f64>::identity(p, p));
     let cov = &inverse * &meat * &inverse;
     (0..p)

@@ -20,7 +20,7 @@
 //! smear. With fewer than three response components the MPC carries no information (one
 //! component is always collinear) and no smear can be told.
 
-use crate::lsfd::{ModalFit, frac};
+use crate::lsfd::ModalFit;
 use crate::shapes::CmifPeak;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -163,6 +163,10 @@ pub struct ModeEvidence {
     pub shape_len: usize,
     /// Stable poles in its column.
     pub stable_count: usize,
+    /// The mean FRAC the regenerated curves lose without it ([`contributions`]).
+    pub frac_drop: f64,
+    /// The spacing of the measured lines, Hz (the CMIF peak's least reach).
+    pub line_spacing_hz: f64,
 }
 
 /// The measured curves the modal model was fitted to, and the lines of the band.
@@ -176,20 +180,10 @@ pub struct Measured<'a> {
     pub lines: &'a [usize],
 }
 
-/// The verdict on mode `r` of `fit` (module docs).
-pub fn assess(
-    fit: &ModalFit,
-    r: usize,
-    mode: &ModeEvidence,
-    data: Measured,
-    cmif_peaks: &[CmifPeak],
-) -> ModeQuality {
-    let frac_drop = frac_drop(fit, r, data);
-    let df = match data.lines {
-        [a, b, ..] => (data.freqs_hz[*b] - data.freqs_hz[*a]).abs(),
-        _ => 0.0,
-    };
-    let reach = 3.0 * (mode.damping_ratio * mode.freq_hz).max(df);
+/// The verdict on a mode from its evidence (module docs).
+pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
+    let frac_drop = mode.frac_drop;
+    let reach = 3.0 * (mode.damping_ratio * mode.freq_hz).max(mode.line_spacing_hz);
     let cmif_peak_hz = cmif_peaks
         .iter()
         .map(|p| p.freq_hz)
@@ -236,26 +230,105 @@ pub fn assess(
     }
 }
 
-/// Mean over the curves of FRAC(measured, model) − FRAC(measured, model without mode r).
-fn frac_drop(fit: &ModalFit, r: usize, data: Measured) -> f64 {
-    if data.curves.is_empty() {
-        return 0.0;
-    }
-    let n = data.freqs_hz.len();
-    let total: f64 = data
-        .curves
-        .iter()
-        .enumerate()
-        .map(|(o, measured)| {
-            let mut with = vec![Complex64::new(0.0, 0.0); n];
-            let mut without = with.clone();
-            for &k in data.lines {
-                let f = data.freqs_hz[k];
-                with[k] = fit.synthesize(o, f);
-                without[k] = with[k] - fit.mode_term(o, r, f);
+/// How well a modal model regenerates the measured curves, and what each mode adds to that.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contributions {
+    /// FRAC of each regenerated curve ([`crate::lsfd::frac`]) over the lines.
+    pub frac: Vec<f64>,
+    /// Per mode: the mean over the curves of the FRAC lost when its term is removed from the
+    /// regenerated curves (residues kept).
+    pub frac_drop: Vec<f64>,
+}
+
+/// The [`Contributions`] of `fit`'s modes on `data`, in one pass over the lines (each line's
+/// partial fractions computed once for every curve and mode).
+pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
+    use rayon::prelude::*;
+    let modes = fit.poles.len();
+    let empty = || CurveSums {
+        with: vec![FracSums::default(); data.curves.len()],
+        without: vec![vec![FracSums::default(); modes]; data.curves.len()],
+    };
+    let sums = data
+        .lines
+        .par_chunks(2048)
+        .map(|chunk| {
+            let mut sums = empty();
+            for &k in chunk {
+                sums.add_line(fit, data.curves, k, data.freqs_hz[k]);
             }
-            frac(measured, &with, data.lines) - frac(measured, &without, data.lines)
+            sums
         })
-        .sum();
-    total / data.curves.len() as f64
+        .reduce(empty, CurveSums::merged);
+    let (with, without) = (sums.with, sums.without);
+    let frac: Vec<f64> = with.iter().map(FracSums::frac).collect();
+    let curves = data.curves.len().max(1) as f64;
+    let frac_drop = (0..modes)
+        .map(|r| {
+            let lost: f64 = without
+                .iter()
+                .zip(&frac)
+                .map(|(w, f)| f - w[r].frac())
+                .sum();
+            lost / curves
+        })
+        .collect();
+    Contributions { frac, frac_drop }
+}
+
+/// Per curve the FRAC sums of the model, and per curve and mode those without the mode.
+struct CurveSums {
+    with: Vec<FracSums>,
+    without: Vec<Vec<FracSums>>,
+}
+
+impl CurveSums {
+    /// Adds line `k` (at `freq_hz`) of every curve.
+    fn add_line(&mut self, fit: &ModalFit, curves: &[&[Complex64]], k: usize, freq_hz: f64) {
+        let basis = fit.line_basis(freq_hz);
+        for (o, curve) in curves.iter().enumerate() {
+            let (measured, model) = (curve[k], fit.synthesize_on(&basis, o));
+            self.with[o].add(measured, model);
+            for (r, sums) in self.without[o].iter_mut().enumerate() {
+                sums.add(measured, model - fit.mode_term_on(&basis, o, r));
+            }
+        }
+    }
+
+    /// The sums over the lines of both.
+    fn merged(mut self, other: Self) -> Self {
+        for (a, b) in self.with.iter_mut().zip(&other.with) {
+            a.merge(b);
+        }
+        for (a, b) in self.without.iter_mut().zip(&other.without) {
+            a.iter_mut().zip(b).for_each(|(x, y)| x.merge(y));
+        }
+        self
+    }
+}
+
+/// The sums of [`crate::lsfd::frac`]: Σ H Ĥ*, Σ|H|², Σ|Ĥ|².
+#[derive(Debug, Clone, Copy, Default)]
+struct FracSums {
+    cross: Complex64,
+    measured: f64,
+    model: f64,
+}
+
+impl FracSums {
+    fn add(&mut self, measured: Complex64, model: Complex64) {
+        self.cross += measured * model.conj();
+        self.measured += measured.norm_sqr();
+        self.model += model.norm_sqr();
+    }
+
+    fn merge(&mut self, other: &Self) {
+        self.cross += other.cross;
+        self.measured += other.measured;
+        self.model += other.model;
+    }
+
+    fn frac(&self) -> f64 {
+        self.cross.norm_sqr() / (self.measured * self.model).max(f64::MIN_POSITIVE)
+    }
 }

@@ -109,27 +109,38 @@ pub struct CmifPeak {
 /// next higher peak. A plateau counts once, at its first line.
 pub fn cmif_peaks(freqs_hz: &[f64], first: &[f64], prominence: f64) -> Vec<CmifPeak> {
     let n = first.len();
-    let mut out = Vec::new();
-    for k in 1..n.saturating_sub(1) {
-        if !(first[k] > first[k - 1] && first[k] >= first[k + 1]) {
-            continue;
-        }
-        let base = |range: &mut dyn Iterator<Item = usize>| {
-            range
-                .take_while(|&j| first[j] <= first[k])
-                .map(|j| first[j])
-                .fold(f64::INFINITY, f64::min)
-        };
-        let left = base(&mut (0..k).rev());
-        let right = base(&mut (k + 1..n));
-        if first[k] >= prominence * left.max(right) {
-            out.push(CmifPeak {
-                freq_hz: freqs_hz[k],
-                value: first[k],
-            });
-        }
-    }
-    out
+    let left = bases(first.iter().copied());
+    let mut right = bases(first.iter().rev().copied());
+    right.reverse();
+    (1..n.saturating_sub(1))
+        .filter(|&k| first[k] > first[k - 1] && first[k] >= first[k + 1])
+        .filter(|&k| first[k] >= prominence * left[k].max(right[k]))
+        .map(|k| CmifPeak {
+            freq_hz: freqs_hz[k],
+            value: first[k],
+        })
+        .collect()
+}
+
+/// For each value v_k of `values`: the lowest value between it and the nearest earlier value
+/// above it (or the start), v_k excluded; +∞ where there is none between. One pass with a
+/// stack of the values not yet exceeded, each with the lowest value since the one below it.
+fn bases(values: impl Iterator<Item = f64>) -> Vec<f64> {
+    let mut stack: Vec<(f64, f64)> = Vec::new();
+    values
+        .map(|v| {
+            let mut low = f64::INFINITY;
+            while let Some(&(top, since)) = stack.last() {
+                if top > v || top.is_nan() || v.is_nan() {
+                    break;
+                }
+                low = low.min(since);
+                stack.pop();
+            }
+            stack.push((v, low.min(v)));
+            low
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -187,5 +198,26 @@ mod tests {
         // A higher threshold than the weaker resonance's prominence keeps the stronger one.
         let lower = peaks[1].value / sigma[990..2490].iter().cloned().fold(f64::MAX, f64::min);
         assert_eq!(cmif_peaks(&f, &sigma, 1.01 * lower).len(), 1);
+    }
+
+    /// The one-pass bases equal their definition, scanned line by line from each value, on
+    /// values with repeats, plateaus and a NaN.
+    #[test]
+    fn bases_equal_the_scan_of_their_definition() {
+        let mut v: Vec<f64> = (0..500u64)
+            .map(|k| ((k * 7919 % 101) as f64 / 10.0).floor())
+            .collect();
+        v[250] = f64::NAN;
+        let by_scan = |k: usize| {
+            (0..k)
+                .rev()
+                .take_while(|&j| v[j] <= v[k])
+                .map(|j| v[j])
+                .fold(f64::INFINITY, f64::min)
+        };
+        let fast = bases(v.iter().copied());
+        for k in 0..v.len() {
+            assert_eq!(fast[k].to_bits(), by_scan(k).to_bits(), "line {k}");
+        }
     }
 }

@@ -193,14 +193,18 @@ impl Report {
         for w in &self.warnings {
             writeln!(err, "lamdyn: warning: {w}")?;
         }
+        // Buffered: stdout flushes at every newline, and the JSON of a long record has
+        // hundreds of thousands of them.
+        let mut out = std::io::BufWriter::new(out);
         match format {
-            Format::Text => self.write_text(out),
-            Format::Csv => self.write_csv(out),
+            Format::Text => self.write_text(&mut out),
+            Format::Csv => self.write_csv(&mut out),
             Format::Json => {
-                serde_json::to_writer_pretty(&mut *out, &self.to_json())?;
+                serde_json::to_writer_pretty(&mut out, &self.to_json())?;
                 writeln!(out)
             }
-        }
+        }?;
+        out.flush()
     }
 
     fn write_text(&self, out: &mut dyn Write) -> std::io::Result<()> {

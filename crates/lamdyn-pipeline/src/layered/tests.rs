@@ -683,7 +683,7 @@ fn a_pair_fit_to_the_frfs_recovers_the_core_its_poles_miss() {
         missing_hz: Vec::new(),
         fit: None,
         warnings: Vec::new(),
-        seconds: [0.0; 2],
+        timings: Default::default(),
     };
     let fit = super::pair_fit::fit_pair(
         &model,

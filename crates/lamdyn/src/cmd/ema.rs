@@ -8,7 +8,9 @@ use crate::cli::{EmaArgs, Estimator, ExcitationArg, QuantityArg, WindowArg};
 use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
-use lamdyn_ema::identify::{EmaResult, EmaSettings, Mode, PoleEstimator, identify_with};
+use lamdyn_ema::identify::{
+    EmaResult, EmaSettings, EmaTimings, Mode, PoleEstimator, identify_with,
+};
 use lamdyn_ema::lscf::{pole_damping, pole_freq_hz};
 use lamdyn_ema::quality::Verdict;
 use lamdyn_ema::spectra::Spectra;
@@ -162,6 +164,7 @@ pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
         .as_ref()
         .map(|d| OutputDir::prepare(d, &inputs, args.force))
         .transpose()?;
+    let clock = std::time::Instant::now();
     let (set, source, time) = match (&args.channels, args.time.is_empty()) {
         (Some(c), false) => {
             let (set, info) = frfs_from_time(c, &args.time, args)?;
@@ -182,12 +185,13 @@ pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
             (set, src, None)
         }
     };
+    let read_s = clock.elapsed().as_secs_f64();
     let s = settings(args, &set)?;
     let spinner = Spinner::new();
     let r = identify_with(&set, &s, &|step| spinner.stage(step));
     spinner.finish();
     let r = r.context("identification failed")?;
-    let mut report = build_report(&set, &source, &s, &r);
+    let mut report = build_report(&set, &source, &s, &r, read_s);
     report.warnings.extend(r.warnings.iter().cloned());
     if let Some(info) = &time {
         add_time_info(&mut report, &set, &r, info);
@@ -266,7 +270,25 @@ fn estimator_text(s: &EmaSettings) -> &'static str {
     }
 }
 
-fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> Report {
+/// The time of each step in seconds, reading the data first, and the total.
+fn time_text(read_s: f64, t: &EmaTimings) -> String {
+    let steps: Vec<String> = std::iter::once(("read", read_s))
+        .chain(t.steps())
+        .map(|(step, s)| format!("{step} {s:.3}"))
+        .collect();
+    format!("{} s; total {:.3} s", steps.join(", "), read_s + t.total())
+}
+
+/// The step times as JSON: seconds per step, reading the data first.
+fn time_json(read_s: f64, t: &EmaTimings) -> serde_json::Value {
+    let steps: serde_json::Map<String, serde_json::Value> = std::iter::once(("read", read_s))
+        .chain(t.steps())
+        .map(|(step, s)| (step.to_string(), serde_json::json!(s)))
+        .collect();
+    serde_json::Value::Object(steps)
+}
+
+fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read_s: f64) -> Report {
     let mut report = Report::new(
         "ema",
         vec![
@@ -333,13 +355,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
             ),
         );
     }
-    report.input(
-        "time",
-        format!(
-            "poles and diagram {:.3} s, refinement and residues {:.3} s",
-            r.seconds[0], r.seconds[1]
-        ),
-    );
+    report.input("time", time_text(read_s, &r.timings));
     for (k, m) in r.modes.iter().enumerate() {
         report.row(vec![
             ((k + 1) as f64).into(),
@@ -433,6 +449,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult) -> R
         "cmif_first": r.cmif.iter().map(|v| v[0]).collect::<Vec<_>>(),
         "freqs_hz": set.freqs_hz(),
         "responses": set.responses().iter().map(|c| &c.name).collect::<Vec<_>>(),
+        "seconds": time_json(read_s, &r.timings),
     }));
     report
 }

@@ -601,6 +601,50 @@ fn the_dam_keeps_every_cmif_peak_and_its_close_pair() {
     assert!(pair.iter().all(|(_, v)| v == "sound*"), "{pair:?}");
 }
 
+/// The time of each step is printed: in the text's `time` line and as numbers in the JSON's
+/// `details.seconds`, every step there, none negative, their sum within the process's time.
+#[test]
+fn the_time_of_each_step_is_printed() {
+    let dam =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../lamdyn-ema/tests/fixtures/dam/dam0.unv");
+    let args = ["ema", "--uff", dam.to_str().unwrap(), "--band-hz", "2,12.5"];
+    let clock = std::time::Instant::now();
+    let (doc, _) = ema_json(&args[1..]);
+    let wall = clock.elapsed().as_secs_f64();
+    let steps = [
+        "read",
+        "diagram",
+        "selection",
+        "refinement",
+        "check",
+        "residues",
+        "deviations",
+        "modes",
+    ];
+    let seconds = &doc["details"]["seconds"];
+    let total: f64 = steps
+        .iter()
+        .map(|k| {
+            let t = seconds[*k]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{k}: {seconds}"));
+            assert!(t >= 0.0, "{k}: {t}");
+            t
+        })
+        .sum();
+    assert!(
+        total > 0.0 && total <= wall,
+        "{total} s of steps in {wall} s"
+    );
+    let (code, text, _) = lamdyn(&args);
+    assert!(code <= 1);
+    let line = text.lines().find(|l| l.starts_with("time")).unwrap();
+    for k in steps {
+        assert!(line.contains(&format!("{k} ")), "{k}: {line}");
+    }
+    assert!(line.contains("total"), "{line}");
+}
+
 /// One swept-sine record of the measured plate: run 1 alone split the mode at 450.5 Hz (the
 /// four runs' average) in two poles, 446.3 and 452.1 Hz; one curve cannot tell two modes that
 /// close apart, so they are merged into one, within 0.5 % of the average. Run 4's extra pole

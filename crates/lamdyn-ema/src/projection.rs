@@ -1,0 +1,455 @@
+//! The residue problem of given poles on given lines, solved and differentiated with respect
+//! to the poles: variable projection [Golub & Pereyra 1973].
+//!
+//! With the poles fixed, every curve is linear in its residues and residual terms (the model of
+//! [`crate::lsfd`]): B ≈ A(λ) X, with A the real basis (real and imaginary part of each line as
+//! two rows) shared by all curves and B the curves as columns. The projected residual
+//!
+//!   R(λ) = P⊥ B,   P⊥ = I − A A⁺,
+//!
+//! depends on the poles alone. Its derivative with respect to a pole parameter u_j is
+//! [Golub & Pereyra 1973, eq. (4.12); Kaufman 1975 keeps the first term only]
+//!
+//!   ∂R/∂u_j = −P⊥ D_j X − (A⁺)ᵀ D_jᵀ R,   D_j = ∂A/∂u_j,
+//!
+//! with D_j nonzero only in the two columns of u_j's pole. With the columns scaled by their
+//! norms S for conditioning and the thin QR A S⁻¹ = Q R̃, A⁺ = S⁻¹ R̃⁻¹ Qᵀ and (A⁺)ᵀ = Q R̃⁻ᵀ S⁻¹:
+//! the Jacobian costs two products with Q per parameter instead of a factorization per
+//! finite-difference step, and is exact where differences are not.
+//!
+//! The pole parameters are u = (ln σ, ω_d) for λ = −σ + iω_d (σ > 0 keeps the pole stable):
+//! ∂λ/∂ln σ = −σ, ∂λ/∂ω_d = i.
+
+use crate::error::{EmaError, invalid};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::householder::{
+    apply_block_householder_sequence_transpose_on_the_left_in_place_scratch,
+    apply_block_householder_sequence_transpose_on_the_left_in_place_with_conj,
+};
+use faer::linalg::solvers::{Qr, SolveLstsq};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
+use faer::{Conj, Mat, Par};
+use lamdyn_frf::Quantity;
+use num_complex::Complex64;
+use std::f64::consts::PI;
+
+/// The measured side of the residue problem: the lines, the quantity's factor (iω)^k at each,
+/// and the curves' values as real rows (re, im per line), one column per curve.
+pub(crate) struct LineSamples {
+    omega: Vec<f64>,
+    factor: Vec<Complex64>,
+    data: Mat<f64>,
+}
+
+impl LineSamples {
+    /// The samples of `curves` (values of `quantity` at `freqs_hz`) at `lines` (positive
+    /// frequencies; the curves' lengths already checked).
+    ///
+    /// # Errors
+    /// [`EmaError::Invalid`] for a value that is not finite.
+    pub(crate) fn new(
+        freqs_hz: &[f64],
+        curves: &[&[Complex64]],
+        quantity: Quantity,
+        lines: &[usize],
+    ) -> Result<Self, EmaError> {
+        let omega: Vec<f64> = lines.iter().map(|&k| 2.0 * PI * freqs_hz[k]).collect();
+        let factor = omega
+            .iter()
+            .map(|&w| quantity_factor(w, quantity))
+            .collect();
+        let data = Mat::from_fn(2 * lines.len(), curves.len(), |row, o| {
+            let h = curves[o][lines[row / 2]];
+            if row % 2 == 0 { h.re } else { h.im }
+        });
+        if !data.is_all_finite() {
+            return Err(invalid("FRFs", "a value in the band is not finite".into()));
+        }
+        Ok(Self {
+            omega,
+            factor,
+            data,
+        })
+    }
+
+    /// Rows per curve: two per line.
+    pub(crate) fn rows(&self) -> usize {
+        self.data.nrows()
+    }
+
+    /// The number of curves.
+    pub(crate) fn curves(&self) -> usize {
+        self.data.ncols()
+    }
+
+    /// Writes the complex column value `v` of line `i` into rows 2i, 2i + 1 of column `c`.
+    fn put(a: &mut Mat<f64>, i: usize, c: usize, v: Complex64) {
+        a[(2 * i, c)] = v.re;
+        a[(2 * i + 1, c)] = v.im;
+    }
+
+    /// The basis A for `poles` (unscaled): per pole the columns (iω)^k [1/(iω − λ) + 1/(iω − λ*)]
+    /// and (iω)^k i[1/(iω − λ) − 1/(iω − λ*)], then the lower residual's −(iω)^k/ω² and the upper
+    /// residual's (iω)^k.
+    fn basis(&self, poles: &[Complex64]) -> Mat<f64> {
+        let n = 2 * poles.len();
+        let mut a = Mat::zeros(self.rows(), n + 2);
+        for (i, (&w, &f)) in self.omega.iter().zip(&self.factor).enumerate() {
+            let s = Complex64::new(0.0, w);
+            for (r, &p) in poles.iter().enumerate() {
+                let (a1, a2) = (1.0 / (s - p), 1.0 / (s - p.conj()));
+                Self::put(&mut a, i, 2 * r, f * (a1 + a2));
+                Self::put(&mut a, i, 2 * r + 1, f * Complex64::i() * (a1 - a2));
+            }
+            Self::put(&mut a, i, n, f * (-1.0 / (w * w)));
+            Self::put(&mut a, i, n + 1, f);
+        }
+        a
+    }
+
+    /// The derivatives of pole `p`'s two basis columns with respect to a parameter with
+    /// ∂λ/∂u = `c` (∂λ*/∂u = c*): (iω)^k [c/(iω − λ)² + c*/(iω − λ*)²] and
+    /// (iω)^k i[c/(iω − λ)² − c*/(iω − λ*)²], as an (rows × 2) matrix.
+    fn basis_derivative(&self, p: Complex64, c: Complex64) -> Mat<f64> {
+        let mut d = Mat::zeros(self.rows(), 2);
+        for (i, (&w, &f)) in self.omega.iter().zip(&self.factor).enumerate() {
+            let s = Complex64::new(0.0, w);
+            let (a1, a2) = (1.0 / (s - p), 1.0 / (s - p.conj()));
+            let (d1, d2) = (c * a1 * a1, c.conj() * a2 * a2);
+            Self::put(&mut d, i, 0, f * (d1 + d2));
+            Self::put(&mut d, i, 1, f * Complex64::i() * (d1 - d2));
+        }
+        d
+    }
+
+    /// The basis for `poles` with each column scaled to unit norm, and the norms; None without
+    /// more rows than columns.
+    fn scaled_basis(&self, poles: &[Complex64]) -> Option<(Mat<f64>, Vec<f64>)> {
+        if self.rows() <= 2 * poles.len() + 2 {
+            return None;
+        }
+        let mut a = self.basis(poles);
+        let scale: Vec<f64> = (0..a.ncols())
+            .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
+            .collect();
+        for (c, s) in scale.iter().enumerate() {
+            a.col_mut(c).iter_mut().for_each(|v| *v /= s);
+        }
+        Some((a, scale))
+    }
+
+    /// The block's least-squares problem for `poles` reduced to min(rows, unknowns) rows: the
+    /// triangle R of the QR of the basis and the first rows of Qᵀ B ([`solve_by_blocks`]). The
+    /// basis is factorised with its columns scaled to unit norm and R scaled back.
+    fn triangle(&self, poles: &[Complex64]) -> (Mat<f64>, Mat<f64>) {
+        let n = 2 * poles.len() + 2;
+        let mut a = self.basis(poles);
+        let scale: Vec<f64> = (0..n)
+            .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
+            .collect();
+        for (c, s) in scale.iter().enumerate() {
+            a.col_mut(c).iter_mut().for_each(|v| *v /= s);
+        }
+        let qr = a.qr();
+        let mut r = qr.thin_R().to_owned();
+        for (c, s) in scale.iter().enumerate() {
+            r.col_mut(c).iter_mut().for_each(|v| *v *= s);
+        }
+        let mut qtb = self.data.clone();
+        apply_transpose_q(&qr, &mut qtb);
+        let rows = r.nrows();
+        (r, qtb.subrows(0, rows).to_owned())
+    }
+
+    /// The residue problem solved for `poles` (module docs); None where it is singular or not
+    /// finite. Needs more rows than unknowns (2 poles + 2).
+    pub(crate) fn project(&self, poles: &[Complex64]) -> Option<Projection> {
+        let (a, scale) = self.scaled_basis(poles)?;
+        let qr = a.qr();
+        let q = qr.compute_thin_Q();
+        let r = qr.thin_R().to_owned();
+        let qtb = q.transpose() * &self.data;
+        let mut unknowns = qtb.clone();
+        solve_upper_triangular_in_place(r.as_ref(), unknowns.as_mut(), Par::Seq);
+        if !unknowns.is_all_finite() {
+            return None;
+        }
+        let residual = &self.data - &q * &qtb;
+        Some(Projection {
+            poles: poles.to_vec(),
+            q,
+            r,
+            scale,
+            unknowns,
+            residual,
+        })
+    }
+}
+
+/// Lines per block of [`solve_by_blocks`]: 4096 rows of a few dozen columns stay in cache.
+const BLOCK_LINES: usize = 2048;
+
+/// The unknowns of the residue problem for `poles` (one column per curve, the order of
+/// [`Projection::unknown`]) fitted to `curves` (values of `quantity` at `freqs_hz`, lengths
+/// already checked) at `lines`; None where it is singular, not finite or has no more rows than
+/// unknowns. By a QR of each block of lines, in parallel, then one of their stacked triangles
+/// with the columns scaled to unit norm (TSQR [Demmel et al. 2012]): the least-squares solution
+/// of one QR of every row, without the band's whole basis in memory.
+///
+/// # Errors
+/// [`EmaError::Invalid`] for a value that is not finite.
+pub(crate) fn solve_by_blocks(
+    freqs_hz: &[f64],
+    curves: &[&[Complex64]],
+    quantity: Quantity,
+    lines: &[usize],
+    poles: &[Complex64],
+) -> Result<Option<Mat<f64>>, EmaError> {
+    use rayon::prelude::*;
+    let n = 2 * poles.len() + 2;
+    if 2 * lines.len() <= n {
+        return Ok(None);
+    }
+    let blocks: Vec<(Mat<f64>, Mat<f64>)> = lines
+        .par_chunks(BLOCK_LINES)
+        .map(|block| LineSamples::new(freqs_hz, curves, quantity, block).map(|s| s.triangle(poles)))
+        .collect::<Result<_, _>>()?;
+    let rows: usize = blocks.iter().map(|(r, _)| r.nrows()).sum();
+    let (mut r, mut qtb) = (Mat::zeros(rows, n), Mat::zeros(rows, curves.len()));
+    let mut at = 0;
+    for (rb, tb) in &blocks {
+        r.subrows_mut(at, rb.nrows()).copy_from(rb);
+        qtb.subrows_mut(at, tb.nrows()).copy_from(tb);
+        at += rb.nrows();
+    }
+    let scale: Vec<f64> = (0..n)
+        .map(|c| r.col(c).norm_l2().max(f64::MIN_POSITIVE))
+        .collect();
+    for (c, s) in scale.iter().enumerate() {
+        r.col_mut(c).iter_mut().for_each(|v| *v /= s);
+    }
+    let mut x = r.qr().solve_lstsq(&qtb);
+    for (c, s) in scale.iter().enumerate() {
+        x.row_mut(c).iter_mut().for_each(|v| *v /= s);
+    }
+    Ok(x.is_all_finite().then_some(x))
+}
+
+/// Replaces `m` by Qᵀ m for the QR `qr`, Q applied as its Householder reflections.
+pub(crate) fn apply_transpose_q(qr: &Qr<f64>, m: &mut Mat<f64>) {
+    let (basis, factor) = (qr.Q_basis(), qr.Q_coeff());
+    let scratch = apply_block_householder_sequence_transpose_on_the_left_in_place_scratch::<f64>(
+        basis.nrows(),
+        factor.nrows(),
+        m.ncols(),
+    );
+    apply_block_householder_sequence_transpose_on_the_left_in_place_with_conj(
+        basis,
+        factor,
+        Conj::No,
+        m.as_mut(),
+        faer::get_global_parallelism(),
+        MemStack::new(&mut MemBuffer::new(scratch)),
+    );
+}
+
+/// (iω)^k of the quantity: receptance 1, mobility iω, accelerance (iω)².
+pub(crate) fn quantity_factor(w: f64, q: Quantity) -> Complex64 {
+    let s = Complex64::new(0.0, w);
+    match q {
+        Quantity::Receptance => Complex64::new(1.0, 0.0),
+        Quantity::Mobility => s,
+        Quantity::Accelerance => s * s,
+    }
+}
+
+/// The residue problem of [`LineSamples::project`] solved at given poles.
+pub(crate) struct Projection {
+    poles: Vec<Complex64>,
+    /// Thin Q of the scaled basis.
+    q: Mat<f64>,
+    /// Its triangular factor R̃.
+    r: Mat<f64>,
+    /// Column norms S of the basis.
+    scale: Vec<f64>,
+    /// The scaled unknowns X̃ = S X, one column per curve.
+    unknowns: Mat<f64>,
+    /// P⊥ B.
+    residual: Mat<f64>,
+}
+
+impl Projection {
+    /// Unknown `c` of curve `o` (basis order: re, im of each pole's residue, then the lower
+    /// and upper residuals).
+    pub(crate) fn unknown(&self, c: usize, o: usize) -> f64 {
+        self.unknowns[(c, o)] / self.scale[c]
+    }
+
+    /// The residual sum of squares over every curve.
+    pub(crate) fn cost(&self) -> f64 {
+        self.residual.squared_norm_l2()
+    }
+
+    /// Curve `o`'s residual sum of squares.
+    pub(crate) fn curve_cost(&self, o: usize) -> f64 {
+        self.residual.col(o).squared_norm_l2()
+    }
+
+    /// The residuals curve after curve (rows 2i, 2i + 1: line i's real and imaginary part), as
+    /// one column.
+    pub(crate) fn residual_vector(&self) -> Mat<f64> {
+        let rows = self.residual.nrows();
+        Mat::from_fn(rows * self.residual.ncols(), 1, |i, _| {
+            self.residual[(i % rows, i / rows)]
+        })
+    }
+
+    /// The Jacobian of [`Self::residual_vector`] with respect to the pole parameters
+    /// (ln σ, ω_d of each pole in turn): one column per parameter (module docs).
+    pub(crate) fn jacobian(&self, samples: &LineSamples) -> Mat<f64> {
+        use rayon::prelude::*;
+        let cols: Vec<Mat<f64>> = (0..2 * self.poles.len())
+            .into_par_iter()
+            .map(|j| self.jacobian_column(samples, j))
+            .collect();
+        let rows = self.residual.nrows();
+        Mat::from_fn(rows * self.residual.ncols(), cols.len(), |i, j| {
+            -cols[j][(i % rows, i / rows)]
+        })
+    }
+
+    /// Column `j` of [`Self::jacobian`] negated, one column per curve:
+    /// P⊥ D_j X + Q R̃⁻ᵀ S⁻¹ D_jᵀ R.
+    fn jacobian_column(&self, samples: &LineSamples, j: usize) -> Mat<f64> {
+        let k = j / 2;
+        let p = self.poles[k];
+        let dlambda = if j % 2 == 0 {
+            Complex64::new(p.re, 0.0)
+        } else {
+            Complex64::i()
+        };
+        let d = samples.basis_derivative(p, dlambda);
+        let curves = self.residual.ncols();
+        let x = Mat::from_fn(2, curves, |m, o| self.unknown(2 * k + m, o));
+        let v = &d * &x;
+        let mut w = Mat::<f64>::zeros(self.q.ncols(), curves);
+        let dtr = d.transpose() * &self.residual;
+        for m in 0..2 {
+            for o in 0..curves {
+                w[(2 * k + m, o)] = dtr[(m, o)] / self.scale[2 * k + m];
+            }
+        }
+        solve_lower_triangular_in_place(self.r.transpose(), w.as_mut(), Par::Seq);
+        let qtv = self.q.transpose() * &v;
+        &self.q * (&w - &qtv) + &v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pole of frequency `f` (Hz) and damping ratio `z`.
+    fn pole(f: f64, z: f64) -> Complex64 {
+        Complex64::new(-z * 2.0 * PI * f, 2.0 * PI * f)
+    }
+
+    /// `n` accelerance curves of `poles` at `freqs` (residue 1 + r + o + 0.3 r i of pole r in
+    /// curve o) with a deterministic disturbance of amplitude `noise` on every line.
+    fn accelerances(
+        freqs: &[f64],
+        poles: &[Complex64],
+        n: usize,
+        noise: f64,
+    ) -> Vec<Vec<Complex64>> {
+        (0..n)
+            .map(|o| {
+                freqs
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &f)| {
+                        let s = Complex64::new(0.0, 2.0 * PI * f);
+                        let h: Complex64 = poles
+                            .iter()
+                            .enumerate()
+                            .map(|(r, &p)| {
+                                let a = Complex64::new(1.0 + (r + o) as f64, 0.3 * r as f64);
+                                a / (s - p) + a.conj() / (s - p.conj())
+                            })
+                            .sum();
+                        let k = k as f64;
+                        s * s * h + noise * Complex64::new((1.7 * k).sin(), k.cos())
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Three poles over 5000 lines (three blocks, the last a short one): the blocks' stacked
+    /// triangles give the unknowns of one QR of every row.
+    #[test]
+    fn blocks_solve_as_one_factorisation() {
+        let freqs: Vec<f64> = (1..=5000).map(|k| 0.02 * f64::from(k)).collect();
+        let poles = [pole(20.0, 0.01), pole(21.0, 0.02), pole(70.0, 0.005)];
+        let curves = accelerances(&freqs, &poles, 3, 1e-2);
+        let refs: Vec<&[Complex64]> = curves.iter().map(|c| c.as_slice()).collect();
+        let lines: Vec<usize> = (0..freqs.len()).collect();
+        let samples = LineSamples::new(&freqs, &refs, Quantity::Accelerance, &lines).unwrap();
+        let one = samples.project(&poles).unwrap();
+        let blocks = solve_by_blocks(&freqs, &refs, Quantity::Accelerance, &lines, &poles)
+            .unwrap()
+            .unwrap();
+        // Each unknown's difference as a part of the curve it fits (its column's norm times
+        // the difference, against the curve's norm): the lower residual is ~1e-5 of its
+        // column here, so a relative test of the value itself would measure conditioning.
+        for o in 0..refs.len() {
+            let curve = samples.data.col(o).norm_l2();
+            for c in 0..blocks.nrows() {
+                let (a, b) = (one.unknown(c, o), blocks[(c, o)]);
+                let part = (a - b).abs() * one.scale[c] / curve;
+                assert!(part <= 1e-12, "{c}, {o}: {a} {b} ({part:e} of the curve)");
+            }
+        }
+    }
+
+    /// Two close modes and one far, two curves, 1 % noise: the analytic Jacobian matches
+    /// central differences of the residuals within their own truncation error.
+    #[test]
+    fn the_jacobian_matches_central_differences() {
+        let freqs: Vec<f64> = (1..=400).map(|k| 0.25 * f64::from(k)).collect();
+        let truth = [pole(40.0, 0.02), pole(41.5, 0.03), pole(80.0, 0.01)];
+        let curves = accelerances(&freqs, &truth, 2, 1e-3);
+        let refs: Vec<&[Complex64]> = curves.iter().map(|c| c.as_slice()).collect();
+        let lines: Vec<usize> = (0..freqs.len()).collect();
+        let samples = LineSamples::new(&freqs, &refs, Quantity::Accelerance, &lines).unwrap();
+        let start: Vec<Complex64> = truth
+            .iter()
+            .map(|p| p * Complex64::new(1.01, 0.002))
+            .collect();
+        let at = samples.project(&start).unwrap();
+        let analytic = at.jacobian(&samples);
+        let u: Vec<f64> = start.iter().flat_map(|p| [(-p.re).ln(), p.im]).collect();
+        let poles_of = |u: &[f64]| -> Vec<Complex64> {
+            u.chunks(2)
+                .map(|c| Complex64::new(-c[0].exp(), c[1]))
+                .collect()
+        };
+        for j in 0..u.len() {
+            let h = 1e-6 * u[j].abs().max(1.0);
+            let (mut up, mut um) = (u.clone(), u.clone());
+            up[j] += h;
+            um[j] -= h;
+            let rp = samples.project(&poles_of(&up)).unwrap().residual_vector();
+            let rm = samples.project(&poles_of(&um)).unwrap().residual_vector();
+            let numeric = (&rp - &rm) * faer::Scale(0.5 / h);
+            let norm = numeric.norm_l2();
+            let diff = (numeric.col(0) - analytic.col(j)).norm_l2();
+            assert!(
+                diff < 1e-6 * norm,
+                "parameter {j}: {diff:e} against {norm:e}"
+            );
+        }
+    }
+}
