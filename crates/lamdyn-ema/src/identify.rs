@@ -223,6 +223,55 @@ impl EmaTimings {
     }
 }
 
+/// The power of two 2^−e that brings the largest magnitude of `curves` over the band's `lines`
+/// into [1, 2): FRFs in any unit (1e±100 would overflow or underflow in the LSCF's sums of
+/// products) are identified at a unit scale. A power of two scales every value exactly, so the
+/// poles of the scaled curves are those of the curves, bit for bit, and the residues and CMIF
+/// scale back exactly.
+///
+/// # Errors
+/// [`EmaError::Invalid`] when every curve is zero over the band.
+fn unit_scale(curves: &[&[Complex64]], lines: &[usize], band: [f64; 2]) -> Result<f64, EmaError> {
+    let largest = curves
+        .iter()
+        .flat_map(|c| lines.iter().map(|&k| c[k].norm()))
+        .fold(0.0, f64::max);
+    if largest == 0.0 {
+        return Err(invalid(
+            "FRFs",
+            format!(
+                "every FRF is zero over the band {}-{} Hz: there is nothing to identify (a unit or channel mapping lost on export?)",
+                band[0], band[1]
+            ),
+        ));
+    }
+    if !largest.is_finite() {
+        return Ok(1.0);
+    }
+    Ok(2f64.powi(-(largest.log2().floor() as i32)))
+}
+
+/// One warning per curve that is zero over the band's `lines` (a dead channel, or one that
+/// was never connected): it takes no part in the poles and its shape entries are zero.
+fn zero_curves(
+    curves: &[&[Complex64]],
+    lines: &[usize],
+    names: &[String],
+    band: [f64; 2],
+) -> Vec<String> {
+    curves
+        .iter()
+        .zip(names)
+        .filter(|(c, _)| lines.iter().all(|&k| c[k] == Complex64::new(0.0, 0.0)))
+        .map(|(_, name)| {
+            format!(
+                "the FRF {name} is zero over the band {}-{} Hz: a dead or unconnected channel?",
+                band[0], band[1]
+            )
+        })
+        .collect()
+}
+
 /// Seconds since `clock` started, restarting it.
 fn lap(clock: &mut Instant) -> f64 {
     let t = clock.elapsed().as_secs_f64();
@@ -583,6 +632,19 @@ pub fn identify_with(
                 .map(move |j| format!("{}@{}", set.responses()[i].name, set.references()[j].name))
         })
         .collect();
+    let in_band = crate::band::lines(freqs, band);
+    let mut warnings = zero_curves(&curves, &in_band, &names, band);
+    let scale = unit_scale(&curves, &in_band, band)?;
+    let scaled: Option<Vec<Vec<Complex64>>> = (scale != 1.0).then(|| {
+        curves
+            .iter()
+            .map(|c| c.iter().map(|v| v * scale).collect())
+            .collect()
+    });
+    let curves: Vec<&[Complex64]> = match &scaled {
+        Some(owned) => owned.iter().map(Vec::as_slice).collect(),
+        None => curves,
+    };
     let (lo, hi, step) = s.orders;
     on_stage(&format!(
         "stabilization diagram: orders {lo} to {hi}, {} curves",
@@ -606,11 +668,12 @@ pub fn identify_with(
     let cmif: Vec<Vec<f64>> = (0..freqs.len())
         .map(|k| {
             let h: Vec<Complex64> = curves.iter().map(|c| c[k]).collect();
-            cmif_line(&h, nf)
+            let mut sigma = cmif_line(&h, nf);
+            sigma.iter_mut().for_each(|v| *v /= scale);
+            sigma
         })
         .collect();
     let band_peaks = first_cmif_peaks(freqs, &cmif, band, s.cmif_prominence);
-    let mut warnings = Vec::new();
     let (mut selected, missing_hz): (Vec<SelectedPole>, Vec<f64>) = match &s.near_hz {
         Some(targets) => {
             let picks = select_near(&diag, targets, s.window_hz);
@@ -673,6 +736,7 @@ pub fn identify_with(
         warnings: kept,
         refined,
     } = fitted;
+    let fit = fit.scaled(1.0 / scale);
     clock = Instant::now();
     let positive = crate::band::positive_lines(freqs, band);
     let contributions = contributions(

@@ -127,6 +127,16 @@ impl ModalFit {
         self.synthesize_on(&self.line_basis(freq_hz), o)
     }
 
+    /// The model of the curves times `factor`: residues and residual terms scaled, poles kept.
+    pub fn scaled(mut self, factor: f64) -> Self {
+        for r in &mut self.residues {
+            r.iter_mut().for_each(|a| *a *= factor);
+        }
+        self.lower.iter_mut().for_each(|v| *v *= factor);
+        self.upper.iter_mut().for_each(|v| *v *= factor);
+        self
+    }
+
     /// The poles' partial fractions at `freq_hz`, computed once for every curve's synthesis
     /// there ([`Self::synthesize_on`], [`Self::mode_term_on`]).
     pub fn line_basis(&self, freq_hz: f64) -> LineBasis {

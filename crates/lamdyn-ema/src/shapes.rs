@@ -14,17 +14,30 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+/// `v` times the power of two that brings its largest magnitude into [1, 2): the indicators'
+/// sums of fourth powers neither underflow nor overflow whatever the shapes' units (a residue
+/// of 1e-108 squares twice to nothing), and a power of two changes no bit of a ratio.
+fn unit_scaled(v: &[Complex64]) -> Vec<Complex64> {
+    let largest = v.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    if largest == 0.0 || !largest.is_finite() {
+        return v.to_vec();
+    }
+    let scale = 2f64.powi(-(largest.log2().floor() as i32));
+    v.iter().map(|z| z * scale).collect()
+}
+
 /// Modal assurance criterion.
 pub fn mac(a: &[Complex64], b: &[Complex64]) -> f64 {
+    let (a, b) = (&unit_scaled(a), &unit_scaled(b));
     let ab: Complex64 = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
     let aa: f64 = a.iter().map(Complex64::norm_sqr).sum();
     let bb: f64 = b.iter().map(Complex64::norm_sqr).sum();
     ab.norm_sqr() / (aa * bb).max(f64::MIN_POSITIVE)
 }
 
-/// (s_xx, s_yy, s_xy).
+/// (s_xx, s_yy, s_xy) of `v` at a unit scale ([`unit_scaled`]).
 fn moments(v: &[Complex64]) -> (f64, f64, f64) {
-    v.iter().fold((0.0, 0.0, 0.0), |(a, b, c), z| {
+    unit_scaled(v).iter().fold((0.0, 0.0, 0.0), |(a, b, c), z| {
         (a + z.re * z.re, b + z.im * z.im, c + z.re * z.im)
     })
 }
