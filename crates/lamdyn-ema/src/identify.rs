@@ -8,7 +8,7 @@ use crate::error::{EmaError, invalid};
 use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz, sample_interval};
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
 use crate::quality::{Measured, ModeEvidence, ModeQuality, assess, contributions};
-use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode};
+use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode, to_unit};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
     DiagramPole, Pick, SelectedPole, StabilityCriteria, diagram, rescue_cmif_peaks, select_auto,
@@ -245,10 +245,7 @@ fn unit_scale(curves: &[&[Complex64]], lines: &[usize], band: [f64; 2]) -> Resul
             ),
         ));
     }
-    if !largest.is_finite() {
-        return Ok(1.0);
-    }
-    Ok(2f64.powi(-(largest.log2().floor() as i32)))
+    Ok(to_unit(largest))
 }
 
 /// One warning per curve that is zero over the band's `lines` (a dead channel, or one that
@@ -400,15 +397,15 @@ const CMIF_REACH: f64 = 0.03;
 /// one mode split in two ([`merge_split_modes`]).
 const SPLIT_MAC: f64 = 0.9;
 
-/// The peaks of the first CMIF within `band` (prominence ratio `prominence`).
+/// The peaks of the first CMIF over the band's lines `in_band` (prominence ratio
+/// `prominence`).
 fn first_cmif_peaks(
     freqs: &[f64],
     cmif: &[Vec<f64>],
-    band: [f64; 2],
+    in_band: &[usize],
     prominence: f64,
 ) -> Vec<CmifPeak> {
     let first: Vec<f64> = cmif.iter().map(|v| v[0]).collect();
-    let in_band = crate::band::lines(freqs, band);
     match (in_band.first(), in_band.last()) {
         (Some(&a), Some(&b)) => cmif_peaks(&freqs[a..=b], &first[a..=b], prominence),
         _ => vec![],
@@ -673,7 +670,7 @@ pub fn identify_with(
             sigma
         })
         .collect();
-    let band_peaks = first_cmif_peaks(freqs, &cmif, band, s.cmif_prominence);
+    let band_peaks = first_cmif_peaks(freqs, &cmif, &in_band, s.cmif_prominence);
     let (mut selected, missing_hz): (Vec<SelectedPole>, Vec<f64>) = match &s.near_hz {
         Some(targets) => {
             let picks = select_near(&diag, targets, s.window_hz);
@@ -738,7 +735,11 @@ pub fn identify_with(
     } = fitted;
     let fit = fit.scaled(1.0 / scale);
     clock = Instant::now();
-    let positive = crate::band::positive_lines(freqs, band);
+    let positive: Vec<usize> = in_band
+        .iter()
+        .copied()
+        .filter(|&k| freqs[k] > 0.0)
+        .collect();
     let contributions = contributions(
         &fit,
         Measured {

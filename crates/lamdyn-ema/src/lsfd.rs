@@ -114,11 +114,27 @@ fn lsfd_on(
 #[derive(Debug, Clone, PartialEq)]
 pub struct LineBasis {
     /// (iω)^k of the quantity.
-    factor: Complex64,
+    pub(crate) factor: Complex64,
     /// The lower residual's −1/ω² (0 at 0 Hz).
-    lower: f64,
+    pub(crate) lower: f64,
     /// 1/(iω − λ_r) and 1/(iω − λ_r*) of each pole.
-    fractions: Vec<(Complex64, Complex64)>,
+    pub(crate) fractions: Vec<(Complex64, Complex64)>,
+}
+
+impl LineBasis {
+    /// The basis of `poles` for curves of `quantity` at ω = `w` rad/s: the model's terms of
+    /// the module docs before their coefficients.
+    pub(crate) fn new(poles: &[Complex64], quantity: Quantity, w: f64) -> Self {
+        let s = Complex64::new(0.0, w);
+        Self {
+            factor: quantity_factor(w, quantity),
+            lower: if w > 0.0 { -1.0 / (w * w) } else { 0.0 },
+            fractions: poles
+                .iter()
+                .map(|p| (1.0 / (s - p), 1.0 / (s - p.conj())))
+                .collect(),
+        }
+    }
 }
 
 impl ModalFit {
@@ -140,17 +156,7 @@ impl ModalFit {
     /// The poles' partial fractions at `freq_hz`, computed once for every curve's synthesis
     /// there ([`Self::synthesize_on`], [`Self::mode_term_on`]).
     pub fn line_basis(&self, freq_hz: f64) -> LineBasis {
-        let w = 2.0 * PI * freq_hz;
-        let s = Complex64::new(0.0, w);
-        LineBasis {
-            factor: quantity_factor(w, self.quantity),
-            lower: if w > 0.0 { -1.0 / (w * w) } else { 0.0 },
-            fractions: self
-                .poles
-                .iter()
-                .map(|p| (1.0 / (s - p), 1.0 / (s - p.conj())))
-                .collect(),
-        }
+        LineBasis::new(&self.poles, self.quantity, 2.0 * PI * freq_hz)
     }
 
     /// [`Self::synthesize`] on a line's basis.
@@ -212,13 +218,40 @@ impl ModalFit {
 /// Frequency response assurance criterion between a measured and a synthesized curve over the
 /// lines `lines`: |Σ H_m H_s*|² / (Σ|H_m|² Σ|H_s|²), 1 for identical shapes.
 pub fn frac(measured: &[Complex64], synthesized: &[Complex64], lines: &[usize]) -> f64 {
-    let (mut c, mut a, mut b) = (Complex64::new(0.0, 0.0), 0.0, 0.0);
+    let mut sums = FracSums::default();
     for &k in lines {
-        c += measured[k] * synthesized[k].conj();
-        a += measured[k].norm_sqr();
-        b += synthesized[k].norm_sqr();
+        sums.add(measured[k], synthesized[k]);
     }
-    c.norm_sqr() / (a * b).max(f64::MIN_POSITIVE)
+    sums.frac()
+}
+
+/// The sums of [`frac`]: Σ H Ĥ*, Σ|H|², Σ|Ĥ|², added line by line.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct FracSums {
+    cross: Complex64,
+    measured: f64,
+    model: f64,
+}
+
+impl FracSums {
+    /// Adds one line's measured and model values.
+    pub(crate) fn add(&mut self, measured: Complex64, model: Complex64) {
+        self.cross += measured * model.conj();
+        self.measured += measured.norm_sqr();
+        self.model += model.norm_sqr();
+    }
+
+    /// Adds the sums over other lines.
+    pub(crate) fn merge(&mut self, other: &Self) {
+        self.cross += other.cross;
+        self.measured += other.measured;
+        self.model += other.model;
+    }
+
+    /// The FRAC of the lines added.
+    pub(crate) fn frac(&self) -> f64 {
+        self.cross.norm_sqr() / (self.measured * self.model).max(f64::MIN_POSITIVE)
+    }
 }
 
 /// Refines `poles` by Levenberg–Marquardt with the residues eliminated (module docs); returns

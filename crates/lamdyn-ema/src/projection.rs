@@ -21,6 +21,7 @@
 //! ∂λ/∂ln σ = −σ, ∂λ/∂ω_d = i.
 
 use crate::error::{EmaError, invalid};
+use crate::lsfd::LineBasis;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::householder::{
     apply_block_householder_sequence_transpose_on_the_left_in_place_scratch,
@@ -35,11 +36,11 @@ use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
-/// The measured side of the residue problem: the lines, the quantity's factor (iω)^k at each,
-/// and the curves' values as real rows (re, im per line), one column per curve.
+/// The measured side of the residue problem: the lines (ω), the curves' quantity, and the
+/// curves' values as real rows (re, im per line), one column per curve.
 pub(crate) struct LineSamples {
     omega: Vec<f64>,
-    factor: Vec<Complex64>,
+    quantity: Quantity,
     data: Mat<f64>,
 }
 
@@ -56,10 +57,6 @@ impl LineSamples {
         lines: &[usize],
     ) -> Result<Self, EmaError> {
         let omega: Vec<f64> = lines.iter().map(|&k| 2.0 * PI * freqs_hz[k]).collect();
-        let factor = omega
-            .iter()
-            .map(|&w| quantity_factor(w, quantity))
-            .collect();
         let data = Mat::from_fn(2 * lines.len(), curves.len(), |row, o| {
             let h = curves[o][lines[row / 2]];
             if row % 2 == 0 { h.re } else { h.im }
@@ -69,7 +66,7 @@ impl LineSamples {
         }
         Ok(Self {
             omega,
-            factor,
+            quantity,
             data,
         })
     }
@@ -96,15 +93,19 @@ impl LineSamples {
     fn basis(&self, poles: &[Complex64]) -> Mat<f64> {
         let n = 2 * poles.len();
         let mut a = Mat::zeros(self.rows(), n + 2);
-        for (i, (&w, &f)) in self.omega.iter().zip(&self.factor).enumerate() {
-            let s = Complex64::new(0.0, w);
-            for (r, &p) in poles.iter().enumerate() {
-                let (a1, a2) = (1.0 / (s - p), 1.0 / (s - p.conj()));
-                Self::put(&mut a, i, 2 * r, f * (a1 + a2));
-                Self::put(&mut a, i, 2 * r + 1, f * Complex64::i() * (a1 - a2));
+        for (i, &w) in self.omega.iter().enumerate() {
+            let line = LineBasis::new(poles, self.quantity, w);
+            for (r, &(a1, a2)) in line.fractions.iter().enumerate() {
+                Self::put(&mut a, i, 2 * r, line.factor * (a1 + a2));
+                Self::put(
+                    &mut a,
+                    i,
+                    2 * r + 1,
+                    line.factor * Complex64::i() * (a1 - a2),
+                );
             }
-            Self::put(&mut a, i, n, f * (-1.0 / (w * w)));
-            Self::put(&mut a, i, n + 1, f);
+            Self::put(&mut a, i, n, line.factor * line.lower);
+            Self::put(&mut a, i, n + 1, line.factor);
         }
         a
     }
@@ -114,7 +115,8 @@ impl LineSamples {
     /// (iω)^k i[c/(iω − λ)² − c*/(iω − λ*)²], as an (rows × 2) matrix.
     fn basis_derivative(&self, p: Complex64, c: Complex64) -> Mat<f64> {
         let mut d = Mat::zeros(self.rows(), 2);
-        for (i, (&w, &f)) in self.omega.iter().zip(&self.factor).enumerate() {
+        for (i, &w) in self.omega.iter().enumerate() {
+            let f = quantity_factor(w, self.quantity);
             let s = Complex64::new(0.0, w);
             let (a1, a2) = (1.0 / (s - p), 1.0 / (s - p.conj()));
             let (d1, d2) = (c * a1 * a1, c.conj() * a2 * a2);
@@ -131,12 +133,7 @@ impl LineSamples {
             return None;
         }
         let mut a = self.basis(poles);
-        let scale: Vec<f64> = (0..a.ncols())
-            .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
-            .collect();
-        for (c, s) in scale.iter().enumerate() {
-            a.col_mut(c).iter_mut().for_each(|v| *v /= s);
-        }
+        let scale = unit_columns(&mut a);
         Some((a, scale))
     }
 
@@ -144,14 +141,8 @@ impl LineSamples {
     /// triangle R of the QR of the basis and the first rows of Qᵀ B ([`solve_by_blocks`]). The
     /// basis is factorised with its columns scaled to unit norm and R scaled back.
     fn triangle(&self, poles: &[Complex64]) -> (Mat<f64>, Mat<f64>) {
-        let n = 2 * poles.len() + 2;
         let mut a = self.basis(poles);
-        let scale: Vec<f64> = (0..n)
-            .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
-            .collect();
-        for (c, s) in scale.iter().enumerate() {
-            a.col_mut(c).iter_mut().for_each(|v| *v /= s);
-        }
+        let scale = unit_columns(&mut a);
         let qr = a.qr();
         let mut r = qr.thin_R().to_owned();
         for (c, s) in scale.iter().enumerate() {
@@ -224,17 +215,24 @@ pub(crate) fn solve_by_blocks(
         qtb.subrows_mut(at, tb.nrows()).copy_from(tb);
         at += rb.nrows();
     }
-    let scale: Vec<f64> = (0..n)
-        .map(|c| r.col(c).norm_l2().max(f64::MIN_POSITIVE))
-        .collect();
-    for (c, s) in scale.iter().enumerate() {
-        r.col_mut(c).iter_mut().for_each(|v| *v /= s);
-    }
+    let scale = unit_columns(&mut r);
     let mut x = r.qr().solve_lstsq(&qtb);
     for (c, s) in scale.iter().enumerate() {
         x.row_mut(c).iter_mut().for_each(|v| *v /= s);
     }
     Ok(x.is_all_finite().then_some(x))
+}
+
+/// Scales each column of `a` to unit norm (for the QR's conditioning: the span is what
+/// counts); returns the norms.
+fn unit_columns(a: &mut Mat<f64>) -> Vec<f64> {
+    let scale: Vec<f64> = (0..a.ncols())
+        .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
+        .collect();
+    for (c, s) in scale.iter().enumerate() {
+        a.col_mut(c).iter_mut().for_each(|v| *v /= s);
+    }
+    scale
 }
 
 /// Replaces `m` by Qᵀ m for the QR `qr`, Q applied as its Householder reflections.

@@ -20,7 +20,7 @@
 //! smear. With fewer than three response components the MPC carries no information (one
 //! component is always collinear) and no smear can be told.
 
-use crate::lsfd::ModalFit;
+use crate::lsfd::{FracSums, ModalFit};
 use crate::shapes::CmifPeak;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -304,31 +304,5 @@ impl CurveSums {
             a.iter_mut().zip(b).for_each(|(x, y)| x.merge(y));
         }
         self
-    }
-}
-
-/// The sums of [`crate::lsfd::frac`]: Σ H Ĥ*, Σ|H|², Σ|Ĥ|².
-#[derive(Debug, Clone, Copy, Default)]
-struct FracSums {
-    cross: Complex64,
-    measured: f64,
-    model: f64,
-}
-
-impl FracSums {
-    fn add(&mut self, measured: Complex64, model: Complex64) {
-        self.cross += measured * model.conj();
-        self.measured += measured.norm_sqr();
-        self.model += model.norm_sqr();
-    }
-
-    fn merge(&mut self, other: &Self) {
-        self.cross += other.cross;
-        self.measured += other.measured;
-        self.model += other.model;
-    }
-
-    fn frac(&self) -> f64 {
-        self.cross.norm_sqr() / (self.measured * self.model).max(f64::MIN_POSITIVE)
     }
 }

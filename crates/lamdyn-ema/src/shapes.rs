@@ -18,12 +18,17 @@ use serde::{Deserialize, Serialize};
 /// sums of fourth powers neither underflow nor overflow whatever the shapes' units (a residue
 /// of 1e-108 squares twice to nothing), and a power of two changes no bit of a ratio.
 fn unit_scaled(v: &[Complex64]) -> Vec<Complex64> {
-    let largest = v.iter().map(|z| z.norm()).fold(0.0, f64::max);
-    if largest == 0.0 || !largest.is_finite() {
-        return v.to_vec();
-    }
-    let scale = 2f64.powi(-(largest.log2().floor() as i32));
+    let scale = to_unit(v.iter().map(|z| z.norm()).fold(0.0, f64::max));
     v.iter().map(|z| z * scale).collect()
+}
+
+/// The power of two that brings `largest` into [1, 2); 1 for 0 or a value that is not finite.
+/// Scaling by it is exact: no bit of a ratio, a pole or an angle changes.
+pub(crate) fn to_unit(largest: f64) -> f64 {
+    if largest == 0.0 || !largest.is_finite() {
+        return 1.0;
+    }
+    2f64.powi(-(largest.log2().floor() as i32))
 }
 
 /// Modal assurance criterion.

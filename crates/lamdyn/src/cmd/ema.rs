@@ -270,22 +270,25 @@ fn estimator_text(s: &EmaSettings) -> &'static str {
     }
 }
 
+/// Each step's label and seconds, reading the data first.
+fn steps(read_s: f64, t: &EmaTimings) -> impl Iterator<Item = (&'static str, f64)> {
+    std::iter::once(("read", read_s)).chain(t.steps())
+}
+
 /// The time of each step in seconds, reading the data first, and the total.
 fn time_text(read_s: f64, t: &EmaTimings) -> String {
-    let steps: Vec<String> = std::iter::once(("read", read_s))
-        .chain(t.steps())
+    let steps: Vec<String> = steps(read_s, t)
         .map(|(step, s)| format!("{step} {s:.3}"))
         .collect();
     format!("{} s; total {:.3} s", steps.join(", "), read_s + t.total())
 }
 
-/// The step times as JSON: seconds per step, reading the data first.
+/// The step times as JSON: seconds per step.
 fn time_json(read_s: f64, t: &EmaTimings) -> serde_json::Value {
-    let steps: serde_json::Map<String, serde_json::Value> = std::iter::once(("read", read_s))
-        .chain(t.steps())
+    steps(read_s, t)
         .map(|(step, s)| (step.to_string(), serde_json::json!(s)))
-        .collect();
-    serde_json::Value::Object(steps)
+        .collect::<serde_json::Map<_, _>>()
+        .into()
 }
 
 fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read_s: f64) -> Report {
