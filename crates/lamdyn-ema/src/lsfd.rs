@@ -22,7 +22,8 @@
 //! A_r = φ φᵀ/(2iω_d) give φ_p = √(2iω_d A_r,pp) and φ_o = 2iω_d A_r,op/φ_p.
 
 use crate::error::{EmaError, check_curves, invalid};
-use crate::projection::{LineSamples, quantity_factor, solve_by_blocks};
+pub use crate::projection::LineBasis;
+use crate::projection::{LineSamples, solve_by_blocks};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use lamdyn_frf::Quantity;
@@ -108,33 +109,6 @@ fn lsfd_on(
         upper: curves.map(|o| x[(2 * nr + 1, o)]).collect(),
         quantity,
     })
-}
-
-/// What every curve's synthesis at one line shares ([`ModalFit::line_basis`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct LineBasis {
-    /// (iω)^k of the quantity.
-    pub(crate) factor: Complex64,
-    /// The lower residual's −1/ω² (0 at 0 Hz).
-    pub(crate) lower: f64,
-    /// 1/(iω − λ_r) and 1/(iω − λ_r*) of each pole.
-    pub(crate) fractions: Vec<(Complex64, Complex64)>,
-}
-
-impl LineBasis {
-    /// The basis of `poles` for curves of `quantity` at ω = `w` rad/s: the model's terms of
-    /// the module docs before their coefficients.
-    pub(crate) fn new(poles: &[Complex64], quantity: Quantity, w: f64) -> Self {
-        let s = Complex64::new(0.0, w);
-        Self {
-            factor: quantity_factor(w, quantity),
-            lower: if w > 0.0 { -1.0 / (w * w) } else { 0.0 },
-            fractions: poles
-                .iter()
-                .map(|p| (1.0 / (s - p), 1.0 / (s - p.conj())))
-                .collect(),
-        }
-    }
 }
 
 impl ModalFit {

@@ -21,7 +21,6 @@
 //! ∂λ/∂ln σ = −σ, ∂λ/∂ω_d = i.
 
 use crate::error::{EmaError, invalid};
-use crate::lsfd::LineBasis;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::householder::{
     apply_block_householder_sequence_transpose_on_the_left_in_place_scratch,
@@ -253,8 +252,35 @@ pub(crate) fn apply_transpose_q(qr: &Qr<f64>, m: &mut Mat<f64>) {
     );
 }
 
+/// What every curve's synthesis at one line shares ([`crate::lsfd::ModalFit::line_basis`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineBasis {
+    /// (iω)^k of the quantity.
+    pub(crate) factor: Complex64,
+    /// The lower residual's −1/ω² (0 at 0 Hz).
+    pub(crate) lower: f64,
+    /// 1/(iω − λ_r) and 1/(iω − λ_r*) of each pole.
+    pub(crate) fractions: Vec<(Complex64, Complex64)>,
+}
+
+impl LineBasis {
+    /// The basis of `poles` for curves of `quantity` at ω = `w` rad/s: the model's terms of
+    /// the module docs before their coefficients.
+    pub(crate) fn new(poles: &[Complex64], quantity: Quantity, w: f64) -> Self {
+        let s = Complex64::new(0.0, w);
+        Self {
+            factor: quantity_factor(w, quantity),
+            lower: if w > 0.0 { -1.0 / (w * w) } else { 0.0 },
+            fractions: poles
+                .iter()
+                .map(|p| (1.0 / (s - p), 1.0 / (s - p.conj())))
+                .collect(),
+        }
+    }
+}
+
 /// (iω)^k of the quantity: receptance 1, mobility iω, accelerance (iω)².
-pub(crate) fn quantity_factor(w: f64, q: Quantity) -> Complex64 {
+fn quantity_factor(w: f64, q: Quantity) -> Complex64 {
     let s = Complex64::new(0.0, w);
     match q {
         Quantity::Receptance => Complex64::new(1.0, 0.0),
