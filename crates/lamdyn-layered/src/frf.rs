@@ -272,8 +272,8 @@ impl ObservedModel {
             let dc = self.model.input_core_derivative(k);
             let c = core.get_or_insert_with(|| self.core.clone());
             for j in 0..dc.ncols() {
-                for i in 0..dc.nrows() {
-                    c[(i, j)] += c64::new(f * dc[(i, j)], 0.0);
+                for (ci, &di) in c.col_as_slice_mut(j).iter_mut().zip(dc.col_as_slice(j)) {
+                    *ci += c64::new(f * di, 0.0);
                 }
             }
         }

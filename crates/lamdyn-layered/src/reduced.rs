@@ -346,21 +346,28 @@ impl ReducedModel {
         Ok(())
     }
 
-    /// Entry (i, j) of the reduced dynamic stiffness Vᵀ Z(ω) V (module docs).
-    fn dynamic_stiffness(&self, i: usize, j: usize, omega: f64, core_scale: Complex64) -> c64 {
-        let v = Complex64::new(1.0, self.elastic_loss) * self.k_elastic[(i, j)]
-            + core_scale * self.k_core[(i, j)]
-            + Complex64::new(
-                self.k_springs[(i, j)] - omega * omega * self.mass[(i, j)],
-                omega * self.c_dampers[(i, j)],
-            );
-        c64::new(v.re, v.im)
-    }
-
-    /// The projected dynamic stiffness Vᵀ Z(ω) V at ω (rad/s) and core scale s (module docs).
+    /// The projected dynamic stiffness Vᵀ Z(ω) V at ω (rad/s) and core scale s (module docs):
+    /// (1 + iη_e) K_e + s K_c + K_s − ω² M + iω C_s, a column at a time.
     pub(crate) fn dynamic_stiffness_matrix(&self, omega: f64, core_scale: Complex64) -> Mat<c64> {
         let m = self.size();
-        Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, omega, core_scale))
+        let elastic = Complex64::new(1.0, self.elastic_loss);
+        let omega2 = omega * omega;
+        let mut z = Mat::<c64>::zeros(m, m);
+        for j in 0..m {
+            let parts = self
+                .k_elastic
+                .col_as_slice(j)
+                .iter()
+                .zip(self.k_core.col_as_slice(j))
+                .zip(self.k_springs.col_as_slice(j))
+                .zip(self.mass.col_as_slice(j))
+                .zip(self.c_dampers.col_as_slice(j));
+            for (zi, ((((&ke, &kc), &ks), &mi), &ci)) in z.col_as_slice_mut(j).iter_mut().zip(parts)
+            {
+                *zi = elastic * ke + core_scale * kc + Complex64::new(ks - omega2 * mi, omega * ci);
+            }
+        }
+        z
     }
 
     /// The inputs whose derivatives this model holds, in their order.
@@ -421,8 +428,8 @@ impl ReducedModel {
             let w = f * w;
             let w = c64::new(w.re, w.im);
             for j in 0..a.ncols() {
-                for i in 0..a.nrows() {
-                    z[(i, j)] += w * a[(i, j)];
+                for (zi, &ai) in z.col_as_slice_mut(j).iter_mut().zip(a.col_as_slice(j)) {
+                    *zi += w * ai;
                 }
             }
         }
@@ -443,8 +450,8 @@ impl ReducedModel {
             for c in 0..x.ncols() {
                 for j in 0..a.ncols() {
                     let wx = w * x[(j, c)];
-                    for i in 0..a.nrows() {
-                        y[(i, c)] += wx * a[(i, j)];
+                    for (yi, &ai) in y.col_as_slice_mut(c).iter_mut().zip(a.col_as_slice(j)) {
+                        *yi += wx * ai;
                     }
                 }
             }
@@ -461,8 +468,7 @@ impl ReducedModel {
     /// scale s (Vᵀ M V = I, so the eigenvalues of Vᵀ Z(0) V: the dashpots left out), increasing
     /// real part: the natural frequencies √Re λ/2π and modal loss factors Im λ/Re λ.
     pub fn complex_eigenvalues(&self, core_scale: Complex64) -> Vec<Complex64> {
-        let m = self.size();
-        let z = Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, 0.0, core_scale));
+        let z = self.dynamic_stiffness_matrix(0.0, core_scale);
         seq::eigenvalues(z.as_ref())
     }
 
@@ -503,7 +509,7 @@ impl ReducedModel {
         dofs: &[usize],
     ) -> Vec<Complex64> {
         let m = self.size();
-        let z = Mat::from_fn(m, m, |i, j| self.dynamic_stiffness(i, j, omega, core_scale));
+        let z = self.dynamic_stiffness_matrix(omega, core_scale);
         let rhs = Mat::from_fn(m, 1, |i, _| c64::new(load_r[i], 0.0));
         let q = z.partial_piv_lu().solve(&rhs);
         dofs.iter()
