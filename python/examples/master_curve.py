@@ -8,6 +8,7 @@ to the cores found by the layered inverse at every mode and temperature (lamdyn.
 The recovered C1 and C2 are printed with their 95 % intervals beside the truth.
 
     python python/examples/master_curve.py [OUT] [--temperatures 14,17,20,23,26] [--workers 2]
+                                           [--cache DIR]
 
 Writes OUT/T<..>/ (each test's job and report), OUT/batch.csv, OUT/master_curve.csv (G' and
 eta against reduced frequency with 95 % bands) and OUT/shift_factors.csv (log10 a_T(T)).
@@ -33,6 +34,12 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
     ap.add_argument("--address", default=None, help="scheduler address of a running cluster")
     ap.add_argument("--force", action="store_true", help="replace files lamdyn did not write")
+    ap.add_argument(
+        "--cache",
+        default="shared",
+        help="the batch's cache folder (default: .lamdyn-cache beside the jobs); another batch's "
+        "cache lets a rerun, or a run with more temperatures, take the stages it already has",
+    )
     args = ap.parse_args(argv)
     from distributed import Client, LocalCluster
 
@@ -61,7 +68,7 @@ def main(argv=None) -> int:
         )
         jobs = client.gather(sims)
         print(f"simulated {len(jobs)} tests in {time.perf_counter() - clock:.1f} s", file=sys.stderr)
-        batch = lamdyn.batch.run_batch(jobs, out=out / "reports", client=client, force=args.force)
+        batch = lamdyn.batch.run_batch(jobs, out=out / "reports", cache=args.cache, client=client, force=args.force)
     finally:
         client.close()
         if cluster is not None:

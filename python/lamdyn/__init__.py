@@ -100,14 +100,28 @@ def _channels_json(channels: Optional[Sequence[Any]]) -> Optional[str]:
 
 
 def _f64(a: Any, name: str) -> np.ndarray:
-    arr = np.ascontiguousarray(np.asarray(a, dtype=np.float64))
+    """``a`` as a contiguous 1-d float64 array; anything else raises LamdynError naming ``name``."""
+    try:
+        arr = np.ascontiguousarray(np.asarray(a, dtype=np.float64))
+    except (TypeError, ValueError) as e:
+        raise LamdynError(f"{name}: expected an array of real numbers: {e}") from None
     if arr.ndim != 1:
         raise LamdynError(f"{name}: expected a 1-d array, got shape {arr.shape}")
     return arr
 
 
 def _frf(a: Any) -> np.ndarray:
-    arr = np.asarray(a)
+    """FRFs as a contiguous complex128 array (responses, references, lines). A real array is
+    refused: FRFs are complex, and a real one is most often magnitudes."""
+    try:
+        arr = np.asarray(a)
+    except (TypeError, ValueError) as e:
+        raise LamdynError(f"frf: expected an array of complex numbers: {e}") from None
+    if not np.issubdtype(arr.dtype, np.complexfloating):
+        raise LamdynError(
+            f"frf: a {arr.dtype} array: FRFs are complex (magnitude and phase); pass the complex "
+            "values, not magnitudes or real parts"
+        )
     if arr.ndim == 2:  # one reference
         arr = arr[:, None, :]
     if arr.ndim != 3:
@@ -189,7 +203,7 @@ def ema(
     window_hz: float = 1.0,
     polymax: bool = True,
     refine: bool = True,
-    driving: Optional[int] = None,
+    driving: Union[str, int, None] = None,
     cmif_prominence: float = 2.0,
     poles: str = "checked",
 ) -> dict:
@@ -212,8 +226,14 @@ def ema(
     refined one), ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
     ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json). The CMIF peaks
     listed are those whose topographic prominence in the band (as ``scipy.signal.find_peaks``
-    on log sigma_1) is at least the factor ``cmif_prominence``.
+    on log sigma_1) is at least the factor ``cmif_prominence``. ``driving`` names the
+    driving-point response (mass-normalised shapes) as ``lamdyn ema --driving`` does, or gives
+    its index.
     """
+    if isinstance(driving, bool) or not (driving is None or isinstance(driving, (str, int, np.integer))):
+        raise LamdynError(f"driving: a response's name or index, got {driving!r}")
+    if isinstance(driving, np.integer):
+        driving = int(driving)
     options = {
         "band_hz": None if band_hz is None else [float(b) for b in band_hz],
         "orders": [int(o) for o in orders],

@@ -4,6 +4,8 @@ users (docs/python.md)."""
 
 import inspect
 
+import pytest
+
 import lamdyn
 import lamdyn.batch
 
@@ -16,7 +18,7 @@ PUBLIC = {
     'read_uff': "(path: 'PathLike', lenient: 'bool' = False) -> 'FrfData'",
     'read_uff_functions': "(path: 'PathLike', lenient: 'bool' = False) -> 'list'",
     'write_uff': "(path: 'PathLike', freqs_hz: 'Any', frf: 'Any', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, quantity: 'str' = 'accelerance', binary: 'bool' = False) -> 'None'",
-    'ema': "(freqs_hz: 'Any', frf: 'Any', quantity: 'str' = 'accelerance', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, band_hz: 'Optional[Sequence[float]]' = None, orders: 'Sequence[int]' = (2, 60, 2), near_hz: 'Optional[Sequence[float]]' = None, reject_hz: 'Optional[Sequence[float]]' = None, window_hz: 'float' = 1.0, polymax: 'bool' = True, refine: 'bool' = True, driving: 'Optional[int]' = None, cmif_prominence: 'float' = 2.0, poles: 'str' = 'checked') -> 'dict'",
+    'ema': "(freqs_hz: 'Any', frf: 'Any', quantity: 'str' = 'accelerance', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, band_hz: 'Optional[Sequence[float]]' = None, orders: 'Sequence[int]' = (2, 60, 2), near_hz: 'Optional[Sequence[float]]' = None, reject_hz: 'Optional[Sequence[float]]' = None, window_hz: 'float' = 1.0, polymax: 'bool' = True, refine: 'bool' = True, driving: 'Union[str, int, None]' = None, cmif_prominence: 'float' = 2.0, poles: 'str' = 'checked') -> 'dict'",
     'modes': "(model: 'Union[dict, PathLike]', n_modes: 'Optional[int]' = None) -> 'dict'",
     'fit': "(freqs_hz: 'Any', frf: 'Any', responses: 'Sequence[Any]', references: 'Sequence[Any]', model: 'Union[dict, PathLike]', quantity: 'str' = 'accelerance', law: 'str' = 'per_mode', band_hz: 'Optional[Sequence[float]]' = None, misfit: 'str' = 'log_rms', reference: 'int' = 0, exclude_hz: 'Optional[Sequence[Sequence[float]]]' = None, covariance: 'str' = 'robust_hc3', n_modes: 'Optional[int]' = None, residual: 'bool' = True, tolerance_m: 'float' = 0.001, sensor_mapping: 'str' = 'surface') -> 'dict'",
     'fit_job': "(job: 'PathLike') -> 'dict'",
@@ -78,3 +80,62 @@ def test_results_are_typed_and_still_read_as_dicts():
         raise AssertionError("an unknown key must raise KeyError")
     for cls in (lamdyn.RunResult, lamdyn.ModalTable, lamdyn.MasterCurve):
         assert dataclasses.is_dataclass(cls) and cls.__doc__ and "Attributes:" in cls.__doc__
+
+
+
+def test_errors_pickle_and_keep_their_class_across_processes(tmp_path):
+    """A LamdynError keeps its class and message through pickle and from a Dask worker's
+    process (a file that does not exist, read there), so a batch's caller can catch it by
+    class."""
+    import pickle
+
+    from distributed import Client, LocalCluster
+
+    e = pickle.loads(pickle.dumps(lamdyn.LamdynError("stack.layers[1]: bad")))
+    assert type(e) is lamdyn.LamdynError and str(e) == "stack.layers[1]: bad"
+    assert lamdyn.LamdynError.__module__ == "lamdyn"
+    missing = str(tmp_path / "missing.uff")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, Client(cluster) as client:
+        future = client.submit(lamdyn.read_uff, missing, pure=False)
+        try:
+            future.result()
+        except lamdyn.LamdynError as got:
+            assert "missing.uff" in str(got)
+        else:
+            raise AssertionError("no error came back")
+
+
+def test_bad_arrays_raise_lamdyns_error_naming_the_argument():
+    """Real-valued FRFs (magnitudes, most often) are refused; arrays that are not numbers, or of
+    the wrong shape, raise LamdynError naming the argument, not numpy's ValueError."""
+    import numpy as np
+
+    f = np.linspace(1, 100, 200)
+    h = 1 / (1 - (f / 50) ** 2 + 0.02j)
+    with pytest.raises(lamdyn.LamdynError, match=r"^frf: a float64 array: FRFs are complex"):
+        lamdyn.ema(f, np.abs(h)[None, :])
+    with pytest.raises(lamdyn.LamdynError, match=r"^freqs_hz: expected an array of real numbers"):
+        lamdyn.ema(["one", "two"], h[None, :])
+    with pytest.raises(lamdyn.LamdynError, match=r"^freqs_hz: expected a 1-d array"):
+        lamdyn.ema(f[None, :], h[None, :])
+    with pytest.raises(lamdyn.LamdynError, match=r"^e_storage_pa: expected an array of real numbers"):
+        lamdyn.core_inverse([100.0], [1e9 + 1j], [0.1], stack={})
+
+
+def test_the_driving_point_is_named_as_the_cli_names_it():
+    """``driving`` takes the response's name (as ``lamdyn ema --driving``) or its index, with
+    the same shapes either way; a name that is not a response lists the responses."""
+    import numpy as np
+
+    f = np.linspace(1, 100, 400)
+    h1 = 1 / (1 - (f / 30) ** 2 + 0.04j * f / 30) + 0.5 / (1 - (f / 70) ** 2 + 0.04j * f / 70)
+    h2 = 0.7 / (1 - (f / 30) ** 2 + 0.04j * f / 30) - 0.4 / (1 - (f / 70) ** 2 + 0.04j * f / 70)
+    frf = np.array([h1, h2])
+    names = ["1+Z", "2+Z"]
+    by_name = lamdyn.ema(f, frf, responses=names, driving="2+Z", band_hz=(10, 90))
+    by_index = lamdyn.ema(f, frf, responses=names, driving=1, band_hz=(10, 90))
+    np.testing.assert_array_equal(by_name["shapes"], by_index["shapes"])
+    with pytest.raises(lamdyn.LamdynError, match=r"driving: '3\+Z' is not a response of the data \(2 responses: 1\+Z, 2\+Z\)"):
+        lamdyn.ema(f, frf, responses=names, driving="3+Z", band_hz=(10, 90))
+    with pytest.raises(lamdyn.LamdynError, match="driving: index 5 is not a response"):
+        lamdyn.ema(f, frf, responses=names, driving=5, band_hz=(10, 90))

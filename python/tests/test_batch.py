@@ -131,15 +131,18 @@ def test_a_killed_worker_s_job_is_rerun(temperature_jobs, batch, tmp_path):
         np.testing.assert_array_equal(b.results[name]["modal"]["g_layered_storage_pa"], want["modal"]["g_layered_storage_pa"])
 
 
-def test_the_master_curve_example_runs(repo, tmp_path):
+def test_the_master_curve_example_runs(repo, tmp_path, batch, shared_cache):
     """python/examples/master_curve.py as the README runs it (three temperatures here, to keep
-    the suite short): tests simulated and run on its own LocalCluster, the curve written."""
+    the suite short): tests simulated and run on its own LocalCluster, the curve written. It
+    takes the batch fixture's cache (``--cache``): its tests are the same bytes, so their
+    stages come from the cache, as a user's rerun would take them."""
     import subprocess
     import sys
 
     out = tmp_path / "m"
     p = subprocess.run(
-        [sys.executable, str(repo / "python/examples/master_curve.py"), str(out), "--temperatures", "14,20,26"],
+        [sys.executable, str(repo / "python/examples/master_curve.py"), str(out), "--temperatures", "14,20,26",
+         "--cache", str(shared_cache)],
         capture_output=True, text=True, timeout=900,
     )
     print(p.stdout[-3000:])

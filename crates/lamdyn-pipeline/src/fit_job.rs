@@ -409,6 +409,7 @@ pub fn load_fit_job(path: &Path, progress: &dyn Reporter) -> Result<FitProblem> 
     settings.covariance = job.fit.covariance;
     settings.prominence = prominence;
     let mut notes = notes;
+    notes.extend(crate::io::encoding_notes([path]));
     notes.extend(measured.warnings);
     Ok(FitProblem {
         source: format!("job '{}': {}", path.display(), measured.source),

@@ -3,7 +3,7 @@
 
 use crate::error::{Context, Result};
 use crate::{bail, err};
-use lamdyn_frf::text::{Dialect, data_lines};
+use lamdyn_frf::text::{Dialect, Encoding, data_lines};
 use serde::de::DeserializeOwned;
 use std::path::Path;
 
@@ -15,6 +15,52 @@ use std::path::Path;
 pub fn read_text(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read '{}'", path.display()))?;
     Ok(lamdyn_frf::text::decode(&bytes).0)
+}
+
+/// A note naming the encoding of a text file that is not UTF-8 ([`lamdyn_frf::text::decode`]
+/// reads it anyway); `None` for UTF-8.
+pub fn encoding_note(path: &Path, encoding: Encoding) -> Option<String> {
+    match encoding {
+        Encoding::Utf8 => None,
+        Encoding::Utf16 => Some(format!(
+            "'{}' is UTF-16 (it starts with a byte-order mark): read as UTF-16",
+            path.display()
+        )),
+        Encoding::Latin1 => Some(format!(
+            "'{}' is not UTF-8: read as Latin-1 (ISO 8859-1); if it was written in another encoding, names and comments in it may be wrong: save it as UTF-8",
+            path.display()
+        )),
+    }
+}
+
+/// Notes ([`encoding_note`]) for the text files among `paths` that are not UTF-8; files that
+/// cannot be read and universal files ([`is_uff`], binary datasets allowed) are left to their
+/// readers.
+pub fn encoding_notes<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Vec<String> {
+    paths
+        .into_iter()
+        .filter(|p| !is_uff(p).unwrap_or(true))
+        .filter_map(|p| {
+            let bytes = std::fs::read(p).ok()?;
+            encoding_note(p, lamdyn_frf::text::decode(&bytes).1)
+        })
+        .collect()
+}
+
+/// Whether a file is a universal file: its first non-blank line is the delimiter `-1`.
+///
+/// # Errors
+/// The file cannot be opened or read.
+pub fn is_uff(path: &Path) -> Result<bool> {
+    use std::io::Read;
+    let mut head = [0u8; 512];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .with_context(|| format!("cannot read '{}'", path.display()))?;
+    Ok(String::from_utf8_lossy(&head[..n])
+        .lines()
+        .find(|l| !l.trim().is_empty())
+        .is_some_and(|l| l.trim() == "-1"))
 }
 
 /// Reads and parses a TOML file; errors name the file and, from the parser, the line, column and
@@ -226,6 +272,37 @@ impl CsvTable {
 
 #[cfg(test)]
 mod tests {
+    /// A text file in Latin-1 or UTF-16 is named with its encoding; UTF-8 (with or without a
+    /// byte-order mark), a universal file with binary bytes and a missing file are not.
+    #[test]
+    fn files_not_in_utf8_are_named_with_their_encoding() {
+        let dir = lamdyn_testkit::TempDir::new("io-encodings");
+        let file = |name: &str, bytes: &[u8]| {
+            let p = dir.to_path_buf().join(name);
+            std::fs::write(&p, bytes).unwrap();
+            p
+        };
+        let latin1 = file("latin1.csv", b"name,x_m\nr\xe9ponse 1,0.1\n");
+        let utf16 = file("utf16.csv", b"\xff\xfen\x00,\x00x\x00\n\x00");
+        let utf8 = file("utf8.csv", "name,x_m\nréponse 1,0.1\n".as_bytes());
+        let bom = file("bom.csv", b"\xef\xbb\xbfname,x_m\n");
+        let uff = file("data.uff", b"    -1\n    58b\n\xff\xfe\x00\x01\n    -1\n");
+        let missing = dir.to_path_buf().join("missing.csv");
+        let paths = [&latin1, &utf16, &utf8, &bom, &uff, &missing];
+        let notes = super::encoding_notes(paths.iter().map(|p| p.as_path()));
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes[0].contains("latin1.csv") && notes[0].contains("Latin-1"),
+            "{}",
+            notes[0]
+        );
+        assert!(
+            notes[1].contains("utf16.csv") && notes[1].contains("UTF-16"),
+            "{}",
+            notes[1]
+        );
+    }
+
     /// A job whose error lies on a line of a million characters, or on a line of binary
     /// bytes, quotes at most 80 characters of it, control characters escaped; a short line
     /// keeps the parser's own message with its caret.

@@ -543,6 +543,7 @@ impl Job {
         let job: Job = crate::io::read_toml(path)?;
         job.check()
             .and_then(|()| job.check_files(&base_of(path)))
+            .and_then(|()| job.check_stack_against_model(&base_of(path)))
             .map_err(|e| err!("error in '{}': {e}", path.display()))?;
         Ok(job)
     }
@@ -798,6 +799,42 @@ impl Job {
         Ok(())
     }
 
+    /// The model, and the stack against it: the shell model of the paper's route and the stack
+    /// are one part, so the same total
+    /// thickness within [`STACK_MODEL_THICKNESS`] and the same surface density (the stack's
+    /// given one, else its layers' Σ ρ_i h_i) within [`STACK_MODEL_SURFACE_DENSITY`].
+    ///
+    /// The model's mesh is built here too (a Gmsh file read and checked), so that a broken
+    /// mesh is found before the measurement and the EMA, not after them.
+    fn check_stack_against_model(&self, base: &Path) -> Result<()> {
+        let ModelFile { spec, dir, label } = self.model_file(base)?;
+        spec.build(&dir)
+            .map_err(|e| err!("invalid model {label}: {e}"))?;
+        let layers = &self.stack.layers;
+        let h_stack: f64 = layers.iter().map(|l| l.thickness_m).sum();
+        let h_model = spec.material.thickness_m;
+        if (h_model - h_stack).abs() > STACK_MODEL_THICKNESS * h_stack {
+            return Err(err!(
+                "stack.layers: {:.4} mm thick in all, but the shell model {label} is {:.4} mm thick (material.thickness_m): one part, so they must agree within {:.0} %; check the units (m) of both",
+                1e3 * h_stack,
+                1e3 * h_model,
+                100.0 * STACK_MODEL_THICKNESS
+            ));
+        }
+        let rho_stack = self
+            .stack
+            .surface_density_kg_m2
+            .unwrap_or_else(|| layers.iter().map(|l| l.density_kg_m3 * l.thickness_m).sum());
+        let rho_model = spec.material.density_kg_m3 * h_model;
+        if (rho_model - rho_stack).abs() > STACK_MODEL_SURFACE_DENSITY * rho_stack {
+            return Err(err!(
+                "stack: surface density {rho_stack:.4} kg/m^2, but the shell model {label} has {rho_model:.4} kg/m^2 (material.density_kg_m3 x thickness_m): one part, so they must agree within {:.0} %",
+                100.0 * STACK_MODEL_SURFACE_DENSITY
+            ));
+        }
+        Ok(())
+    }
+
     /// Misfit kind label for the report.
     pub fn misfit_label(&self) -> &'static str {
         match self.fit.misfit.kind {
@@ -807,6 +844,15 @@ impl Job {
         }
     }
 }
+
+/// Largest relative difference between the stack's total thickness and the shell model's: both
+/// describe one part, and the shell model is the laminate's total thickness.
+pub const STACK_MODEL_THICKNESS: f64 = 0.05;
+
+/// Largest relative difference between the stack's surface density and the shell model's
+/// ρ h: both describe one part's mass per area (a measured one may differ from nominal layers
+/// by some percent).
+pub const STACK_MODEL_SURFACE_DENSITY: f64 = 0.1;
 
 /// The shell material of an inline model spec, in SI units (the checks `lamdyn modes` uses).
 fn check_shell(at: &str, spec: &ModelSpec) -> Result<()> {

@@ -51,19 +51,6 @@ fn read_text(p: &Path) -> Result<String> {
     crate::io::read_text(p)
 }
 
-/// Whether a file is a universal file: its first non-blank line is the delimiter `-1`.
-fn is_uff(path: &Path) -> Result<bool> {
-    use std::io::Read;
-    let mut head = [0u8; 512];
-    let n = std::fs::File::open(path)
-        .and_then(|mut f| f.read(&mut head))
-        .with_context(|| format!("cannot read '{}'", path.display()))?;
-    Ok(String::from_utf8_lossy(&head[..n])
-        .lines()
-        .find(|l| !l.trim().is_empty())
-        .is_some_and(|l| l.trim() == "-1"))
-}
-
 /// One run or hit of time data: a time CSV (`lamdyn_frf::csv` module docs) or a universal file
 /// of time responses (`lamdyn_uff::time`), told apart by content.
 fn read_time_file(
@@ -72,7 +59,7 @@ fn read_time_file(
     hammer: &Channel,
     quantity: Option<Quantity>,
 ) -> Result<TimeRecord> {
-    if is_uff(path)? {
+    if crate::io::is_uff(path)? {
         let file = lamdyn_uff::read_path(path, Default::default()).map_err(|e| err!("{e}"))?;
         return lamdyn_uff::time::time_record(&file, responses, hammer, quantity)
             .map_err(|e| err!("'{}': {e}", path.display()));
@@ -392,6 +379,11 @@ pub fn read_measurement_section(
             path.display()
         ),
     };
+    let texts = m.channels.iter().chain(&m.frf).chain(&m.time);
+    let texts: Vec<PathBuf> = texts.map(|p| relative(base, p)).collect();
+    out.warnings.extend(crate::io::encoding_notes(
+        texts.iter().map(PathBuf::as_path),
+    ));
     if let Some(n) = m.responses {
         let got = out.set.responses().len();
         if got != n {

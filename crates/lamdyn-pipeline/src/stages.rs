@@ -82,6 +82,7 @@ pub fn run_job(
     let measured = t.stage("measurement", || {
         Ok((read_measurement(&job, &base, path)?, false))
     })?;
+    warnings.extend(crate::io::encoding_notes([path]));
     warnings.extend(measured.warnings.iter().cloned());
     let ema = t.stage("ema", || run_ema(&job, &measured.set, &cache, spinner))?;
     let pole_checks = pole_checks(&mut t, &job, &measured, &cache)?;
@@ -717,7 +718,7 @@ fn build_model(
         bail!("model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode");
     }
     let tol = job.measurement.tolerance_m;
-    let mut key = Key::new(concat!("model ", env!("CARGO_PKG_VERSION")))
+    let mut key = Key::new(concat!("model with its line ", env!("CARGO_PKG_VERSION")))
         .bytes(format!("{spec:?}").as_bytes())
         .bytes(&(modes as u64).to_le_bytes())
         .bytes(&[u8::from(job.model.residual)])
@@ -744,8 +745,10 @@ fn build_model(
         )
     };
     if let Some(bytes) = cache.get("model", key) {
-        if let Ok(m) = ModalModel::from_cache_bytes(&bytes) {
-            return Ok(((m, line("-".into(), "-".into()) + " (cached)"), true));
+        if let Some((text, model)) = unpack_model(&bytes) {
+            if let Ok(m) = ModalModel::from_cache_bytes(model) {
+                return Ok(((m, format!("{text} (cached)")), true));
+            }
         }
     }
     let (mesh, _) = spec
@@ -766,7 +769,6 @@ fn build_model(
         ResidualTerm::None
     };
     let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, residual)?;
-    cache.put("model", key, &model.to_cache_bytes())?;
     let text = format!(
         "{}; {}",
         line(
@@ -775,7 +777,26 @@ fn build_model(
         ),
         placement_line(mapping, &[resp.as_slice(), refs.as_slice()].concat())
     );
+    cache.put("model", key, &pack_model(&text, &model.to_cache_bytes()))?;
     Ok(((model, text), false))
+}
+
+/// A cache entry of the shell model: its description line (mesh size, sensor placement),
+/// then the model's bytes; the line's length first, as 8 little-endian bytes.
+fn pack_model(text: &str, model: &[u8]) -> Vec<u8> {
+    let mut out = (text.len() as u64).to_le_bytes().to_vec();
+    out.extend_from_slice(text.as_bytes());
+    out.extend_from_slice(model);
+    out
+}
+
+/// The description line and the model's bytes of a [`pack_model`] entry; `None` for bytes
+/// that are not one.
+fn unpack_model(bytes: &[u8]) -> Option<(&str, &[u8])> {
+    let (len, rest) = bytes.split_first_chunk::<8>()?;
+    let len = usize::try_from(u64::from_le_bytes(*len)).ok()?;
+    let text = std::str::from_utf8(rest.get(..len)?).ok()?;
+    Some((text, &rest[len..]))
 }
 
 /// The paper's fit's misfit lines and RMS curves (paper Fig. 5, Table 3).

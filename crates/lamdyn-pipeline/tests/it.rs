@@ -360,7 +360,25 @@ fn a_gmsh_model_goes_the_layered_route() {
         &text[to..]
     );
     let gmsh_job = dir.join("input/gmsh.toml");
-    std::fs::write(&gmsh_job, text).unwrap();
+    std::fs::write(&gmsh_job, &text).unwrap();
+    // A broken mesh is found when the job is read, before any work, naming the mesh's line.
+    let broken = dir.join("input/broken.toml");
+    std::fs::write(&broken, text.replace("plan.msh", "broken.msh")).unwrap();
+    let mesh = std::fs::read_to_string(dir.join("input/plan.msh")).unwrap();
+    let at = mesh.find("$Nodes\n").unwrap();
+    let at = at + mesh[at..].find("\n-300 -250 0\n").unwrap() + 1;
+    let line = mesh[..at].matches('\n').count() + 1;
+    let bad = format!(
+        "{}-300 oops 0{}",
+        &mesh[..at],
+        &mesh[at + "-300 -250 0".len()..]
+    );
+    std::fs::write(dir.join("input/broken.msh"), bad).unwrap();
+    let e = chain_text(&Job::read(&broken).unwrap_err());
+    assert!(
+        e.contains("broken.msh") && e.contains(&format!("line {line}")),
+        "line {line}: {e}"
+    );
     let options = RunOptions {
         cache_dir: Some(dir.join("input/.lamdyn-cache")),
     };
@@ -404,6 +422,13 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
             "model",
             "layered inverse"
         ]
+    );
+    // The cached model is described as the built one was (mesh size, sensor placement).
+    assert_eq!(r.model_line, format!("{} (cached)", first.model_line));
+    assert!(
+        first.model_line.contains(" nodes, ") && !first.model_line.contains("- nodes"),
+        "{}",
+        first.model_line
     );
     // From the cache, the same bits (the EMA's JSON floats round-trip exactly).
     let layered = |r: &ChainResult| -> Vec<Option<num_complex::Complex64>> {
@@ -520,6 +545,29 @@ fn rerun_uses_the_cache_and_a_failed_stage_keeps_the_report() {
     assert_eq!(std::fs::read(&report).unwrap(), before);
 }
 
+/// The shell model's ρ h of a job, kg/m² (its inline `[model.spec.material]`).
+fn shell_surface_density(job: &str) -> f64 {
+    let v: toml::Table = toml::from_str(job).unwrap();
+    let m = &v["model"]["spec"]["material"];
+    m["density_kg_m3"].as_float().unwrap() * m["thickness_m"].as_float().unwrap()
+}
+
+/// A job whose inline shell model takes the stack's total thickness and Σ ρ_i h_i.
+fn with_the_stacks_shell(job: &str) -> String {
+    let mut v: toml::Table = toml::from_str(job).unwrap();
+    let layers = v["stack"]["layers"].as_array().unwrap();
+    let of = |key: &str, l: &toml::Value| l[key].as_float().unwrap();
+    let h: f64 = layers.iter().map(|l| of("thickness_m", l)).sum();
+    let m: f64 = layers
+        .iter()
+        .map(|l| of("thickness_m", l) * of("density_kg_m3", l))
+        .sum();
+    let material = v["model"]["spec"]["material"].as_table_mut().unwrap();
+    material.insert("thickness_m".into(), h.into());
+    material.insert("density_kg_m3".into(), (m / h).into());
+    toml::to_string(&v).unwrap()
+}
+
 #[test]
 fn bad_job_files_name_the_field() {
     let dir = TempDir::new("pipeline-jobs");
@@ -574,6 +622,8 @@ fn bad_job_files_name_the_field() {
         "{}{glass}\n{pvb}\n{glass}\n{pvb}\n{glass}\n",
         &good[..layers_at]
     );
+    // The shell model describes the same part: its thickness and density follow the stack.
+    let five = with_the_stacks_shell(&five);
     read("five.toml", five.clone()).expect("a five-layer job");
     check(
         "five_paper.toml",
@@ -584,6 +634,25 @@ fn bad_job_files_name_the_field() {
         "four_faces.toml",
         format!("{}{glass}\n{glass}\n{glass}\n{glass}\n", &good[..layers_at]),
         "at least one core (without): 4 layers, 0 without young_pa",
+    );
+    // A stack that is not the shell model's part: 5 % thicker than the shell, or 15 % heavier
+    // (a given surface density).
+    check(
+        "thicker.toml",
+        good.replace("thickness_m = 0.003\n", "thickness_m = 0.0032\n"),
+        "mm thick in all, but the shell model [model.spec] is",
+    );
+    check(
+        "heavier.toml",
+        good.replacen(
+            "[[stack.layers]]",
+            &format!(
+                "[stack]\nsurface_density_kg_m2 = {}\n\n[[stack.layers]]",
+                1.15 * shell_surface_density(&good)
+            ),
+            1,
+        ),
+        "(material.density_kg_m3 x thickness_m): one part, so they must agree within 10 %",
     );
     // A support of the layered model outside the plate.
     check(

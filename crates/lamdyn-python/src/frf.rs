@@ -250,8 +250,45 @@ struct EmaOptions {
     polymax: Option<bool>,
     refine: Option<bool>,
     estimator: Option<lamdyn_ema::identify::PoleEstimator>,
-    driving: Option<usize>,
+    driving: Option<Driving>,
     cmif_prominence: Option<f64>,
+}
+
+/// The driving-point response: its name, as `lamdyn ema --driving` takes it, or its index.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Driving {
+    Index(usize),
+    Name(String),
+}
+
+impl Driving {
+    /// The response's index in `set`; a name or index that is not a response is an error that
+    /// lists the responses.
+    fn index(&self, set: &FrfSet) -> PyResult<usize> {
+        let names: Vec<&str> = set.responses().iter().map(|c| c.name.as_str()).collect();
+        let found = match self {
+            Self::Index(k) => (*k < names.len()).then_some(*k),
+            Self::Name(name) => names.iter().position(|n| n == name),
+        };
+        found.ok_or_else(|| {
+            let given = match self {
+                Self::Index(k) => format!("index {k}"),
+                Self::Name(name) => format!("'{name}'"),
+            };
+            let shown: Vec<&str> = names.iter().take(10).copied().collect();
+            py_msg(format!(
+                "driving: {given} is not a response of the data ({} responses: {}{})",
+                names.len(),
+                shown.join(", "),
+                if names.len() > shown.len() {
+                    ", ..."
+                } else {
+                    ""
+                }
+            ))
+        })
+    }
 }
 
 /// Modal identification (PolyMAX / LSCF, stabilization, LSFD) of an FRF set; the result as JSON.
@@ -283,7 +320,7 @@ fn ema(
             0
         },
         estimator: o.estimator.unwrap_or(d.estimator),
-        driving: o.driving,
+        driving: o.driving.map(|d| d.index(&set)).transpose()?,
         cmif_prominence: o.cmif_prominence.unwrap_or(d.cmif_prominence),
         ..d
     };

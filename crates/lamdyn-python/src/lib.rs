@@ -16,8 +16,10 @@ mod frf;
 mod master;
 mod model;
 
+// Module `lamdyn`, where the package exports it: pickle finds the class by its module and
+// name, so the error keeps its class across processes (Dask's workers).
 create_exception!(
-    _native,
+    lamdyn,
     LamdynError,
     PyException,
     "An error of lamdyn: bad input (naming the file, line or field) or a failed computation."

@@ -13,7 +13,7 @@
 //! Gmsh files carry no unit: coordinates are multiplied by `scale_to_m` (1 for metres,
 //! 1e-3 for millimetres).
 
-use super::Mesh;
+use super::{Mesh, Numbering};
 use crate::element::ElementOrder;
 use crate::error::FemError;
 use crate::vec3::V3;
@@ -90,10 +90,23 @@ enum Version {
 struct RawMesh {
     node_tags: HashMap<i64, usize>,
     nodes: Vec<V3>,
-    /// (node tags, physical tags, line) of the 4-node or 9-node quadrilaterals.
-    quads: Vec<(Vec<i64>, Vec<i64>, usize)>,
+    /// The 4-node or 9-node quadrilaterals.
+    quads: Vec<RawQuad>,
     /// (dimension, node tags, physical tags)
     boundary: Vec<(usize, Vec<i64>, Vec<i64>)>,
+}
+
+/// A quadrilateral as the file gives it.
+#[derive(Debug)]
+struct RawQuad {
+    /// The element's tag (its number in the file).
+    tag: i64,
+    /// Node tags.
+    nodes: Vec<i64>,
+    /// Physical tags.
+    physicals: Vec<i64>,
+    /// Line in the file (1-based).
+    line: usize,
 }
 
 /// What is wrong with one node or element of a Gmsh file (the reader adds the file and line).
@@ -160,23 +173,28 @@ impl RawMesh {
 
     fn add_element(
         &mut self,
-        etype: i64,
+        (tag, etype): (i64, i64),
         nodes: Vec<i64>,
         physicals: Vec<i64>,
         line: usize,
     ) -> Result<(), EntityError> {
         match etype {
             3 | 10 => {
-                if let Some((first, _, first_line)) = self.quads.first()
-                    && first.len() != nodes.len()
+                if let Some(first) = self.quads.first()
+                    && first.nodes.len() != nodes.len()
                 {
                     return Err(EntityError::MixedOrder {
                         nodes: nodes.len(),
-                        first: first.len(),
-                        first_line: *first_line,
+                        first: first.nodes.len(),
+                        first_line: first.line,
                     });
                 }
-                self.quads.push((nodes, physicals, line));
+                self.quads.push(RawQuad {
+                    tag,
+                    nodes,
+                    physicals,
+                    line,
+                });
             }
             15 => self.boundary.push((0, nodes, physicals)),
             1 | 8 => self.boundary.push((1, nodes, physicals)),
@@ -205,11 +223,11 @@ impl RawMesh {
         };
         let mut connectivity = Vec::with_capacity(9 * self.quads.len());
         let mut element_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
-        for (e, (q, phys, line)) in self.quads.iter().enumerate() {
-            for tag in q {
-                connectivity.push(index(*tag, *line)?);
+        for (e, quad) in self.quads.iter().enumerate() {
+            for tag in &quad.nodes {
+                connectivity.push(index(*tag, quad.line)?);
             }
-            for p in phys {
+            for p in &quad.physicals {
                 element_groups
                     .entry(group_name(physical_names, 2, *p))
                     .or_default()
@@ -217,7 +235,7 @@ impl RawMesh {
             }
         }
         let order = match self.quads.first() {
-            Some((q, _, _)) if q.len() == 9 => ElementOrder::Quadratic,
+            Some(q) if q.nodes.len() == 9 => ElementOrder::Quadratic,
             Some(_) => ElementOrder::Linear,
             None => {
                 return Err(FemError::MeshFile {
@@ -239,13 +257,22 @@ impl RawMesh {
                 }
             }
         }
-        let mut mesh =
-            Mesh::of_order(order, self.nodes, None, connectivity).map_err(|e| match e {
-                FemError::InvalidMesh(m) => FemError::InvalidMesh(format!(
-                    "'{name}': {m} (indices count from 0 in file order)"
-                )),
-                other => other,
-            })?;
+        let mut node_ids = vec![0; self.nodes.len()];
+        for (&tag, &k) in &self.node_tags {
+            node_ids[k] = tag;
+        }
+        let numbering = Numbering {
+            node_ids,
+            element_ids: self.quads.iter().map(|q| q.tag).collect(),
+            element_lines: self.quads.iter().map(|q| q.line).collect(),
+        };
+        let mut mesh = Mesh::of_order_numbered(order, self.nodes, None, connectivity, &numbering)
+            .map_err(|e| match e {
+            FemError::InvalidMesh(m) => FemError::InvalidMesh(format!(
+                "'{name}': {m} (nodes and elements by the file's tags)"
+            )),
+            other => other,
+        })?;
         for (g, mut nodes) in node_groups {
             nodes.sort_unstable();
             nodes.dedup();
@@ -516,7 +543,7 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
                 vec![]
             };
             let line = self.line;
-            raw.add_element(etype, nodes, physical, line)
+            raw.add_element((v[0], etype), nodes, physical, line)
                 .map_err(|m| self.err(format!("element {}: {m}", v[0])))?;
         }
         self.expect_end("$Elements")
@@ -548,7 +575,7 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
                 }
                 check_node_count(etype, v.len() - 1).map_err(|m| self.err(m.to_string()))?;
                 let line = self.line;
-                raw.add_element(etype, v[1..].to_vec(), phys.clone(), line)
+                raw.add_element((v[0], etype), v[1..].to_vec(), phys.clone(), line)
                     .map_err(|m| self.err(format!("element {}: {m}", v[0])))?;
             }
             total += count;

@@ -46,6 +46,46 @@ pub(crate) fn push_grid_element(
     }
 }
 
+/// How the source of a mesh numbers its nodes and elements, for messages: a file's node and
+/// element numbers (tags) and each element's line; empty, the indices from 0 in the order
+/// given (meshes built in code).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Numbering {
+    /// The file's number of each node, in the mesh's node order.
+    pub node_ids: Vec<i64>,
+    /// The file's number of each element, in the mesh's element order.
+    pub element_ids: Vec<i64>,
+    /// The file's line of each element (1-based).
+    pub element_lines: Vec<usize>,
+}
+
+impl Numbering {
+    /// Node `n` as the source numbers it.
+    pub fn node(&self, n: usize) -> String {
+        self.node_ids
+            .get(n)
+            .map_or_else(|| n.to_string(), ToString::to_string)
+    }
+
+    /// Element `e` as the source numbers it, with its line where known.
+    pub fn element(&self, e: usize) -> String {
+        let number = self
+            .element_ids
+            .get(e)
+            .map_or_else(|| e.to_string(), ToString::to_string);
+        match self.element_lines.get(e) {
+            Some(line) => format!("{number} (line {line})"),
+            None => number,
+        }
+    }
+
+    /// Nodes `ns` as the source numbers them, as a list.
+    pub fn nodes(&self, ns: &[usize]) -> String {
+        let names: Vec<String> = ns.iter().map(|&n| self.node(n)).collect();
+        format!("[{}]", names.join(", "))
+    }
+}
+
 /// A quadrilateral shell mesh of 4-node or 9-node elements.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mesh {
@@ -116,6 +156,21 @@ impl Mesh {
         directors: Option<Vec<V3>>,
         connectivity: Vec<usize>,
     ) -> Result<Self, FemError> {
+        Self::of_order_numbered(order, nodes, directors, connectivity, &Numbering::default())
+    }
+
+    /// [`Mesh::of_order`] for a mesh read from a file: errors name nodes and elements as the
+    /// file numbers them (`numbering`).
+    ///
+    /// # Errors
+    /// As [`Mesh::of_order`].
+    pub fn of_order_numbered(
+        order: ElementOrder,
+        nodes: Vec<V3>,
+        directors: Option<Vec<V3>>,
+        connectivity: Vec<usize>,
+        numbering: &Numbering,
+    ) -> Result<Self, FemError> {
         let per = order.nodes();
         if connectivity.len() % per != 0 {
             return Err(FemError::InvalidMesh(format!(
@@ -123,14 +178,15 @@ impl Mesh {
                 connectivity.len()
             )));
         }
-        check_nodes_and_connectivity(&nodes, &connectivity, per)?;
-        check_orientation(&connectivity, per)?;
+        let id = numbering;
+        check_nodes_and_connectivity(&nodes, &connectivity, per, id)?;
+        check_orientation(&connectivity, per, id)?;
         if order == ElementOrder::Quadratic {
-            check_quadratic_nodes(&nodes, &connectivity)?;
+            check_quadratic_nodes(&nodes, &connectivity, id)?;
         }
         let directors = match directors {
             Some(d) => d,
-            None => averaged_normals(&nodes, &connectivity, order)?,
+            None => averaged_normals(&nodes, &connectivity, order, id)?,
         };
         if directors.len() != nodes.len() {
             return Err(FemError::InvalidMesh(format!(
@@ -142,7 +198,8 @@ impl Mesh {
         for (i, d) in directors.iter().enumerate() {
             if (norm(*d) - 1.0).abs().is_nan() || (norm(*d) - 1.0).abs() >= 1e-9 {
                 return Err(FemError::InvalidMesh(format!(
-                    "node {i}: director {d:?} is not a unit vector"
+                    "node {}: director {d:?} is not a unit vector",
+                    id.node(i)
                 )));
             }
         }
@@ -158,14 +215,14 @@ impl Mesh {
             // Geometry only: a small thickness is enough to check the Jacobian's sign.
             let scale_len = mesh.element_size(e);
             mesh.element(e, 1e-3 * scale_len).check_geometry().map_err(|d| {
-                let nodes = mesh.element_nodes(e);
+                let (el, nodes) = (id.element(e), id.nodes(mesh.element_nodes(e)));
                 FemError::InvalidMesh(match d {
                     ElementDefect::Degenerate { at } => format!(
-                        "element {e} (nodes {nodes:?}) is degenerate (zero area near r = {}, s = {})",
+                        "element {el} (nodes {nodes}) is degenerate (zero area near r = {}, s = {})",
                         at[0], at[1]
                     ),
                     ElementDefect::Inverted { at } => format!(
-                        "element {e} (nodes {nodes:?}) is inverted (negative Jacobian near r = {}, s = {}): check the node order",
+                        "element {el} (nodes {nodes}) is inverted (negative Jacobian near r = {}, s = {}): check the node order",
                         at[0], at[1]
                     ),
                 })
@@ -301,6 +358,7 @@ fn check_nodes_and_connectivity(
     nodes: &[V3],
     connectivity: &[usize],
     per: usize,
+    id: &Numbering,
 ) -> Result<(), FemError> {
     if nodes.is_empty() || connectivity.is_empty() {
         return Err(FemError::InvalidMesh(format!(
@@ -312,7 +370,8 @@ fn check_nodes_and_connectivity(
     for (i, p) in nodes.iter().enumerate() {
         if !p.iter().all(|c| c.is_finite()) {
             return Err(FemError::InvalidMesh(format!(
-                "node {i} has a non-finite coordinate {p:?}"
+                "node {} has a non-finite coordinate {p:?}",
+                id.node(i)
             )));
         }
     }
@@ -321,7 +380,8 @@ fn check_nodes_and_connectivity(
         for &n in el {
             if n >= nodes.len() {
                 return Err(FemError::InvalidMesh(format!(
-                    "element {e} refers to node {n}, but there are {} nodes",
+                    "element {} refers to node {n}, but there are {} nodes",
+                    id.element(e),
                     nodes.len()
                 )));
             }
@@ -331,8 +391,10 @@ fn check_nodes_and_connectivity(
             for b in a + 1..per {
                 if el[a] == el[b] {
                     return Err(FemError::InvalidMesh(format!(
-                        "element {e} (nodes {el:?}) repeats node {}: degenerate",
-                        el[a]
+                        "element {} (nodes {}) repeats node {}: degenerate",
+                        id.element(e),
+                        id.nodes(el),
+                        id.node(el[a])
                     )));
                 }
             }
@@ -340,7 +402,8 @@ fn check_nodes_and_connectivity(
     }
     if let Some(n) = used.iter().position(|u| !u) {
         return Err(FemError::InvalidMesh(format!(
-            "node {n} is not used by any element (a free node makes the stiffness singular)"
+            "node {} is not used by any element (a free node makes the stiffness singular)",
+            id.node(n)
         )));
     }
     Ok(())
@@ -348,7 +411,7 @@ fn check_nodes_and_connectivity(
 
 /// Neighbouring elements must run along their shared edge in opposite directions, and 9-node
 /// neighbours must share the edge's mid-side node.
-fn check_orientation(connectivity: &[usize], per: usize) -> Result<(), FemError> {
+fn check_orientation(connectivity: &[usize], per: usize, id: &Numbering) -> Result<(), FemError> {
     let mut edges: HashMap<(usize, usize), (usize, Option<usize>)> = HashMap::new();
     for (e, el) in connectivity.chunks_exact(per).enumerate() {
         for k in 0..4 {
@@ -356,16 +419,25 @@ fn check_orientation(connectivity: &[usize], per: usize) -> Result<(), FemError>
             let mid = (per == 9).then(|| el[4 + k]);
             if let Some(&(other, _)) = edges.get(&(a, b)) {
                 return Err(FemError::InvalidMesh(format!(
-                    "elements {other} and {e} run along edge {a}-{b} in the same direction: their orientations (normals) disagree"
+                    "elements {} and {} run along edge {}-{} in the same direction: their orientations (normals) disagree",
+                    id.element(other),
+                    id.element(e),
+                    id.node(a),
+                    id.node(b)
                 )));
             }
             if let Some(&(other, other_mid)) = edges.get(&(b, a))
                 && other_mid != mid
             {
+                let name = |m: Option<usize>| m.map_or_else(|| "none".into(), |m| id.node(m));
                 return Err(FemError::InvalidMesh(format!(
-                    "elements {other} and {e} share edge {a}-{b} but not its mid-side node ({:?} and {:?})",
-                    other_mid.unwrap_or(usize::MAX),
-                    mid.unwrap_or(usize::MAX)
+                    "elements {} and {} share edge {}-{} but not its mid-side node ({} and {})",
+                    id.element(other),
+                    id.element(e),
+                    id.node(a),
+                    id.node(b),
+                    name(other_mid),
+                    name(mid)
                 )));
             }
             edges.insert((a, b), (e, mid));
@@ -378,7 +450,11 @@ fn check_orientation(connectivity: &[usize], per: usize) -> Result<(), FemError>
 /// edge's midpoint, and its centre node within a quarter of the shorter diagonal of the point
 /// the other eight nodes put it at (½ Σ mid-sides − ¼ Σ corners, exact for any biquadratic
 /// map that is serendipity-consistent).
-fn check_quadratic_nodes(nodes: &[V3], connectivity: &[usize]) -> Result<(), FemError> {
+fn check_quadratic_nodes(
+    nodes: &[V3],
+    connectivity: &[usize],
+    id: &Numbering,
+) -> Result<(), FemError> {
     for (e, el) in connectivity.chunks_exact(9).enumerate() {
         let x = |k: usize| nodes[el[k]];
         for k in 0..4 {
@@ -387,10 +463,11 @@ fn check_quadratic_nodes(nodes: &[V3], connectivity: &[usize]) -> Result<(), Fem
             let off = norm(sub(x(4 + k), scale(0.5, add(a, b))));
             if off > 0.25 * chord {
                 return Err(FemError::InvalidMesh(format!(
-                    "element {e}: mid-side node {} is {off:.4e} m from the middle of edge {}-{} ({chord:.4e} m long): more than a quarter of the edge, the element would fold (check the node order)",
-                    el[4 + k],
-                    el[k],
-                    el[(k + 1) % 4]
+                    "element {}: mid-side node {} is {off:.4e} m from the middle of edge {}-{} ({chord:.4e} m long): more than a quarter of the edge, the element would fold (check the node order)",
+                    id.element(e),
+                    id.node(el[4 + k]),
+                    id.node(el[k]),
+                    id.node(el[(k + 1) % 4])
                 )));
             }
         }
@@ -402,8 +479,9 @@ fn check_quadratic_nodes(nodes: &[V3], connectivity: &[usize]) -> Result<(), Fem
         let off = norm(sub(x(8), centre));
         if off > 0.25 * diagonal {
             return Err(FemError::InvalidMesh(format!(
-                "element {e}: centre node {} is {off:.4e} m from where its edges put it, more than a quarter of the diagonal ({diagonal:.4e} m)",
-                el[8]
+                "element {}: centre node {} is {off:.4e} m from where its edges put it, more than a quarter of the diagonal ({diagonal:.4e} m)",
+                id.element(e),
+                id.node(el[8])
             )));
         }
     }
@@ -415,6 +493,7 @@ fn averaged_normals(
     nodes: &[V3],
     connectivity: &[usize],
     order: ElementOrder,
+    id: &Numbering,
 ) -> Result<Vec<V3>, FemError> {
     let mut sum = vec![[0.0; 3]; nodes.len()];
     for el in connectivity.chunks_exact(order.nodes()) {
@@ -439,7 +518,8 @@ fn averaged_normals(
                 Ok(unit(s))
             } else {
                 Err(FemError::InvalidMesh(format!(
-                    "node {i}: no normal can be defined (adjacent elements fold back on each other)"
+                    "node {}: no normal can be defined (adjacent elements fold back on each other)",
+                    id.node(i)
                 )))
             }
         })

@@ -387,13 +387,14 @@ fn gmsh_nine_node_quadrilaterals_are_read() {
 }
 
 /// Bad 9-node input: a mid-side node far off its edge's middle, neighbours that do not share
-/// the mid-side node, and a file that mixes orders.
+/// the mid-side node, and a file that mixes orders; elements and nodes named by the file's
+/// tags, with the element's line.
 #[test]
 fn bad_nine_node_meshes_are_refused_with_the_node() {
     let off = TWO_QUAD9.replacen("7 0.5 0 0", "7 0.9 0 0", 1);
     let e = invalid(parse_msh("off.msh", &off, 1.0).unwrap_err());
     assert!(
-        e.contains("element 0: mid-side node 6 is 4.0000e-1 m from the middle of edge 0-1 (1.0000e0 m long): more than a quarter of the edge"),
+        e.contains("element 1 (line 24): mid-side node 7 is 4.0000e-1 m from the middle of edge 1-2 (1.0000e0 m long): more than a quarter of the edge"),
         "{e}"
     );
     let unshared = TWO_QUAD9.replacen(
@@ -402,7 +403,11 @@ fn bad_nine_node_meshes_are_refused_with_the_node() {
         1,
     );
     let e = invalid(parse_msh("unshared.msh", &unshared, 1.0).unwrap_err());
-    assert!(e.contains("share edge"), "{e}");
+    // Elements and nodes by the file's tags and lines, not by indices from 0.
+    assert!(
+        e.contains("elements 1 (line 24) and 2 (line 25) share edge 5-2 but not its mid-side node (12 and 14)"),
+        "{e}"
+    );
     let mixed = TWO_QUAD9
         .replacen("$Elements\n2\n", "$Elements\n3\n", 1)
         .replacen("$EndElements", "3 3 2 1 1 1 2 5 4\n$EndElements", 1);

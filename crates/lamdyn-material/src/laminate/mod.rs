@@ -18,8 +18,8 @@ mod section;
 mod spec;
 
 pub use homogenized::{
-    Homogenized, ModelWarning, PHI_ACCURACY_LIMIT, apparent_stiffness, phi,
-    phi_from_stiffness_ratio,
+    Homogenized, ModelWarning, PAPER_LOSS_AGREEMENT, PAPER_STORAGE_AGREEMENT, PHI_ACCURACY_LIMIT,
+    agrees_with_exact, apparent_stiffness, phi, phi_from_stiffness_ratio,
 };
 pub use inverse::{
     CoreEstimate, CoreShearFormula, FaceBending, FaceShear, PaperInverseOptions, paper_forward,
@@ -175,6 +175,29 @@ impl Layer {
     }
 }
 
+/// Largest factor between a given surface density and its layers' Σ ρ_i h_i. A part's
+/// measured mass per area differs from its nominal layers by their tolerances and by what the
+/// layers leave out (adhesive, coatings, inserts): some percent, rarely some ten; a factor
+/// beyond 1.5 is a wrong unit (g/m², a mass not divided by the area) or a wrong layer.
+pub const SURFACE_DENSITY_FACTOR: f64 = 1.5;
+
+/// A given surface density `given` (kg/m²) within [`SURFACE_DENSITY_FACTOR`] of its layers'
+/// Σ ρ_i h_i, `of_layers`.
+fn check_surface_density(context: &str, given: f64, of_layers: f64) -> Result<(), MaterialError> {
+    let ratio = given / of_layers;
+    if (1.0 / SURFACE_DENSITY_FACTOR..=SURFACE_DENSITY_FACTOR).contains(&ratio) {
+        return Ok(());
+    }
+    Err(MaterialError::InvalidParameter {
+        context: context.into(),
+        field: "surface_density_kg_m2".into(),
+        value: format!("{given}"),
+        requirement: format!(
+            "contradicts the layers, whose densities times thicknesses sum to {of_layers:.4} kg/m^2 ({ratio:.2} times that; at most a factor {SURFACE_DENSITY_FACTOR} is accepted): check its unit (kg/m^2) and the layers' densities and thicknesses"
+        ),
+    })
+}
+
 /// A stack of layers, bottom to top, with an optional measured surface density.
 #[derive(Debug, Clone)]
 pub struct LayerStack {
@@ -202,6 +225,8 @@ impl LayerStack {
         }
         if let Some(rho) = surface_density_kg_m2 {
             check::positive("stack", "surface_density_kg_m2", rho)?;
+            let of_layers = layers.iter().map(|l| l.density_kg_m3 * l.thickness_m).sum();
+            check_surface_density("stack", rho, of_layers)?;
         }
         Ok(Self {
             layers,
@@ -334,6 +359,10 @@ impl SandwichStack {
         check::poisson("core", "poisson", core.poisson)?;
         if let Some(rho) = surface_density_kg_m2 {
             check::positive("sandwich", "surface_density_kg_m2", rho)?;
+            let of_layers = bottom.density_kg_m3 * bottom.thickness_m
+                + core.density_kg_m3 * core.thickness_m
+                + top.density_kg_m3 * top.thickness_m;
+            check_surface_density("sandwich", rho, of_layers)?;
         }
         Ok(Self {
             bottom,

@@ -100,6 +100,32 @@ fn errors_name_the_layer_and_the_field() {
     );
 }
 
+/// A given surface density that contradicts the layers (here the roof's 10.40 kg/m² written
+/// over layers that weigh 5.2 times as much, or in g/m²) is refused by the layered stack and by
+/// the sandwich, naming both values; the paper's own 10.40 over 9.02 kg/m² of nominal layers
+/// (1.15 times) is accepted.
+#[test]
+fn a_surface_density_that_contradicts_the_layers_is_refused() {
+    assert!(parse(ROOF).to_layer_stack().is_ok());
+    assert!(parse(ROOF).to_sandwich().is_ok());
+    let thick = ROOF.replace("thickness_m = 1.715e-3", "thickness_m = 10.0e-3");
+    for e in [
+        err_of(&thick),
+        parse(&thick).to_sandwich().unwrap_err().to_string(),
+    ] {
+        assert!(
+            e.contains("surface_density_kg_m2 = 10.4 contradicts the layers")
+                && e.contains("sum to 50.4494 kg/m^2 (0.21 times that"),
+            "{e}"
+        );
+    }
+    let grams = ROOF.replace(
+        "surface_density_kg_m2 = 10.40",
+        "surface_density_kg_m2 = 10400",
+    );
+    assert!(err_of(&grams).contains("check its unit (kg/m^2)"));
+}
+
 #[test]
 fn unknown_and_missing_keys_are_toml_errors() {
     let unknown = ROOF.replacen("poisson = 0.22", "poisson = 0.22\nyoung_gpa = 70", 1);

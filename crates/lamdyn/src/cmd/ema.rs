@@ -192,6 +192,10 @@ pub fn run(args: &EmaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     spinner.finish();
     let r = r.context("identification failed")?;
     let mut report = build_report(&set, &source, &s, &r, read_s);
+    let texts = args.channels.iter().chain(&args.frf).chain(&args.time);
+    report.warnings.extend(lamdyn_pipeline::io::encoding_notes(
+        texts.map(|p| p.as_path()),
+    ));
     report.warnings.extend(r.warnings.iter().cloned());
     if let Some(info) = &time {
         add_time_info(&mut report, &set, &r, info);

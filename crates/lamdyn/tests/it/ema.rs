@@ -93,6 +93,30 @@ fn beam_modes_and_correlation() {
     }
 }
 
+/// Channels written in Latin-1 (an accented name in a comment) are read, with a warning that
+/// names the file and its encoding; the UTF-8 FRF file gets none.
+#[test]
+fn a_file_not_in_utf8_is_read_with_a_warning_naming_its_encoding() {
+    let (_dir, c, f) = beam_csv("ema-latin1");
+    let mut latin1 = b"# r\xe9ponses du banc d'essai\n".to_vec();
+    latin1.extend(std::fs::read(&c).unwrap());
+    std::fs::write(&c, latin1).unwrap();
+    let doc = beam_json(&c, &f, &[]);
+    let warnings: Vec<&str> = doc["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w.as_str())
+        .filter(|w| w.contains("UTF-8"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].contains("channels.csv") && warnings[0].contains("Latin-1"),
+        "{}",
+        warnings[0]
+    );
+}
+
 #[test]
 fn picks_and_bad_arguments() {
     let (_dir, c, f) = beam_csv("ema-bad");
