@@ -810,8 +810,7 @@ impl Job {
         let ModelFile { spec, dir, label } = self.model_file(base)?;
         spec.build(&dir)
             .map_err(|e| err!("invalid model {label}: {e}"))?;
-        let layers = &self.stack.layers;
-        let h_stack: f64 = layers.iter().map(|l| l.thickness_m).sum();
+        let h_stack = self.stack.thickness_m();
         let h_model = spec.material.thickness_m;
         if (h_model - h_stack).abs() > STACK_MODEL_THICKNESS * h_stack {
             return Err(err!(
@@ -821,10 +820,7 @@ impl Job {
                 100.0 * STACK_MODEL_THICKNESS
             ));
         }
-        let rho_stack = self
-            .stack
-            .surface_density_kg_m2
-            .unwrap_or_else(|| layers.iter().map(|l| l.density_kg_m3 * l.thickness_m).sum());
+        let rho_stack = self.stack.surface_density_kg_m2();
         let rho_model = spec.material.density_kg_m3 * h_model;
         if (rho_model - rho_stack).abs() > STACK_MODEL_SURFACE_DENSITY * rho_stack {
             return Err(err!(

@@ -223,15 +223,15 @@ impl LayerStack {
                 requirement: "must hold at least one layer".into(),
             });
         }
-        if let Some(rho) = surface_density_kg_m2 {
-            check::positive("stack", "surface_density_kg_m2", rho)?;
-            let of_layers = layers.iter().map(|l| l.density_kg_m3 * l.thickness_m).sum();
-            check_surface_density("stack", rho, of_layers)?;
-        }
-        Ok(Self {
+        let stack = Self {
             layers,
             surface_density_kg_m2,
-        })
+        };
+        if let Some(rho) = surface_density_kg_m2 {
+            check::positive("stack", "surface_density_kg_m2", rho)?;
+            check_surface_density("stack", rho, stack.layers_surface_density_kg_m2())?;
+        }
+        Ok(stack)
     }
 
     /// The layers, bottom to top.
@@ -246,12 +246,16 @@ impl LayerStack {
 
     /// Surface density ρ_S, kg/m²: the override if given, else Σ ρ_i h_i.
     pub fn surface_density_kg_m2(&self) -> f64 {
-        self.surface_density_kg_m2.unwrap_or_else(|| {
-            self.layers
-                .iter()
-                .map(|l| l.density_kg_m3 * l.thickness_m)
-                .sum()
-        })
+        self.surface_density_kg_m2
+            .unwrap_or_else(|| self.layers_surface_density_kg_m2())
+    }
+
+    /// The layers' Σ ρ_i h_i, kg/m² (the override left out).
+    pub fn layers_surface_density_kg_m2(&self) -> f64 {
+        self.layers
+            .iter()
+            .map(|l| l.density_kg_m3 * l.thickness_m)
+            .sum()
     }
 
     /// The section at ω (rad/s) under `kinematics`.
@@ -357,19 +361,17 @@ impl SandwichStack {
             Quantity::Density,
         )?;
         check::poisson("core", "poisson", core.poisson)?;
-        if let Some(rho) = surface_density_kg_m2 {
-            check::positive("sandwich", "surface_density_kg_m2", rho)?;
-            let of_layers = bottom.density_kg_m3 * bottom.thickness_m
-                + core.density_kg_m3 * core.thickness_m
-                + top.density_kg_m3 * top.thickness_m;
-            check_surface_density("sandwich", rho, of_layers)?;
-        }
-        Ok(Self {
+        let sandwich = Self {
             bottom,
             core,
             top,
             surface_density_kg_m2,
-        })
+        };
+        if let Some(rho) = surface_density_kg_m2 {
+            check::positive("sandwich", "surface_density_kg_m2", rho)?;
+            check_surface_density("sandwich", rho, sandwich.layers_surface_density_kg_m2())?;
+        }
+        Ok(sandwich)
     }
 
     /// The paper's roof (Table 1): 1.715 mm glass / 0.42 mm PVB / 1.715 mm glass, glass
@@ -416,11 +418,15 @@ impl SandwichStack {
 
     /// Surface density ρ_S, kg/m²: the override if given, else Σ ρ_i h_i.
     pub fn surface_density_kg_m2(&self) -> f64 {
-        self.surface_density_kg_m2.unwrap_or(
-            self.bottom.density_kg_m3 * self.bottom.thickness_m
-                + self.core.density_kg_m3 * self.core.thickness_m
-                + self.top.density_kg_m3 * self.top.thickness_m,
-        )
+        self.surface_density_kg_m2
+            .unwrap_or_else(|| self.layers_surface_density_kg_m2())
+    }
+
+    /// The layers' Σ ρ_i h_i, kg/m² (the override left out).
+    pub fn layers_surface_density_kg_m2(&self) -> f64 {
+        self.bottom.density_kg_m3 * self.bottom.thickness_m
+            + self.core.density_kg_m3 * self.core.thickness_m
+            + self.top.density_kg_m3 * self.top.thickness_m
     }
 
     /// True when both faces are identical (thickness, modulus, loss, ν) to 1e-12 relative.

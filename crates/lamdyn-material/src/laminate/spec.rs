@@ -196,6 +196,24 @@ fn relocate(e: MaterialError, loc: &str, rename_storage: Option<&str>) -> Materi
 }
 
 impl StackSpec {
+    /// Total thickness Σ h_i, m, as written.
+    pub fn thickness_m(&self) -> f64 {
+        self.layers.iter().map(|l| l.thickness_m).sum()
+    }
+
+    /// Surface density, kg/m², as written: `surface_density_kg_m2` if given, else Σ ρ_i h_i
+    /// (what [`LayerStack::surface_density_kg_m2`] gives for the built stack).
+    pub fn surface_density_kg_m2(&self) -> f64 {
+        self.surface_density_kg_m2.unwrap_or_else(|| {
+            self.layers
+                .iter()
+                .map(|l| l.density_kg_m3 * l.thickness_m)
+                .sum()
+        })
+    }
+}
+
+impl StackSpec {
     /// Builds the stack for forward computations: every layer needs a modulus.
     ///
     /// # Errors
