@@ -134,7 +134,7 @@ def test_fit_on_arrays_equals_the_job(fit_example):
 
 
 def test_run_equals_cli(cli, temperature_jobs, tmp_path):
-    job = temperature_jobs[2]
+    job = temperature_jobs[1]
     doc = cli("run", job, "--out", tmp_path / "cli", "--no-cache")
     r = lamdyn.run(job, out=tmp_path / "py", cache=None)
     assert (tmp_path / "py" / "report.html").exists()

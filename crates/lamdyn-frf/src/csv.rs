@@ -22,7 +22,7 @@
 //! tabs with decimal commas allowed (detected from the header; [`crate::text`]); files may be
 //! UTF-8 (with a byte-order mark), UTF-16 or Latin-1 ([`crate::text::read_text`]).
 
-use crate::text::{Dialect, data_lines, short};
+use crate::text::{Dialect, data_lines, quoted, short};
 use crate::{Channel, FrfError, FrfSet, Quantity};
 use num_complex::Complex64;
 use std::collections::HashMap;
@@ -54,11 +54,17 @@ fn number(d: Dialect, path: &str, line: usize, column: &str, s: &str) -> Result<
             path,
             line,
             if d.separator == ',' {
-                format!("column '{column}': '{s}' is not a finite number")
+                format!(
+                    "column '{column}': '{s}' is not a finite number",
+                    column = quoted(column),
+                    s = quoted(s)
+                )
             } else {
                 format!(
                     "column '{column}': '{s}' is not a finite number (read as {})",
-                    d.describe()
+                    d.describe(),
+                    column = quoted(column),
+                    s = quoted(s)
                 )
             },
         )
@@ -80,7 +86,7 @@ fn declared_quantity(path: &str, text: &str) -> Result<Quantity, FrfError> {
         Some((line, other)) => Err(err(
             path,
             line,
-            format!("quantity '{other}' must be receptance, mobility or accelerance"),
+            format!("quantity '{other}' must be receptance, mobility or accelerance", other = quoted(other)),
         )),
         None => Err(err(
             path,
@@ -213,7 +219,13 @@ pub fn parse_time_as(
             .iter()
             .position(|h| *h == name)
             .map(|c| c + 1)
-            .ok_or_else(|| err(path, hl, format!("no column for channel '{name}'")))
+            .ok_or_else(|| {
+                err(
+                    path,
+                    hl,
+                    format!("no column for channel '{name}'", name = quoted(name)),
+                )
+            })
     };
     let force_col = column(&reference.name)?;
     let resp_cols: Vec<usize> = responses
@@ -275,7 +287,7 @@ pub fn parse_channels(path: &str, text: &str) -> Result<(Vec<Channel>, Vec<Chann
             format!(
                 "header must be {}, got {}",
                 want.join(","),
-                header.join(",")
+                quoted(&header.join(","))
             ),
         ));
     }
@@ -309,7 +321,10 @@ pub fn parse_channels(path: &str, text: &str) -> Result<(Vec<Channel>, Vec<Chann
                 return Err(err(
                     path,
                     line,
-                    format!("role '{other}' must be response or reference"),
+                    format!(
+                        "role '{other}' must be response or reference",
+                        other = quoted(other)
+                    ),
                 ));
             }
         }
@@ -370,28 +385,42 @@ pub fn parse_frf(
             err(
                 path,
                 hl,
-                format!("column '{name}' must be RESPONSE@REFERENCE:re or :im"),
+                format!(
+                    "column '{name}' must be RESPONSE@REFERENCE:re or :im",
+                    name = quoted(name)
+                ),
             )
         })?;
         let (r, f) = pair.split_once('@').ok_or_else(|| {
             err(
                 path,
                 hl,
-                format!("column '{name}' must be RESPONSE@REFERENCE:re or :im"),
+                format!(
+                    "column '{name}' must be RESPONSE@REFERENCE:re or :im",
+                    name = quoted(name)
+                ),
             )
         })?;
         let i = *resp.get(r).ok_or_else(|| {
             err(
                 path,
                 hl,
-                format!("column '{name}': response '{r}' is not in the channels file"),
+                format!(
+                    "column '{name}': response '{r}' is not in the channels file",
+                    name = quoted(name),
+                    r = quoted(r)
+                ),
             )
         })?;
         let j = *refs.get(f).ok_or_else(|| {
             err(
                 path,
                 hl,
-                format!("column '{name}': reference '{f}' is not in the channels file"),
+                format!(
+                    "column '{name}': reference '{f}' is not in the channels file",
+                    name = quoted(name),
+                    f = quoted(f)
+                ),
             )
         })?;
         let im = match part {
@@ -401,13 +430,21 @@ pub fn parse_frf(
                 return Err(err(
                     path,
                     hl,
-                    format!("column '{name}': part '{other}' must be re or im"),
+                    format!(
+                        "column '{name}': part '{other}' must be re or im",
+                        name = quoted(name),
+                        other = quoted(other)
+                    ),
                 ));
             }
         };
         let p = i * references.len() + j;
         if filled[p][im as usize] {
-            return Err(err(path, hl, format!("column '{name}' appears twice")));
+            return Err(err(
+                path,
+                hl,
+                format!("column '{name}' appears twice", name = quoted(name)),
+            ));
         }
         filled[p][im as usize] = true;
         columns.push((p, im));
@@ -741,6 +778,38 @@ mod tests {
             e,
             "error reading 'c.csv' line 2: role 'sensor' must be response or reference"
         );
+    }
+
+    /// A huge field or header of binary bytes is quoted as at most 40 escaped characters; an
+    /// error of the whole file names no line.
+    #[test]
+    fn errors_quote_bounded_printable_excerpts() {
+        let set = sample();
+        let (r, f) = parse_channels("c.csv", &write_channels(&set)).unwrap();
+        let text = write_frf(&set);
+        let field = format!("2{}\u{1b}[2J", "3".repeat(100_000));
+        let bad = text.replacen("2,", &format!("{field},"), 1);
+        let e = parse_frf("h.csv", &bad, r.clone(), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(e.len() < 200 && !e.contains('\u{1b}'), "{e}");
+        assert!(e.ends_with(&format!("'2{}...' is not a finite number", "3".repeat(39))));
+        let header = format!("name,role,\u{7}{}\n", "x".repeat(100_000));
+        let e = parse_channels("c.csv", &header).unwrap_err().to_string();
+        assert!(
+            e.len() < 300 && !e.contains('\u{7}') && e.contains("\\u{7}"),
+            "{e}"
+        );
+        let e = parse_time_as(
+            "t.csv",
+            "# only a comment\n",
+            &r,
+            &f[0],
+            Some(set.quantity()),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("error reading 't.csv': empty"), "{e}");
     }
 
     #[test]

@@ -18,7 +18,7 @@ pub enum FrfError {
         reason: String,
     },
     /// A file could not be read or parsed.
-    #[error("error reading '{path}' line {line}: {reason}")]
+    #[error("error reading '{path}'{}: {reason}", on_line(*.line))]
     File {
         /// The file.
         path: String,
@@ -27,6 +27,15 @@ pub enum FrfError {
         /// What is wrong.
         reason: String,
     },
+}
+
+/// " line N" for a 1-based line, nothing for 0 (an error of the whole file).
+fn on_line(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(" line {line}")
+    }
 }
 
 fn inconsistent(context: &str, reason: String) -> FrfError {

@@ -148,6 +148,26 @@ pub fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
 }
 
+/// Characters of a field that an error quotes.
+const QUOTED: usize = 40;
+
+/// A field of a file as an error quotes it: at most 40 characters, control characters,
+/// quotes and backslashes escaped, a cut marked with "...".
+pub fn quoted(field: &str) -> String {
+    let mut out = String::new();
+    for c in field.chars().take(QUOTED) {
+        if c.is_control() || c == '\'' || c == '\\' {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    if field.chars().nth(QUOTED).is_some() {
+        out.push_str("...");
+    }
+    out
+}
+
 /// A number for a message: six significant digits, plain between 1e-4 and 1e6, scientific
 /// outside (never the 20 digits of `{}` nor the 300 of a fixed format of 1e300).
 pub fn short(x: f64) -> String {
@@ -194,6 +214,14 @@ mod tests {
         assert_eq!(decode(&bom), (text.to_string(), Encoding::Utf8));
         assert_eq!(decode(&latin1), (text.to_string(), Encoding::Latin1));
         assert_eq!(decode(&utf16), (text.to_string(), Encoding::Utf16));
+    }
+
+    #[test]
+    fn quoted_fields_are_bounded_and_escaped() {
+        assert_eq!(quoted("a\u{1b}[2J'b"), "a\\u{1b}[2J\\'b");
+        let long = "x".repeat(1000);
+        assert_eq!(quoted(&long), format!("{}...", "x".repeat(40)));
+        assert_eq!(quoted("é"), "é");
     }
 
     #[test]

@@ -224,26 +224,46 @@ impl BandWidths {
             ));
         }
         let mut text = capitalise(&parts.join("; "));
+        // Each remedy once: the widest bands that one source dominates share a sentence.
+        let mut stated: Vec<&str> = Vec::new();
         for w in &self.widest {
+            if stated.contains(&w.advice.as_str()) {
+                continue;
+            }
+            let alike: Vec<String> = self
+                .widest
+                .iter()
+                .filter(|v| v.advice == w.advice)
+                .map(|v| format!("{} {} at {:.1} Hz", v.part, pct(v.half_width), v.freq_hz))
+                .collect();
+            let (it, one) = if alike.len() > 1 {
+                ("them", "both")
+            } else {
+                ("it", "")
+            };
             text += &format!(
-                ". Widest in {}: {} at {:.1} Hz, mainly from the {}; what would narrow it: {}",
-                w.part,
-                pct(w.half_width),
-                w.freq_hz,
+                ". Widest in {}, {one}{}mainly from the {}; what would narrow {it}: {}",
+                alike.join(" and in "),
+                if one.is_empty() { "" } else { " " },
                 w.source,
                 w.advice
             );
+            stated.push(&w.advice);
         }
-        if !self.undetermined.is_empty() {
+        if let Some(first) = self.undetermined.first() {
             let list: Vec<String> = self
                 .undetermined
                 .iter()
                 .map(|u| format!("{:.1} Hz ({})", u.freq_hz, u.source))
                 .collect();
+            let advice = if stated.contains(&first.advice.as_str()) {
+                "as above".to_string()
+            } else {
+                first.advice.clone()
+            };
             text += &format!(
-                ". Not determined by its own mode (band wider than a factor {UNDETERMINED_FACTOR} either way; the law weighs it by that band): {}; what would narrow them: {}",
+                ". Not determined by its own mode (band wider than a factor {UNDETERMINED_FACTOR} either way; the law weighs it by that band): {}; what would narrow them: {advice}",
                 list.join(", "),
-                self.undetermined[0].advice
             );
         }
         text + "."
@@ -300,6 +320,47 @@ mod tests {
         let nan = undetermined(20.0, [f64::NAN, 0.1], src).expect("NaN is not determined");
         assert_eq!(nan.parts, [true, false]);
         assert_eq!(nan.source, "face modulus");
+    }
+
+    /// Bands that one source dominates share one sentence and one remedy; an undetermined
+    /// mode with that remedy points to it instead of repeating it.
+    #[test]
+    fn each_remedy_is_stated_once() {
+        let widest = |part, f, source: &str| WidestBand {
+            part,
+            freq_hz: f,
+            half_width: 0.05,
+            source: source.into(),
+            advice: what_would_narrow(source),
+        };
+        let b = BandWidths {
+            law_median: Some([0.03, 0.04]),
+            modes_median: None,
+            widest: vec![
+                widest("G'", 20.0, "EMA pole"),
+                widest("eta", 40.0, "EMA pole"),
+            ],
+            undetermined: vec![UndeterminedMode {
+                freq_hz: 90.0,
+                parts: [true, false],
+                source: "EMA pole".into(),
+                advice: what_would_narrow("EMA pole"),
+            }],
+        };
+        let text = b.describe();
+        assert_eq!(
+            text.matches(&what_would_narrow("EMA pole")).count(),
+            1,
+            "{text}"
+        );
+        assert!(
+            text.contains("Widest in G' ±5.0 % at 20.0 Hz and in eta ±5.0 % at 40.0 Hz, both mainly from the EMA pole; what would narrow them: "),
+            "{text}"
+        );
+        assert!(
+            text.ends_with("what would narrow them: as above."),
+            "{text}"
+        );
     }
 
     #[test]

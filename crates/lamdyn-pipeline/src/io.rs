@@ -69,8 +69,16 @@ pub fn is_uff(path: &Path) -> Result<bool> {
 /// # Errors
 /// The file cannot be read or parsed.
 pub fn read_toml<T: DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = read_text(path)?;
-    toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))
+    parse_toml(path, &read_text(path)?)
+}
+
+/// Parses `text`, read from `path`, as TOML; errors as [`read_toml`]'s, quoting at most a
+/// bounded, escaped excerpt of the file.
+///
+/// # Errors
+/// The text is not TOML or not of `T`'s schema.
+pub fn parse_toml<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    toml::from_str(text).map_err(|e| toml_error(path, text, &e))
 }
 
 /// Longest line of a file that an error quotes whole (the TOML parser's own message shows the
@@ -187,7 +195,7 @@ impl CsvTable {
                     "'{path}' line {line_no}: {} fields, but the header has {} ({})",
                     fields.len(),
                     headers.len(),
-                    headers.join(",")
+                    excerpt(&headers.join(","), 0)
                 );
             }
             let values = fields
@@ -197,7 +205,9 @@ impl CsvTable {
                     Some(v) => Ok(v),
                     None if !numeric(h) => Ok(f64::NAN),
                     None => Err(err!(
-                        "'{path}' line {line_no}: column '{h}': '{f}' is not a finite number"
+                        "'{path}' line {line_no}: column '{}': '{}' is not a finite number",
+                        excerpt(h, 0),
+                        excerpt(f, 0)
                     )),
                 })
                 .collect::<Result<Vec<f64>>>()?;
@@ -234,7 +244,7 @@ impl CsvTable {
                     .map(|n| format!("'{n}'"))
                     .collect::<Vec<_>>()
                     .join(" or "),
-                self.headers.join(",")
+                excerpt(&self.headers.join(","), 0)
             )
         })
     }
@@ -253,14 +263,14 @@ impl CsvTable {
                 bail!(
                     "'{}' line {line}: column '{}' = {x} must be positive",
                     self.path,
-                    self.headers[col]
+                    excerpt(&self.headers[col], 0)
                 );
             }
             if prev.is_some_and(|p| x <= p) {
                 bail!(
                     "'{}' line {line}: column '{}' must increase ({x} after {})",
                     self.path,
-                    self.headers[col],
+                    excerpt(&self.headers[col], 0),
                     prev.unwrap_or_default()
                 );
             }
@@ -332,6 +342,21 @@ mod tests {
             e.contains("TOML parse error at line 1") && e.contains('^'),
             "{e}"
         );
+    }
+
+    #[test]
+    fn csv_tables_quote_bounded_printable_fields() {
+        let text = format!("f_hz,g_pa\n1,\u{1b}[2J{}\n", "7".repeat(100_000));
+        let e = super::CsvTable::parse("g.csv", &text)
+            .unwrap_err()
+            .to_string();
+        assert!(e.len() < 200 && !e.contains('\u{1b}'), "{e}");
+        assert!(e.contains("line 2: column 'g_pa': '\\u{1b}[2J7"), "{e}");
+        let text = format!("f_hz,{}\n1\n", "h".repeat(100_000));
+        let e = super::CsvTable::parse("g.csv", &text)
+            .unwrap_err()
+            .to_string();
+        assert!(e.len() < 200 && e.ends_with("...)"), "{e}");
     }
 
     #[test]

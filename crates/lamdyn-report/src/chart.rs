@@ -89,7 +89,10 @@ impl Axis {
         }
     }
 
-    fn tick_label(&self, v: f64) -> String {
+    /// A tick's label for people: the value on a log axis (powers of ten as 1e3), plain
+    /// decimals from 1e-3 to 1e6 on a linear one, scientific beyond, and 0 for a value within
+    /// rounding of zero on an axis spanning `span` (never `-5.6e-17`).
+    fn tick_label(&self, v: f64, span: f64) -> String {
         if self.log {
             let x = 10f64.powf(v);
             if (v - v.round()).abs() < 1e-9 {
@@ -97,7 +100,9 @@ impl Axis {
             } else {
                 format!("{x:.1e}")
             }
-        } else if v.abs() >= 1e4 || (v != 0.0 && v.abs() < 1e-3) {
+        } else if v.abs() <= 1e-9 * span.abs() {
+            "0".into()
+        } else if v.abs() >= 1e6 || v.abs() < 1e-3 {
             format!("{v:.1e}")
         } else {
             let s = format!("{v:.3}");
@@ -304,8 +309,8 @@ impl Chart {
             .configure_mesh()
             .x_desc(xa.label.as_str())
             .y_desc(ya.label.as_str())
-            .x_label_formatter(&|v| xa.tick_label(*v))
-            .y_label_formatter(&|v| ya.tick_label(*v))
+            .x_label_formatter(&|v| xa.tick_label(*v, xr.1 - xr.0))
+            .y_label_formatter(&|v| ya.tick_label(*v, yr.1 - yr.0))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .light_line_style(RGBColor(235, 235, 235))
@@ -315,7 +320,7 @@ impl Chart {
             chart
                 .configure_secondary_axes()
                 .y_desc(y2.label.as_str())
-                .y_label_formatter(&|v| y2.tick_label(*v))
+                .y_label_formatter(&|v| y2.tick_label(*v, y2r.1 - y2r.0))
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 16))
                 .draw()
@@ -330,9 +335,10 @@ impl Chart {
                 s.name.clone()
             };
             let color = RGBColor(s.color[0], s.color[1], s.color[2]);
-            let legend = move |(x, y): (i32, i32)| Circle::new((x + 10, y), 4, color.filled());
+            // The legend draws each mark as the plot does: a line for a curve, a filled
+            // swatch for a band, the marker's own shape and size for points.
             macro_rules! put {
-                ($series:expr) => {{
+                ($series:expr, $legend:expr) => {{
                     let drawn = if s.secondary {
                         chart.draw_secondary_series($series)
                     } else {
@@ -340,21 +346,43 @@ impl Chart {
                     }
                     .map_err(draw_error)?;
                     if !name.is_empty() {
-                        drawn.label(name.as_str()).legend(legend);
+                        drawn.label(name.as_str()).legend($legend);
                     }
                 }};
             }
+            let at = |(x, y): (i32, i32)| EmptyElement::at((x + 10, y));
             match s.mark {
-                Mark::Line => put!(LineSeries::new(pts, color.stroke_width(2))),
-                Mark::Dot => put!(pts.iter().map(|p| Circle::new(*p, 2, color.filled()))),
-                Mark::Disc => put!(pts.iter().map(|p| Circle::new(*p, 4, color.filled()))),
+                Mark::Line => put!(
+                    LineSeries::new(pts, color.stroke_width(2)),
+                    move |(x, y)| PathElement::new(
+                        vec![(x, y), (x + 20, y)],
+                        color.stroke_width(2)
+                    )
+                ),
+                Mark::Dot => put!(
+                    pts.iter().map(|p| Circle::new(*p, 2, color.filled())),
+                    move |p| at(p) + Circle::new((0, 0), 2, color.filled())
+                ),
+                Mark::Disc => put!(
+                    pts.iter().map(|p| Circle::new(*p, 4, color.filled())),
+                    move |p| at(p) + Circle::new((0, 0), 4, color.filled())
+                ),
                 Mark::Circle => put!(
                     pts.iter()
-                        .map(|p| Circle::new(*p, 4, color.stroke_width(1)))
+                        .map(|p| Circle::new(*p, 4, color.stroke_width(1))),
+                    move |p| at(p) + Circle::new((0, 0), 4, color.stroke_width(1))
                 ),
-                Mark::Cross => put!(pts.iter().map(|p| Cross::new(*p, 4, color.stroke_width(1)))),
+                Mark::Cross => put!(
+                    pts.iter().map(|p| Cross::new(*p, 4, color.stroke_width(1))),
+                    move |p| at(p) + Cross::new((0, 0), 4, color.stroke_width(1))
+                ),
                 Mark::Highlight => {
-                    put!(pts.iter().map(|p| Circle::new(*p, 7, color.filled())));
+                    put!(
+                        pts.iter().map(|p| Circle::new(*p, 7, color.filled())),
+                        move |p| at(p)
+                            + Circle::new((0, 0), 6, color.filled())
+                            + Circle::new((0, 0), 6, BLACK.stroke_width(1))
+                    );
                     chart
                         .draw_series(
                             pts.iter()
@@ -365,10 +393,12 @@ impl Chart {
                 Mark::Band => {
                     // A light fill and a thin rim of the band's colour, so that two
                     // overlapping bands stay apart.
-                    put!(std::iter::once(Polygon::new(
-                        pts.clone(),
-                        color.mix(0.15).filled()
-                    )));
+                    put!(
+                        std::iter::once(Polygon::new(pts.clone(), color.mix(0.15).filled())),
+                        move |(x, y)| EmptyElement::at((x, y))
+                            + Rectangle::new([(0, -6), (20, 6)], color.mix(0.15).filled())
+                            + Rectangle::new([(0, -6), (20, 6)], color.stroke_width(1))
+                    );
                     let mut rim = pts.clone();
                     rim.extend(pts.first().copied());
                     chart
@@ -378,10 +408,13 @@ impl Chart {
                         )))
                         .map_err(draw_error)?;
                 }
-                Mark::Tile { width, height } => put!(pts.iter().map(|&(x, y)| {
-                    let (hw, hh) = (width / 2.0, height / 2.0);
-                    Rectangle::new([(x - hw, y - hh), (x + hw, y + hh)], color.filled())
-                })),
+                Mark::Tile { width, height } => put!(
+                    pts.iter().map(|&(x, y)| {
+                        let (hw, hh) = (width / 2.0, height / 2.0);
+                        Rectangle::new([(x - hw, y - hh), (x + hw, y + hh)], color.filled())
+                    }),
+                    move |(x, y)| Rectangle::new([(x, y - 6), (x + 20, y + 6)], color.filled())
+                ),
             };
         }
         if self.series.iter().any(|s| !s.name.is_empty()) {
@@ -437,6 +470,67 @@ fn draw_error<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ticks read as people write them: zero as 0 even where the axis computes -5.6e-17.
+    #[test]
+    fn ticks_are_written_for_people() {
+        let lin = Axis::linear("x");
+        assert_eq!(lin.tick_label(-5.6e-17, 2.0), "0");
+        assert_eq!(lin.tick_label(0.25, 2.0), "0.25");
+        assert_eq!(lin.tick_label(12000.0, 2e4), "12000");
+        assert_eq!(lin.tick_label(2.5e6, 1e7), "2.5e6");
+        assert_eq!(lin.tick_label(2e-4, 1e-3), "2.0e-4");
+        assert_eq!(Axis::log("y").tick_label(3.0, 5.0), "1e3");
+    }
+
+    /// Each mark has its own legend glyph: a line, a swatch, the marker's shape and size;
+    /// checked on the SVG.
+    #[test]
+    fn legend_glyphs_differ_by_mark() {
+        let glyph = |mark: Mark| {
+            let mut c = Chart::new("", Axis::linear("x"), Axis::linear("y"));
+            let pts = vec![[1.0, 1.0], [2.0, 2.0], [3.0, 1.5]];
+            let mut band = pts.clone();
+            band.extend(pts.iter().rev().map(|p| [p[0], p[1] - 0.5]));
+            let points = if mark == Mark::Band { band } else { pts };
+            c.series
+                .push(Series::new("entry", [10, 20, 30], mark, points));
+            let svg = c.render_svg().unwrap();
+            // The legend's glyph follows its text, at the end of the document.
+            let text = svg.rfind("entry\n</text>").expect("the legend's text");
+            let (start, end) = (text + "entry\n</text>".len(), svg.rfind("</svg>").unwrap());
+            // Element names and their size attributes, positions dropped.
+            svg[start..end]
+                .split('<')
+                .filter(|e| !e.trim().is_empty())
+                .map(|e| {
+                    let name = e.split_whitespace().next().unwrap_or("").to_string();
+                    let keep = ["r=", "opacity=", "stroke-width=", "fill="];
+                    let attrs: Vec<&str> = e
+                        .split_whitespace()
+                        .filter(|a| keep.iter().any(|k| a.starts_with(k)))
+                        .collect();
+                    format!("{name} {}", attrs.join(" "))
+                })
+                .collect::<Vec<_>>()
+        };
+        let marks = [
+            Mark::Line,
+            Mark::Dot,
+            Mark::Disc,
+            Mark::Circle,
+            Mark::Cross,
+            Mark::Highlight,
+            Mark::Band,
+        ];
+        let glyphs: Vec<_> = marks.iter().map(|&m| glyph(m)).collect();
+        for (i, g) in glyphs.iter().enumerate() {
+            assert!(!g.is_empty(), "{:?} draws no legend glyph", marks[i]);
+            for j in 0..i {
+                assert_ne!(g, &glyphs[j], "{:?} and {:?}", marks[j], marks[i]);
+            }
+        }
+    }
 
     fn sample() -> Chart {
         let mut c = Chart::new("test", Axis::linear("f (Hz)"), Axis::log("|H|"));

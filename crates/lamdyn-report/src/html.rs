@@ -10,6 +10,7 @@ use std::fmt::Write as _;
 #[derive(Debug, Clone, PartialEq)]
 enum Block {
     Heading(String),
+    Answer(String),
     Paragraph(String),
     Warnings(Vec<String>),
     Table {
@@ -55,7 +56,14 @@ caption{caption-side:top;max-width:1100px}\
 th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}th{background:#f0f0f0}\
 caption{text-align:left;font-weight:bold;padding:4px 0}\
 figure{margin:1.5em 0}figure svg{max-width:100%;height:auto}\
-figcaption{font-size:0.9em;color:#444}.warn{color:#a33}";
+figcaption{font-size:0.9em;color:#444}.warn{color:#a33}\
+.answer{font-size:1.1em;line-height:1.45;border-left:4px solid #943cbd;padding:0.2em 0 0.2em 0.8em}\
+@media (max-width:700px){body{margin:1em auto}\
+table,tbody,tr,td,caption{display:block;width:100%;box-sizing:border-box}thead{display:none}\
+tr{border:1px solid #ccc;margin:0 0 0.6em 0}td{border:0;border-bottom:1px solid #eee;\
+position:relative;padding:3px 6px 3px 55%;min-height:1.2em;overflow-wrap:anywhere}\
+td::before{content:attr(data-label);position:absolute;left:6px;width:50%;text-align:left;\
+font-weight:bold;overflow-wrap:anywhere}}";
 
 impl HtmlReport {
     /// An empty report with a title.
@@ -69,6 +77,11 @@ impl HtmlReport {
     /// A section heading.
     pub fn heading(&mut self, text: &str) {
         self.blocks.push(Block::Heading(text.into()));
+    }
+
+    /// The report's answer: a paragraph set apart at the top of the page.
+    pub fn answer(&mut self, text: &str) {
+        self.blocks.push(Block::Answer(text.into()));
     }
 
     /// A paragraph of plain text.
@@ -118,7 +131,7 @@ impl HtmlReport {
         let mut h = String::new();
         let _ = write!(
             h,
-            "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{}</h1>\n",
+            "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{}</h1>\n",
             escape(&self.title),
             escape(&self.title)
         );
@@ -130,6 +143,9 @@ impl HtmlReport {
                 }
                 Block::Paragraph(t) => {
                     let _ = writeln!(h, "<p>{}</p>", escape(t));
+                }
+                Block::Answer(t) => {
+                    let _ = writeln!(h, "<p class=\"answer\">{}</p>", escape(t));
                 }
                 Block::Warnings(items) => {
                     h.push_str("<ul class=\"warn\">\n");
@@ -145,21 +161,24 @@ impl HtmlReport {
                 } => {
                     let _ = write!(
                         h,
-                        "<div class=\"table\"><table>\n<caption>{}</caption>\n<tr>",
+                        "<div class=\"table\"><table>\n<caption>{}</caption>\n<thead><tr>",
                         escape(caption)
                     );
                     for c in header {
                         let _ = write!(h, "<th>{}</th>", escape(c));
                     }
-                    h.push_str("</tr>\n");
+                    h.push_str("</tr></thead>\n<tbody>\n");
                     for r in rows {
                         h.push_str("<tr>");
-                        for c in r {
-                            let _ = write!(h, "<td>{}</td>", escape(c));
+                        // Each cell carries its column's name: on a narrow screen a row is
+                        // shown as a card of name and value lines (the style sheet).
+                        for (k, c) in r.iter().enumerate() {
+                            let label = header.get(k).map_or(String::new(), |l| escape(l));
+                            let _ = write!(h, "<td data-label=\"{label}\">{}</td>", escape(c));
                         }
                         h.push_str("</tr>\n");
                     }
-                    h.push_str("</table></div>\n");
+                    h.push_str("</tbody></table></div>\n");
                 }
                 Block::Figure { name, caption, svg } => {
                     figure_no += 1;
@@ -185,6 +204,7 @@ mod tests {
     fn text_is_escaped_and_figures_are_linked_and_inline() {
         let mut r = HtmlReport::new("G* <core> & \"more\"");
         r.heading("Results");
+        r.answer("G' > 0");
         r.paragraph("a < b");
         r.warnings(&["phi > 0.1".into()]);
         r.table("T", &["f [Hz]"], vec![vec!["1.0".into()]]);
@@ -192,6 +212,8 @@ mod tests {
         let h = r.render();
         assert!(h.contains("G* &lt;core&gt; &amp; &quot;more&quot;"));
         assert!(h.contains("<p>a &lt; b</p>") && h.contains("phi &gt; 0.1"));
+        assert!(h.contains("<p class=\"answer\">G&#39; &gt; 0</p>"));
+        assert!(h.contains("<td data-label=\"f [Hz]\">1.0</td>"));
         assert!(h.contains("<svg id=\"x\"></svg>"));
         assert!(h.contains("href=\"figures/core.svg\"") && h.contains("href=\"figures/core.png\""));
         assert_eq!(

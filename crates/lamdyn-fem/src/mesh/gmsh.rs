@@ -370,8 +370,9 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
         let l = self.next_line()?;
         l.split_whitespace()
             .map(|w| {
-                w.parse::<T>()
-                    .map_err(|_| self.err(format!("{what}: '{w}' is not a valid number")))
+                w.parse::<T>().map_err(|_| {
+                    self.err(format!("{what}: '{}' is not a valid number", truncate(w)))
+                })
             })
             .collect()
     }
@@ -610,6 +611,20 @@ fn check_node_count(etype: i64, n: usize) -> Result<(), EntityError> {
     Ok(())
 }
 
+/// A piece of a line as an error quotes it: at most 60 characters, control characters, quotes
+/// and backslashes escaped (a binary file must not reach the terminal raw), a cut marked "...".
 fn truncate(s: &str) -> String {
-    s.chars().take(60).collect()
+    const QUOTED: usize = 60;
+    let mut out = String::new();
+    for c in s.chars().take(QUOTED) {
+        if c.is_control() || c == '\'' || c == '\\' {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    if s.chars().nth(QUOTED).is_some() {
+        out.push_str("...");
+    }
+    out
 }

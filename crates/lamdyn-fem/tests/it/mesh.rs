@@ -241,10 +241,20 @@ fn gmsh_errors_name_file_and_line() {
             "line 1: expected a section such as $Nodes, got 'hello world'",
         ),
         (String::new(), "no $MeshFormat section: not a Gmsh MSH file"),
+        // Binary bytes and a huge line: at most 60 characters quoted, control bytes escaped.
+        (
+            format!("\u{1b}[2J{}\n", "x".repeat(100_000)),
+            &format!("got '\\u{{1b}}[2J{}...'", "x".repeat(56)),
+        ),
+        (
+            text.replacen("0.3 0 0", &format!("0.3 \u{7}{} 0", "9".repeat(100_000)), 1),
+            &format!("$Nodes: '\\u{{7}}{}...' is not", "9".repeat(59)),
+        ),
     ];
     for (t, want) in cases {
         let e = invalid(parse_msh("x.msh", &t, 1.0).unwrap_err());
         assert!(e.contains(want), "want {want:?} in {e:?}");
+        assert!(e.len() < 300 && !e.contains(['\u{1b}', '\u{7}']), "{e:?}");
     }
     let unknown_node = text.replacen("3 3 2 1 1 1 11 16 8", "3 3 2 1 1 1 11 16 99", 1);
     if unknown_node != text {

@@ -10,6 +10,7 @@
 //! against the truth of a virtual test, and |φ| against the paper model's validity limit), the
 //! Kramers–Kronig verdict, the warnings and the stage timings.
 
+mod answer;
 mod frf;
 
 use super::uncertainty::{Band, Bands};
@@ -28,6 +29,14 @@ const ORANGE: [u8; 3] = [230, 110, 0];
 const GREEN: [u8; 3] = [44, 160, 44];
 const BLACK: [u8; 3] = [0, 0, 0];
 const PURPLE: [u8; 3] = [148, 60, 189];
+
+/// How the layered inverse finds the core at a mode and what its band holds (the report's text
+/// under its table).
+const LAYERED_METHOD: &str = "How the layered inverse finds it: each EMA pole p (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below); the core so found holds at the pole's complex frequency −ip, and is moved from there to the mode's real frequency by the fitted law (or the modes' log-slope): 1–1.5 % of η on a lightly damped glass laminate. Its 95 % band holds, in quadrature, the inputs known within a tolerance ([uncertainty]: face modulus, thicknesses, densities, each through its sensitivity on the layered model), the pole's scatter over the stabilization diagram (and, from hammer hits, how the pole moves when each hit is left out), the discretization in plane (grid convergence index of the finest mesh) and through the thickness (the coarsest mesh with two elements per layer); the modal table names each band's main source. It does not hold a model-form error (an unmodelled support); the law fitted to all modes below narrows it.";
+
+/// A positive parameter whose 95 % interval spans more decades than this is shown as not
+/// determined.
+const UNDETERMINED_DECADES: f64 = 3.0;
 
 /// Most mode-shape maps drawn.
 const MAX_SHAPES: usize = 8;
@@ -317,22 +326,11 @@ fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
             beyond,
         ));
     }
-    if let Some(t) = &r.truth {
-        let (lo, hi) = (
-            xs.first().copied().unwrap_or(0.0),
-            xs.last().copied().unwrap_or(0.0),
-        );
-        c.series.push(Series::new(
-            "truth (virtual test)",
-            GREEN,
-            Mark::Line,
-            t.lines
-                .iter()
-                .filter(|(f, _)| *f >= lo * 0.9 && *f <= hi * 1.1)
-                .filter_map(|(f, g)| value(Some(*g)).map(|v| [*f, v / scale]))
-                .collect(),
-        ));
-    }
+    let span = [
+        xs.first().copied().unwrap_or(0.0),
+        xs.last().copied().unwrap_or(0.0),
+    ];
+    c.series.extend(truth_series(r, span, loss_factor, scale));
     if let Some(Ok(law)) = &r.core_law {
         let curve = law.curve(60);
         let xs: Vec<f64> = curve.iter().map(|p| p.freq_hz).collect();
@@ -381,6 +379,29 @@ fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
         c.series.push(layered);
     }
     c
+}
+
+/// The truth of a virtual test (none without one) as a line over `span` Hz widened by 10 %:
+/// G' divided by `scale`, or η.
+fn truth_series(r: &ChainResult, span: [f64; 2], loss_factor: bool, scale: f64) -> Option<Series> {
+    let t = r.truth.as_ref()?;
+    Some(Series::new(
+        "truth (virtual test)",
+        GREEN,
+        Mark::Line,
+        t.lines
+            .iter()
+            .filter(|(f, _)| *f >= 0.9 * span[0] && *f <= 1.1 * span[1])
+            .filter_map(|(f, g)| {
+                let v = if loss_factor {
+                    g.im / g.re
+                } else {
+                    g.re / scale
+                };
+                v.is_finite().then_some([*f, v])
+            })
+            .collect(),
+    ))
 }
 
 /// The mode shape maps: normal-ish channels (|d_z| > 0.7), value signed along +z.
@@ -683,12 +704,20 @@ fn lead_section(
         row.push(pct(rel_err(storage(p.paper_g()), storage(best))));
         row.push(pct(rel_err(loss(p.paper_g()), loss(best))));
     }
-    let caption = if layered {
-        "G*(f) of the core at each identified mode by the layered inverse: each EMA pole p (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below); the core so found holds at the pole's complex frequency −ip, and is moved from there to the mode's real frequency by the fitted law (or the modes' log-slope): 1–1.5 % of η on a lightly damped glass laminate. Its 95 % band holds, in quadrature, the inputs known within a tolerance ([uncertainty]: face modulus, thicknesses, densities, each through its sensitivity on the layered model), the pole's scatter over the stabilization diagram (and, from hammer hits, how the pole moves when each hit is left out), the discretization in plane (grid convergence index of the finest mesh) and through the thickness (the coarsest mesh with two elements per layer); the modal table names each band's main source. It does not hold a model-form error (an unmodelled support); the law fitted to all modes below narrows it; the last columns show how far the paper's route lies from this answer"
+    if layered {
+        html.table(
+            "G*(f) of the core at each identified mode by the layered inverse, with its 95 % band; the last columns: how far the paper's route lies from it.",
+            &h,
+            t,
+        );
+        html.paragraph(LAYERED_METHOD);
     } else {
-        "G*(f) of the core at each identified mode by the exact Mead-Markus inverse of the fitted effective modulus, with 95 % Monte Carlo bands (the layered inverse did not run); the last columns show how far the paper's route lies from it"
-    };
-    html.table(caption, &h, t);
+        html.table(
+            "G*(f) of the core at each identified mode by the exact Mead-Markus inverse, with 95 % Monte Carlo bands (the layered inverse did not run); the last columns: the paper's route against it.",
+            &h,
+            t,
+        );
+    }
 }
 
 /// The core's law fitted to all modes with the inputs shared ([`lamdyn_fit::joint`]): its
@@ -800,22 +829,26 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
         })
         .collect();
     html.table(
-        "The law and its 95 % band at each mode (log-normal; all sources, the inputs through the shared changes above); the last column is each mode's layered point, moved by the inputs found, against the law",
+        "The law and its 95 % band at each mode (log-normal, all sources); the last column: each mode's layered point, moved by the inputs found, against the law.",
         &header,
         rows,
     );
     html.table(
-        "The law's parameters and the inputs' relative changes, 95 % intervals (positive parameters and alpha: intervals of their logarithm or logit mapped back; the two terms 'inputs beyond second order, shared' in units of their unit prior); correlations in result.json",
+        "The law's parameters and the inputs' relative changes with 95 % intervals (correlations in result.json).",
         &["parameter", "value", "95% low", "95% high"],
         law.parameters
             .iter()
             .map(|p| {
-                // A parameter the data do not determine has no interval (lamdyn_fit::joint).
+                // A parameter the data do not determine has no interval (lamdyn_fit::joint),
+                // nor has one whose interval spans decades: it is not a measurement.
+                let decades = (p.ci95[1] / p.ci95[0]).log10();
                 let bound = |b: f64| {
-                    if p.sd.is_finite() {
-                        format!("{b:.5e}")
-                    } else {
+                    if !p.sd.is_finite() {
                         "not determined".to_string()
+                    } else if decades > UNDETERMINED_DECADES {
+                        format!("not determined ({decades:.0} decades)")
+                    } else {
+                        format!("{b:.5e}")
                     }
                 };
                 // Its value is where the search stopped along a direction that changes nothing
@@ -834,6 +867,7 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
             })
             .collect(),
     );
+    html.paragraph("Positive parameters and alpha have intervals of their logarithm or logit, mapped back; the two terms 'inputs beyond second order, shared' are in units of their unit prior. An interval spanning more than three decades is shown as not determined: the data do not fix that parameter (core_law.csv and result.json keep the numbers).");
     let mut csv = String::from(
         "f_hz,storage_pa,storage_lo_pa,storage_hi_pa,loss_factor,loss_factor_lo,loss_factor_hi,main_source_storage,main_source_loss_factor\n",
     );
@@ -905,14 +939,22 @@ fn causality_verdict(r: &ChainResult) -> String {
 pub fn build(r: &ChainResult) -> Result<Files> {
     let mut files: Files = vec![];
     let mut html = HtmlReport::new(&r.job.title);
-    html.paragraph(&format!(
-        "Job '{}'. Measurement: {}. Model: {}. Layered inverse: {}. lamdyn {}.",
-        r.job_path.display(),
-        r.measured.source,
-        r.model_line,
-        r.layered_line.as_deref().unwrap_or("not run"),
-        env!("CARGO_PKG_VERSION")
-    ));
+    // The first screen: the answer in a sentence, then its figures.
+    html.answer(&answer::sentence(r));
+    add_figure(
+        &mut html,
+        &mut files,
+        "answer_storage",
+        "The core's G'(f): the answer with its 95 % band and the layered inverse at each mode.",
+        &answer::chart(r, false),
+    )?;
+    add_figure(
+        &mut html,
+        &mut files,
+        "answer_loss",
+        "The core's loss factor η(f), as above.",
+        &answer::chart(r, true),
+    )?;
     let (header, rows, modal_csv) = modal_table(r);
     lead_section(&mut html, r, &header, &rows);
     law_section(&mut html, &mut files, r);
@@ -921,20 +963,6 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     if let Some(b) = &band_widths {
         html.paragraph(&format!("Band widths. {}", b.describe()));
     }
-    add_figure(
-        &mut html,
-        &mut files,
-        "core_storage",
-        "Core G'(f): the layered inverse per mode (large discs), the paper's and the exact inverse with their 95 % bands (paper Fig. 7); the axis is scaled to the estimates and bands beyond it are clipped (marked in the legend)",
-        &core_chart(r, false),
-    )?;
-    add_figure(
-        &mut html,
-        &mut files,
-        "core_loss",
-        "Core loss factor eta(f), as above",
-        &core_chart(r, true),
-    )?;
     html.heading("Warnings");
     if r.warnings.is_empty() {
         html.paragraph("None.");
@@ -943,6 +971,21 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     }
 
     html.heading("The reference methods at the modal frequencies");
+    add_figure(
+        &mut html,
+        &mut files,
+        "core_storage",
+        "Core G'(f) by every route: the paper's and the exact inverse with their 95 % bands (paper Fig. 7), the law and the layered inverse per mode.",
+        &core_chart(r, false),
+    )?;
+    html.paragraph("The axes are scaled to the estimates: a band beyond them is clipped, and its legend entry says so.");
+    add_figure(
+        &mut html,
+        &mut files,
+        "core_loss",
+        "Core loss factor eta(f), as above.",
+        &core_chart(r, true),
+    )?;
     let pick = |names: &[(&'static str, usize)]| pick_columns(&header, &rows, names);
     let with_truth = |mut cols: Vec<(&'static str, usize)>, errs: [&'static str; 2]| {
         if r.truth.is_some() {
@@ -963,7 +1006,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         ["err G'_paper [%]", "err eta_paper [%]"],
     ));
     html.table(
-        "The paper's route: effective modulus E*(f) fitted to the FRFs, then the paper's inverse (eqs. 33-45, eq. 41), with 95 % Monte Carlo bands; |phi| > 0.1 is beyond the paper model's validity (NO)",
+        "The paper's route: E*(f) fitted to the FRFs, then the paper's inverse (eqs. 33-45, 41), with 95 % Monte Carlo bands; |phi| > 0.1 is beyond its validity (NO).",
         &h,
         t,
     );
@@ -1059,6 +1102,14 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         None => "No Monte Carlo (uncertainty.samples = 0).".into(),
     });
     html.heading("Run");
+    html.paragraph(&format!(
+        "Job '{}'. Measurement: {}. Model: {}. Layered inverse: {}. lamdyn {}.",
+        r.job_path.display(),
+        r.measured.source,
+        r.model_line,
+        r.layered_line.as_deref().unwrap_or("not run"),
+        env!("CARGO_PKG_VERSION")
+    ));
     html.table(
         "Stages",
         &["stage", "time [s]", "cached"],

@@ -29,10 +29,7 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let input_dir = OutputDir::prepare(&args.out.join("input"), &inputs, args.force)?;
     let report_dir = OutputDir::prepare(&args.out.join("report"), &inputs, args.force)?;
     let desc = match &args.description {
-        Some(p) => {
-            let text = lamdyn_pipeline::io::read_text(p)?;
-            Description::parse(&p.display().to_string(), &text)?
-        }
+        Some(p) => lamdyn_pipeline::io::read_toml::<Description>(p)?,
         None => demo_roof(),
     };
     let options = RunOptions {

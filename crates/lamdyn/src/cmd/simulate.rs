@@ -21,7 +21,7 @@ fn description(args: &SimulateArgs) -> Result<(Description, String, String)> {
     match (&args.description, args.example.as_deref()) {
         (Some(p), None) => {
             let text = lamdyn_pipeline::io::read_text(p)?;
-            let d = Description::parse(&p.display().to_string(), &text)?;
+            let d: Description = lamdyn_pipeline::io::parse_toml(p, &text)?;
             Ok((d, p.display().to_string(), text))
         }
         (None, Some("roof")) => Ok((

@@ -190,3 +190,47 @@ fn readme_install_command_names_the_binary_package() {
         assert!(readme.contains("not\nredistributed") || readme.contains("not redistributed"));
     }
 }
+
+/// Binary input and a huge one-line file given to every command that reads a file: exit 2
+/// with a short error (an excerpt of the file at most, never the whole line) and no control
+/// byte that would reach the terminal raw.
+#[test]
+fn binary_and_huge_inputs_get_short_printable_errors() {
+    let dir = temp_dir("cli-binary-inputs");
+    let mut binary: Vec<u8> = (0..20_000u32).map(|i| (i * 7919 % 251) as u8).collect();
+    binary.extend_from_slice(b"\x1b[2J\x07");
+    let mut huge = b"\x1b]0;title\x07".to_vec();
+    huge.extend(std::iter::repeat_n(b'x', 1_000_000));
+    huge.extend_from_slice(b"\x1b[31m\n");
+    let channels = dir.join("channels.csv");
+    std::fs::write(
+        &channels,
+        "name,role,x_m,y_m,z_m,dx,dy,dz\na,response,0,0,0,0,0,1\nb,reference,0,0,0,0,0,1\n",
+    )
+    .unwrap();
+    for (name, bytes) in [("binary.dat", &binary), ("huge.txt", &huge)] {
+        let file = dir.join(name);
+        std::fs::write(&file, bytes).unwrap();
+        let f = file.to_str().unwrap();
+        let c = channels.to_str().unwrap();
+        for args in [
+            vec!["run", f],
+            vec!["fit", f],
+            vec!["modes", f],
+            vec!["simulate", f],
+            vec!["laminate", f],
+            vec!["uff", f],
+            vec!["ema", "--frf", f, "--channels", c],
+            vec!["ema", "--uff", f],
+            vec!["ema", "--frf", f, "--channels", f],
+        ] {
+            let (code, _, err) = lamdyn(&args);
+            assert_eq!(code, 2, "{args:?}: {err}");
+            assert!(err.len() < 600, "{args:?}: {} bytes", err.len());
+            assert!(
+                !err.chars().any(|c| c.is_control() && c != '\n'),
+                "{args:?}: {err:?}"
+            );
+        }
+    }
+}

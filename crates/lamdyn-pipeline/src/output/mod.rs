@@ -6,11 +6,16 @@
 //!    parent) must be writable; it must not hold the run's own inputs (the job file, the
 //!    measurement) nor files lamdyn did not write ("foreign" files: anything not in the
 //!    manifest, except lamdyn's own dot-entries such as `.lamdyn-cache`), unless `--force`;
-//! 2. writes each file to a temporary name beside its target, and only when every file is
-//!    written renames them into place (a failed run leaves the earlier results as they were);
-//! 3. removes the files of the previous manifest that this run did not write again (a figure
-//!    no longer produced), never an input and never anything else, and writes the new
-//!    manifest.
+//! 2. builds the new folder whole beside the old one and exchanges the two in one step
+//!    (`output/swap.rs`): a failed or killed run leaves the earlier results as they were, a kill at any
+//!    moment leaves the old or the new folder, never a mix, and the next run removes what a
+//!    killed one left. lamdyn's dot-entries (a cache) move into the new folder; the previous
+//!    run's files that this run did not write (a figure no longer produced) go with the old.
+//! 3. where the folder cannot be swapped (`--force`, a file system without the exchange, a
+//!    parent folder that is not writable, the current directory): writes each file to a
+//!    temporary name beside its target, renames them into place when every file is written,
+//!    then removes the files of the previous manifest that this run did not write again,
+//!    never an input and never anything else, and writes the new manifest.
 //!
 //! From `prepare` to the end of the run the folder holds a lock ([`LOCK`]): a second run on
 //! the same folder is refused at once, naming the process that holds it (a lock whose process
@@ -32,6 +37,8 @@ use crate::error::{Context, Result};
 use crate::{bail, err};
 use std::collections::BTreeSet;
 use std::path::{Component, Path, PathBuf};
+
+mod swap;
 
 /// Name of the manifest in a results folder.
 pub const MANIFEST: &str = ".lamdyn-manifest";
@@ -174,6 +181,7 @@ impl OutputDir {
             Err(_) => probe_writable(&nearest_existing(dir)?)?,
         }
         let lock = FolderLock::acquire(dir)?;
+        swap::recover(dir);
         let out = Self {
             dir: dir.to_path_buf(),
             force,
@@ -259,13 +267,15 @@ impl OutputDir {
         Ok(())
     }
 
-    /// Writes `files` (paths relative to the folder, `/`-separated subfolders allowed): all to
-    /// temporary names first, then renamed into place; the previous run's files that are not
-    /// written again are removed; the manifest is rewritten.
+    /// Writes `files` (paths relative to the folder, `/`-separated subfolders allowed) with a
+    /// new manifest. Without `force` the folder is replaced whole (`output/swap.rs`: a kill at any
+    /// moment leaves the old or the new folder); with `force`, or where that is not available,
+    /// file by file: all to temporary names first, then renamed into place, and the previous
+    /// run's files that are not written again are removed (not with `force`).
     ///
     /// # Errors
     /// A name that leaves the folder, a target that is not a regular file or is an input, or an
-    /// I/O error; before the renames, nothing of the earlier results has changed.
+    /// I/O error; before the swap or the renames, nothing of the earlier results has changed.
     pub fn write<S: AsRef<str>>(&self, files: &[(S, Vec<u8>)]) -> Result<()> {
         std::fs::create_dir_all(&self.dir)
             .with_context(|| format!("cannot create '{}'", self.dir.display()))?;
@@ -285,6 +295,11 @@ impl OutputDir {
             // foreign file in lamdyn's folder.
             targets.push(resolve_target(&self.dir.join(&name), &self.inputs)?);
             self.check_owned(&name)?;
+        }
+        if !self.force
+            && swap::write_swapped(&self.dir, files, &manifest_text(&names))? == swap::Swap::Done
+        {
+            return Ok(());
         }
         let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(files.len());
         let result = (|| -> Result<()> {
@@ -324,18 +339,23 @@ impl OutputDir {
                 remove_stale(&self.dir, stale);
             }
         }
-        let mut manifest = String::from(MANIFEST_HEADER);
-        for n in &listed {
-            manifest.push('\n');
-            manifest.push_str(n);
-        }
-        manifest.push('\n');
         let path = self.dir.join(MANIFEST);
         let tmp = temporary_beside(&path)?;
-        std::fs::write(&tmp, manifest)
+        std::fs::write(&tmp, manifest_text(&listed))
             .and_then(|()| std::fs::rename(&tmp, &path))
             .with_context(|| format!("cannot write '{}'", path.display()))
     }
+}
+
+/// A manifest listing `names`.
+fn manifest_text(names: &BTreeSet<String>) -> String {
+    let mut manifest = String::from(MANIFEST_HEADER);
+    for n in names {
+        manifest.push('\n');
+        manifest.push_str(n);
+    }
+    manifest.push('\n');
+    manifest
 }
 
 /// Writes one file atomically (module docs): through a symlink, never over a non-regular file
