@@ -42,9 +42,9 @@ pub struct LayeredPlateSpec {
     pub nx: usize,
     /// Elements along y.
     pub ny: usize,
-    /// Radius of curvature along x, m (infinite: straight).
+    /// Radius of curvature along x, m (infinite: straight; negative: curved towards +z).
     pub radius_x_m: f64,
-    /// Radius of curvature along y, m (infinite: straight).
+    /// Radius of curvature along y, m (infinite: straight; negative: curved towards +z).
     pub radius_y_m: f64,
     /// The layers, bottom to top.
     pub layers: Vec<LayerMesh>,
@@ -125,7 +125,8 @@ pub(crate) fn heights(layers: &[LayerMesh]) -> (Vec<f64>, Vec<usize>) {
 }
 
 impl LayeredPlateSpec {
-    /// Checks the numbers (positive sizes and counts, radii positive or infinite).
+    /// Checks the numbers (positive sizes and counts, radii non-zero: infinite for straight,
+    /// negative for curved towards +z).
     fn validate(&self) -> Result<(), LayeredError> {
         let bad = |field: &str, why: String| Err(LayeredError::Invalid(format!("{field}: {why}")));
         for (name, v) in [("length_m", self.length_m), ("width_m", self.width_m)] {
@@ -137,8 +138,11 @@ impl LayeredPlateSpec {
             ("radius_x_m", self.radius_x_m),
             ("radius_y_m", self.radius_y_m),
         ] {
-            if v.is_nan() || v <= 0.0 {
-                return bad(name, format!("{v} must be positive (inf for straight)"));
+            if v.is_nan() || v == 0.0 {
+                return bad(
+                    name,
+                    format!("{v} must be non-zero (inf for straight, negative for a bowl)"),
+                );
             }
         }
         if !(0.0..1.0).contains(&self.edge_grading) {
@@ -299,7 +303,7 @@ mod tests {
         s.layers[1].thickness_m = 0.0;
         let e = s.build().unwrap_err().to_string();
         assert!(e.contains("layer 2") && e.contains("thickness"), "{e}");
-        let mut s = spec(-1.0);
+        let mut s = spec(0.0);
         s.nx = 3;
         assert!(s.build().unwrap_err().to_string().contains("radius_x_m"));
     }

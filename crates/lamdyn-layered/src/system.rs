@@ -513,6 +513,77 @@ mod tests {
         (&a - &b).norm_max() / scale
     }
 
+    /// Glass faces and a soft core.
+    const GLASS: Elastic = Elastic {
+        young_pa: 70e9,
+        poisson: 0.22,
+        density_kg_m3: 2500.0,
+    };
+    const CORE: Elastic = Elastic {
+        young_pa: 3e7,
+        poisson: 0.49,
+        density_kg_m3: 1070.0,
+    };
+
+    /// A bowl (negative radii) with a symmetric stack is the dome mirrored through its tangent
+    /// plane: the free solid's eigenvalues of (K, M), invariant under the mirror, agree within
+    /// rounding (dense generalized eigenvalues on a small mesh).
+    #[test]
+    fn a_bowl_has_the_mirrored_dome_s_eigenvalues() {
+        use faer::prelude::Solve;
+        let eigenvalues = |r: f64| {
+            let layer = |thickness_m| LayerMesh {
+                thickness_m,
+                elements: 1,
+            };
+            let mesh = LayeredPlateSpec {
+                length_m: 0.3,
+                width_m: 0.2,
+                nx: 2,
+                ny: 2,
+                radius_x_m: 2.0 * r,
+                radius_y_m: 3.0 * r,
+                layers: vec![layer(2e-3), layer(0.8e-3), layer(2e-3)],
+                edge_grading: 0.0,
+            }
+            .build()
+            .unwrap();
+            let sys = LayeredSystem::assemble(&mesh, &[GLASS, CORE, GLASS]).unwrap();
+            let sum = |m: &[SparseColMat<usize, f64>]| {
+                m.iter()
+                    .map(|a| a.to_dense())
+                    .fold(None, |acc: Option<Mat<f64>>, a| {
+                        Some(acc.map_or(a.clone(), |b| &b + &a))
+                    })
+            };
+            let (k, m) = (sum(&sys.k_layers).unwrap(), sum(&sys.m_layers).unwrap());
+            // K x = λ M x as L⁻¹ K L⁻ᵀ with M = L Lᵀ.
+            let l = m.llt(Side::Lower).unwrap().L().to_owned();
+            let n = l.nrows();
+            let linv = l
+                .as_ref()
+                .partial_piv_lu()
+                .solve(Mat::<f64>::identity(n, n));
+            let a = &linv * &k * linv.transpose();
+            let a = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+            let mut lambda: Vec<f64> = a.self_adjoint_eigenvalues(Side::Lower).unwrap();
+            lambda.sort_by(f64::total_cmp);
+            lambda
+        };
+        let (dome, bowl) = (eigenvalues(1.0), eigenvalues(-1.0));
+        // Six rigid-body modes, then the elastic ones: the lowest 12 of them compared.
+        let scale = dome[17];
+        for k in 0..18 {
+            assert!(
+                (dome[k] - bowl[k]).abs() <= 1e-9 * scale,
+                "eigenvalue {k}: dome {} vs bowl {}",
+                dome[k],
+                bowl[k]
+            );
+        }
+        assert!(dome[6] > 1e-6 * scale && dome[5] < 1e-6 * scale);
+    }
+
     /// The scattered assembly is the triplet sum: every entry of every layer's stiffness and
     /// mass within rounding (1e-14 of the largest), on a curved plate of three layers, one of
     /// them split in two through the thickness. Also the symmetry of every stiffness and the
@@ -544,17 +615,7 @@ mod tests {
         }
         .build()
         .unwrap();
-        let glass = Elastic {
-            young_pa: 70e9,
-            poisson: 0.22,
-            density_kg_m3: 2500.0,
-        };
-        let core = Elastic {
-            young_pa: 3e7,
-            poisson: 0.49,
-            density_kg_m3: 1070.0,
-        };
-        let materials = [glass, core, glass];
+        let materials = [GLASS, CORE, GLASS];
         let sys = LayeredSystem::assemble(&mesh, &materials).unwrap();
         let reference = by_triplets(&mesh, &materials);
         for (l, (k, m)) in reference.iter().enumerate() {

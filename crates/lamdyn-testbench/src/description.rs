@@ -64,10 +64,11 @@ pub struct PlateSpec {
     pub length_m: f64,
     /// Width along y, m.
     pub width_m: f64,
-    /// Radius of curvature along x, m (`inf` or absent: straight).
+    /// Radius of curvature along x, m (`inf` or absent: straight; negative: a bowl, curved
+    /// towards +z).
     #[serde(default = "infinite")]
     pub radius_x_m: f64,
-    /// Radius of curvature along y, m (`inf` or absent: straight).
+    /// Radius of curvature along y, m (`inf` or absent: straight; negative: curved towards +z).
     #[serde(default = "infinite")]
     pub radius_y_m: f64,
 }
@@ -599,10 +600,10 @@ impl Description {
             ("plate.radius_x_m", self.plate.radius_x_m),
             ("plate.radius_y_m", self.plate.radius_y_m),
         ] {
-            if r.is_nan() || r <= 0.0 {
+            if r.is_nan() || r == 0.0 {
                 return Err(invalid(
                     name,
-                    format!("{r} must be positive (inf: straight)"),
+                    format!("{r} must be non-zero (inf: straight, negative: a bowl)"),
                 ));
             }
         }

@@ -6,7 +6,7 @@
 //! z(x, y) = −x²/(2R_x) − y²/(2R_y),
 //!
 //! with exact unit normals n ∝ (x/R_x, y/R_y, 1) as directors; an infinite radius is flat in that
-//! direction. Nodes are numbered row by row (x fastest), elements likewise, counter-clockwise
+//! direction, a negative one curves the other way (R_x, R_y < 0: a bowl; signs apart: a saddle). Nodes are numbered row by row (x fastest), elements likewise, counter-clockwise
 //! seen from +z. Optional grading clusters nodes towards the free edges, where a Mindlin plate
 //! has a boundary layer of width about t/√(12k) (method-notes §5); edge layers resolve it
 //! better: `edge_layers` elements at each edge whose widths grow geometrically from
@@ -34,10 +34,12 @@ pub struct RectangleSpec {
     pub elements_x: usize,
     /// Elements along y.
     pub elements_y: usize,
-    /// Radius of curvature in the x-z plane, m (infinite or absent: flat).
+    /// Radius of curvature in the x-z plane, m (infinite or absent: flat; negative: curved
+    /// towards +z, a bowl).
     #[serde(default = "infinite")]
     pub radius_x_m: f64,
-    /// Radius of curvature in the y-z plane, m (infinite or absent: flat).
+    /// Radius of curvature in the y-z plane, m (infinite or absent: flat; negative: curved
+    /// towards +z).
     #[serde(default = "infinite")]
     pub radius_y_m: f64,
     /// Edge grading in [0, 1): 0 is uniform, larger values cluster nodes towards the edges
@@ -161,13 +163,13 @@ impl RectangleSpec {
             ("radius_x_m", self.radius_x_m, self.length_x_m),
             ("radius_y_m", self.radius_y_m, self.length_y_m),
         ] {
-            if r.is_nan() || r <= 0.0 || r < l {
+            if r.is_nan() || r.abs() < l {
                 return Err(FemError::InvalidParameter {
                     context: ctx.into(),
                     field: field.into(),
                     value: format!("{r}"),
                     requirement: format!(
-                        "must be positive and at least the span ({l} m) for a shallow shell; use inf for flat"
+                        "must be at least the span ({l} m) in size for a shallow shell (negative: curved the other way, a bowl); use inf for flat"
                     ),
                 });
             }
@@ -199,7 +201,7 @@ impl RectangleSpec {
     ///
     /// # Errors
     /// [`FemError::InvalidParameter`] for non-positive lengths, counts outside 1..=2000, radii
-    /// shorter than the span, grading outside [0, 1), or edge layers that do not fit.
+    /// shorter in size than the span, grading outside [0, 1), or edge layers that do not fit.
     pub fn build(&self) -> Result<Mesh, FemError> {
         self.validate()?;
         let (nx, ny) = (self.elements_x, self.elements_y);

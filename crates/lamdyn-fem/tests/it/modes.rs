@@ -352,3 +352,39 @@ fn mitc9_does_not_lock_down_to_t_over_l_1e_4() {
     assert!(flat < 0.01, "flat plate: {flat:e}");
     assert!(curved < 0.03, "dome: {curved:e}");
 }
+
+/// A bowl (negative radii) is the dome mirrored through its tangent plane: the mesh's heights
+/// change sign, its directors keep pointing to +z, and a free shell's frequencies, invariant
+/// under the mirror, are the dome's (to the solver's precision). A saddle (radii of both
+/// signs) builds and solves too.
+#[test]
+fn a_bowl_is_the_mirrored_dome() {
+    let dome = RectangleSpec::flat(0.923, 0.8632, 12, 12).curved(3.0, 5.0);
+    let bowl = dome.clone().curved(-3.0, -5.0);
+    let (d, b) = (dome.build().unwrap(), bowl.build().unwrap());
+    for (p, q) in d.nodes().iter().zip(b.nodes()) {
+        assert_eq!([p[0], p[1]], [q[0], q[1]]);
+        assert!((p[2] + q[2]).abs() < 1e-15, "{p:?} vs {q:?}");
+        assert!(p[2] <= 0.0 && q[2] >= 0.0);
+    }
+    let hz = |m: &lamdyn_fem::mesh::Mesh| {
+        let asm = Assembly::new(m, &ROOF, &[]).unwrap();
+        elastic_hz(&modes(&asm, &ModalParams::lowest(12)))
+    };
+    let (fd, fb) = (hz(&d), hz(&b));
+    assert_eq!(fd.len(), fb.len());
+    for (a, b) in fd.iter().zip(&fb) {
+        assert!((a / b - 1.0).abs() < 1e-9, "dome {a} Hz, bowl {b} Hz");
+    }
+    let saddle = dome.curved(3.0, -5.0).build().unwrap();
+    assert!(hz(&saddle).len() >= 6);
+    let e = RectangleSpec::flat(0.923, 0.8632, 4, 4)
+        .curved(-0.5, 5.0)
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("radius_x_m") && e.contains("at least the span"),
+        "{e}"
+    );
+}

@@ -187,9 +187,9 @@ pub(super) fn sentence(r: &ChainResult) -> String {
         } else if hi > crate::band_widths::UNDETERMINED_FACTOR.ln() {
             "not determined at some modes".to_string()
         } else if hi - lo < 0.001 {
-            format!("±{:.1} %", 100.0 * hi)
+            format!("±{:.1}\u{a0}%", 100.0 * hi)
         } else {
-            format!("±{:.1} to {:.1} %", 100.0 * lo, 100.0 * hi)
+            format!("±{:.1} to {:.1}\u{a0}%", 100.0 * lo, 100.0 * hi)
         }
     };
     format!(
