@@ -64,7 +64,7 @@ fn structured_parameters_are_checked() {
             .unwrap_err(),
     );
     assert!(
-        e.starts_with("rectangle: radius_x_m = 0.5 must be positive and at least the span (1 m)"),
+        e.starts_with("rectangle: radius_x_m = 0.5 must be at least the span (1 m) in size"),
         "{e}"
     );
     let e = invalid(
