@@ -70,7 +70,6 @@ impl<'a> Source<'a> {
             .iter()
             .filter_map(|p| {
                 let g = if layered { p.layered_g() } else { p.exact_g() }?;
-                let b = modal_bands(r, p);
                 let (sb, lb) = if layered {
                     let h = p.layered_band.as_ref().and_then(|b| b.as_ref().ok());
                     let band = |k: usize, v: f64| {
@@ -78,6 +77,7 @@ impl<'a> Source<'a> {
                     };
                     (band(0, g.re), band(1, g.im / g.re))
                 } else {
+                    let b = modal_bands(r, p);
                     (b.exact_storage, b.exact_loss_factor)
                 };
                 Some(Point {
@@ -134,10 +134,7 @@ impl<'a> Source<'a> {
     fn curve(&self, r: &ChainResult) -> Option<Vec<Point>> {
         match self {
             Self::FrfFit(route) => {
-                let f: Vec<f64> = r.modal.iter().map(|p| p.freq_hz).collect();
-                let (lo, hi) = f
-                    .iter()
-                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+                let [lo, hi] = modal_span(r);
                 (lo < hi).then(|| {
                     (0..CURVE_LINES)
                         .map(|k| {
@@ -151,6 +148,16 @@ impl<'a> Source<'a> {
             Self::Modes { .. } => None,
         }
     }
+}
+
+/// The smallest and largest of `values` (+inf and 0 when there are none).
+fn extent(values: impl Iterator<Item = f64>) -> [f64; 2] {
+    values.fold([f64::INFINITY, 0.0], |[a, b], x| [a.min(x), b.max(x)])
+}
+
+/// The lowest and highest identified modal frequency, Hz.
+fn modal_span(r: &ChainResult) -> [f64; 2] {
+    extent(r.modal.iter().map(|p| p.freq_hz))
 }
 
 /// The FRF route's law at `f_hz`.
@@ -179,9 +186,7 @@ pub(super) fn sentence(r: &ChainResult) -> String {
     };
     let widths = |k: usize| {
         let h: Vec<f64> = points.iter().filter_map(|p| p.half_widths()[k]).collect();
-        let (lo, hi) = h
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        let [lo, hi] = extent(h.iter().copied());
         if h.is_empty() {
             "no band".to_string()
         } else if hi > crate::band_widths::UNDETERMINED_FACTOR.ln() {
@@ -332,12 +337,8 @@ pub(super) fn chart(r: &ChainResult, loss_factor: bool) -> Chart {
                 .collect(),
         ));
     }
-    let f: Vec<f64> = r.modal.iter().map(|p| p.freq_hz).collect();
-    let (lo, hi) = f
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
     c.series
-        .extend(truth_series(r, [lo, hi], loss_factor, scale));
+        .extend(truth_series(r, modal_span(r), loss_factor, scale));
     let per_mode: Vec<[f64; 2]> = match &source {
         Source::Modes { points, .. } => points.iter().map(|p| [p.freq_hz, value(p).0]).collect(),
         _ => r
