@@ -3,7 +3,8 @@
 # and installed by pip exactly as the README says (`pip install "./python[test]"`: maturin
 # builds the abi3 wheel), the lamdyn binary the results are compared with, then pytest.
 # LAMDYN_VENV chooses the environment's folder (default target/python-venv); LAMDYN_BIN the
-# lamdyn binary (default: target/release/lamdyn, built here).
+# lamdyn binary (default: target/release/lamdyn, built here). Arguments go to pytest
+# (`python/test.sh -k killed`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV=${LAMDYN_VENV:-target/python-venv}
@@ -15,4 +16,4 @@ python3 -m venv "$VENV"
 if [ -z "${LAMDYN_BIN:-}" ]; then
     cargo build --release -p lamdyn
 fi
-"$VENV/bin/python" -m pytest python/tests -q -rA --durations=5
+"$VENV/bin/python" -m pytest python/tests -q -rA --durations=5 "$@"

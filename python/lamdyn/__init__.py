@@ -173,11 +173,16 @@ def write_uff(
     quantity: str = "accelerance",
     binary: bool = False,
 ) -> None:
-    """Writes FRFs as a universal file: dataset 2411 (the channels' nodes, m), then one
-    dataset 58 (or 58b when ``binary``) per response/reference pair, complex double, SI units.
+    """Writes FRFs as a universal file: lamdyn's header (dataset 151), dataset 2411 (the
+    channels' nodes, m), then one dataset 58 (or 58b when ``binary``) per response/reference
+    pair, complex double, SI units.
 
     Channels are dicts (``name``, ``point_m``, ``direction``) or names; names like ``"12+Z"``
     give node 12, direction +Z.
+
+    An existing file at ``path`` is replaced only when lamdyn wrote it (its 151 header names
+    lamdyn), the rule of ``lamdyn run --out``: any other file raises :class:`LamdynError` and
+    is left as it was.
     """
     _native.write_uff(
         os.fspath(path),

@@ -15,7 +15,9 @@ The answer is a :class:`BatchResult`: one row per job, in the order given, and e
 result as :func:`lamdyn.run` returns it; with ``out`` each job's report is written to
 ``out/<name>/`` and the table to ``out/batch.csv`` and ``out/batch.json``.
 
-Requires ``dask[distributed]`` (``pip install "lamdyn[batch]"``).
+Requires ``dask[distributed]`` (``pip install "lamdyn[batch]"``). In a script, call
+:func:`run_batch` under ``if __name__ == "__main__":``: the local cluster's workers start by
+importing the script, and a batch at its top level would start again in each of them.
 """
 
 from __future__ import annotations
@@ -46,7 +48,8 @@ class BatchResult:
     Attributes:
         rows: one dict per job, in the order given: ``name``, ``job``, ``status`` (``ok`` or
             ``failed``), ``temperature_k``, ``modes`` (modal frequencies with a core),
-            ``attempts`` (1, or more when a worker died), ``seconds`` (the job's own time),
+            ``attempts`` (how many times the job started: 1, or more when a worker died in
+            the middle of it), ``seconds`` (the job's own time),
             ``error`` (lamdyn's message, or the worker's death).
         results: each successful job's result (as :func:`lamdyn.run` returns it), by name.
     """
@@ -102,15 +105,33 @@ def job_names(jobs: Sequence[PathLike]) -> list:
     return names
 
 
+# The scheduler's event topic on which each run of a job says that it started.
+_ATTEMPT_TOPIC = "lamdyn-batch-attempt"
+
+
 def _run_one(job: str, out: Optional[str], cache: Optional[str], samples, seed, force) -> dict:
     """One job on a worker: its result, or lamdyn's error as data (not an exception, so the
     batch goes on and the message is kept whole)."""
+    _say_attempt_started()
     t = time.perf_counter()
     try:
         r = lamdyn.run(job, out=out, cache=cache, samples=samples, seed=seed, force=force)
         return {"ok": True, "result": r, "seconds": time.perf_counter() - t, "error": None}
     except lamdyn.LamdynError as e:
         return {"ok": False, "result": None, "seconds": time.perf_counter() - t, "error": str(e)}
+
+
+def _say_attempt_started() -> None:
+    """Logs this task's start on the scheduler (:data:`_ATTEMPT_TOPIC`), so that the batch
+    counts runs that started. The scheduler's own count (``suspicious``) also blames a task
+    that was only queued on a worker when it died."""
+    try:
+        from distributed import get_worker
+
+        worker = get_worker()
+    except (ImportError, ValueError):  # called outside a Dask worker
+        return
+    worker.log_event(_ATTEMPT_TOPIC, {"key": str(worker.get_current_task())})
 
 
 def _default_cache(jobs: Sequence[PathLike]) -> Path:
@@ -217,7 +238,7 @@ def run_batch(
                 "status": "ok" if o["ok"] else "failed",
                 "temperature_k": None if r is None else r.get("temperature_k"),
                 "modes": 0 if r is None else int(len(r["modal"]["f_hz"])),
-                "attempts": attempts.get(name, 1),
+                "attempts": attempts[name],
                 "seconds": o["seconds"],
                 "error": o["error"],
             }
@@ -231,19 +252,12 @@ def run_batch(
 
 
 def _attempts(client: Any, futures: dict) -> dict:
-    """How many times the scheduler ran each job (more than once when a worker died)."""
-    keys = {f.key: name for f, (_, name) in futures.items()}
-
-    def count(dask_scheduler=None):
-        out = {}
-        for k in keys:
-            ts = dask_scheduler.tasks.get(k)
-            if ts is not None:
-                out[k] = getattr(ts, "suspicious", 0)
-        return out
-
-    try:
-        seen = client.run_on_scheduler(count)
-    except Exception:  # pragma: no cover - an older scheduler
-        return {}
-    return {keys[k]: 1 + int(v) for k, v in seen.items()}
+    """How many times each job started, from the events its runs logged (a worker's death
+    in the middle of a job makes two; a job only queued there still counts one)."""
+    names = {str(f.key): name for f, (_, name) in futures.items()}
+    counts = {name: 0 for name in names.values()}
+    for _, event in client.get_events(_ATTEMPT_TOPIC):
+        name = names.get(event.get("key")) if isinstance(event, dict) else None
+        if name is not None:
+            counts[name] += 1
+    return counts

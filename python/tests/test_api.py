@@ -105,6 +105,23 @@ def test_errors_pickle_and_keep_their_class_across_processes(tmp_path):
             raise AssertionError("no error came back")
 
 
+def test_refusals_name_python_s_arguments(tmp_path, temperature_jobs):
+    """A results folder holding a user's file is refused in Python's words (``force=True``,
+    ``out``), not with the CLI's flags."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    calls = (
+        lambda: lamdyn.write_demo_job(out),
+        lambda: lamdyn.run(temperature_jobs[0], out=out, cache=None),
+    )
+    for call in calls:
+        with pytest.raises(lamdyn.LamdynError, match="did not write") as refusal:
+            call()
+        assert "force=True" in str(refusal.value) and "--" not in str(refusal.value), refusal.value
+    assert (out / "notes.txt").read_text() == "mine"
+
+
 def test_bad_arrays_raise_lamdyns_error_naming_the_argument():
     """Real-valued FRFs (magnitudes, most often) are refused; arrays that are not numbers, or of
     the wrong shape, raise LamdynError naming the argument, not numpy's ValueError."""

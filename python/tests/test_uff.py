@@ -106,3 +106,29 @@ def test_bad_files_raise_lamdyn_errors(tmp_path):
     with pytest.raises(lamdyn.LamdynError):
         lamdyn.write_uff(tmp_path / "x.uff", freqs, bad, responses, references)
     assert not (tmp_path / "x.uff").exists()
+
+
+def test_write_uff_replaces_only_what_lamdyn_wrote(tmp_path):
+    """``write_uff`` follows ``--out``'s rule: its own file (lamdyn's 151 header, which pyuff
+    reads as the program that wrote it) is replaced; a file lamdyn did not write (pyuff's, or
+    any other) raises and is left byte for byte."""
+    freqs, frf, responses, references = _set(np.random.default_rng(5))
+    own = tmp_path / "own.uff"
+    lamdyn.write_uff(own, freqs, frf, responses, references)
+    header = [s for s in pyuff.UFF(str(own)).read_sets() if s["type"] == 151]
+    assert header and header[0]["program"].startswith("lamdyn"), header
+    lamdyn.write_uff(own, freqs, 2 * frf, responses, references, binary=True)
+    assert rel(lamdyn.read_uff(own).frf, 2 * frf) < 1e-15
+
+    theirs = tmp_path / "theirs.uff"
+    theirs.write_text("")
+    pyuff.UFF(str(theirs)).write_sets(
+        pyuff.prepare_151(model_name="rig", description="their test", db_app="pyuff", program="pyuff"), mode="add"
+    )
+    notes = tmp_path / "notes.uff"
+    notes.write_text("my notes, not a universal file\n")
+    for path in (theirs, notes):
+        before = path.read_bytes()
+        with pytest.raises(lamdyn.LamdynError, match=r"exists and lamdyn did not write it .*151 header"):
+            lamdyn.write_uff(path, freqs, frf, responses, references)
+        assert path.read_bytes() == before

@@ -3,7 +3,7 @@
 use crate::{py_err, py_msg, to_json};
 use lamdyn_pipeline::demo::{DemoSampling, demo_roof, demo_roof_at, write_virtual_test};
 use lamdyn_pipeline::job::{Job, MAX_SAMPLES, base_of};
-use lamdyn_pipeline::output::OutputDir;
+use lamdyn_pipeline::output::{OptionNames, OutputDir};
 use lamdyn_pipeline::{ChainResult, RunOptions, Silent, report, run_job};
 use num_complex::Complex64;
 use pyo3::prelude::*;
@@ -121,7 +121,7 @@ fn run(
         inputs.push(job.clone());
         let dir = out
             .as_ref()
-            .map(|d| OutputDir::prepare(d, &inputs, force))
+            .map(|d| OutputDir::prepare_named(d, &inputs, force, OptionNames::PYTHON))
             .transpose()
             .map_err(py_err)?;
         let options = RunOptions { cache_dir: cache };
@@ -159,7 +159,8 @@ fn write_demo_job(
             Some(t) => demo_roof_at(t, c1, c2_k).map_err(py_err)?,
             None => demo_roof(),
         };
-        let dir = OutputDir::prepare(&out, &[], force).map_err(py_err)?;
+        let dir =
+            OutputDir::prepare_named(&out, &[], force, OptionNames::PYTHON).map_err(py_err)?;
         let sampling = DemoSampling {
             samples,
             seed,

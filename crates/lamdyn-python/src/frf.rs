@@ -234,7 +234,14 @@ fn write_uff(
             lamdyn_uff::Encoding::Ascii
         };
         let bytes = lamdyn_uff::write(&datasets, encoding).map_err(py_err)?;
-        lamdyn_pipeline::output::write_file(&path, &bytes, &[]).map_err(py_err)
+        lamdyn_pipeline::output::write_own_file(
+            &path,
+            &bytes,
+            &[],
+            lamdyn_uff::meta::written_by_lamdyn,
+            "lamdyn's 151 header",
+        )
+        .map_err(py_err)
     })
 }
 

@@ -303,7 +303,9 @@ fn dof_of(c: &Channel, index: usize) -> Result<Dof, UffError> {
     })
 }
 
-/// A dataset 2411 with the channels' nodes (metres), then datasets 58 (complex double, even
+/// lamdyn's 151 header ([`crate::meta::Header151::lamdyn`]: how lamdyn knows its own file
+/// before replacing it), a dataset 2411 with the channels' nodes (metres), then datasets 58
+/// (complex double, even
 /// abscissa if the lines are evenly spaced) for every pair of a set, in SI units (unit exponents
 /// and labels set accordingly).
 ///
@@ -350,10 +352,13 @@ pub fn from_frf_set(set: &FrfSet) -> Result<Vec<Dataset>, UffError> {
             }),
         }
     }
-    let mut out = vec![Dataset::Nodes(crate::geometry::Nodes {
-        dataset: 2411,
-        nodes,
-    })];
+    let mut out = vec![
+        Dataset::Header(crate::meta::Header151::lamdyn("FRFs")),
+        Dataset::Nodes(crate::geometry::Nodes {
+            dataset: 2411,
+            nodes,
+        }),
+    ];
     for (i, r) in set.responses().iter().enumerate() {
         let response = dof_of(r, i)?;
         for (j, q) in set.references().iter().enumerate() {

@@ -21,6 +21,46 @@ pub struct Header151 {
     pub lines: Vec<String>,
 }
 
+/// The program that lamdyn names in record 6 of its 151 headers ("program which created the
+/// universal file"), followed by its version: how [`written_by_lamdyn`] knows lamdyn's files.
+pub const PROGRAM: &str = "lamdyn";
+
+impl Header151 {
+    /// lamdyn's header: model name and description `description`, lamdyn (and its version)
+    /// as the program of the database and of the file (records 3 and 6), dates "NONE" so that
+    /// equal inputs write equal files.
+    pub fn lamdyn(description: &str) -> Self {
+        let program = format!("{PROGRAM} {}", env!("CARGO_PKG_VERSION"));
+        let no_date = format!("{:<10}{:<10}", "NONE", "NONE");
+        Self {
+            lines: vec![
+                description.to_string(),
+                description.to_string(),
+                program.clone(),
+                format!("{no_date}{:>10}{:>10}{:>10}", 0, 0, 0),
+                no_date.clone(),
+                program,
+                no_date,
+            ],
+        }
+    }
+}
+
+/// Whether `head`, the first bytes of a file, opens with lamdyn's 151 header (record 6 names
+/// [`PROGRAM`]): lamdyn replaces only universal files it wrote. Reads at most the header's
+/// eight lines.
+pub fn written_by_lamdyn(head: &[u8]) -> bool {
+    let text = String::from_utf8_lossy(head);
+    let mut lines = text.lines().skip_while(|l| l.trim().is_empty());
+    let opens = lines.next().map(str::trim) == Some("-1")
+        && lines.next().and_then(|l| l.split_whitespace().next()) == Some("151");
+    let program = lines.nth(5).unwrap_or("");
+    opens
+        && program
+            .strip_prefix(PROGRAM)
+            .is_some_and(|rest| rest.is_empty() || rest.starts_with(' '))
+}
+
 /// Dataset 164: the file's units.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Units164 {
@@ -154,4 +194,29 @@ pub fn write_164(u: &Units164, out: &mut String) -> Result<(), UffError> {
         e25(u.temperature_offset)
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// lamdyn's own header is recognised in either encoding's file; another program's 151, a
+    /// file that opens with another dataset and a program name that only starts like lamdyn's
+    /// are not.
+    #[test]
+    fn lamdyn_knows_its_own_header() {
+        let mut own = String::new();
+        write_151(&Header151::lamdyn("FRFs"), &mut own);
+        assert!(written_by_lamdyn(own.as_bytes()));
+        assert!(written_by_lamdyn(
+            format!("\n{own}    -1\n    58b ...").as_bytes()
+        ));
+        let foreign = own.replace("lamdyn 0", "pyuff 0");
+        assert!(!written_by_lamdyn(foreign.as_bytes()));
+        let lookalike = own.replace("lamdyn 0", "lamdyn-clone 0");
+        assert!(!written_by_lamdyn(lookalike.as_bytes()));
+        assert!(!written_by_lamdyn(b"    -1\n  2411\n"));
+        assert!(!written_by_lamdyn(b""));
+        assert!(!written_by_lamdyn(&[0xff, 0xfe, 0x00]));
+    }
 }

@@ -548,7 +548,9 @@ pub struct ModesArgs {
     /// Refine until every elastic mode among the --modes lowest has an estimated
     /// discretization error below TOL (relative, e.g. 1e-4): each element split 2x2, 3x3, ...,
     /// each mode's error by Richardson extrapolation over the last three meshes (docs/fem.md);
-    /// exit 1 with how far it got when the tolerance is not met.
+    /// exit 1 with how far it got when the tolerance is not met, as soon as it is seen to be
+    /// out of reach (exit 2 before any solve when the finest allowed mesh cannot resolve the
+    /// free edges).
     #[arg(long, value_name = "TOL", conflicts_with_all = ["vtu", "shapes_json", "compare"])]
     pub converge: Option<f64>,
     /// With --converge: the largest mesh to solve, in dofs [default: 600000].

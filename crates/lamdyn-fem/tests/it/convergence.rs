@@ -2,7 +2,7 @@
 //! references: the estimate must cover the true error of the finest mesh.
 
 use super::common::*;
-use lamdyn_fem::convergence::{ConvergeParams, converge_modes};
+use lamdyn_fem::convergence::{ConvergeParams, converge_modes, subdivided_dofs};
 use lamdyn_fem::eigen::Silent;
 use lamdyn_fem::element::ElementOrder;
 use lamdyn_fem::mesh::structured::RectangleSpec;
@@ -78,7 +78,8 @@ fn mitc4_with_edge_layers_covers_the_true_error() {
 fn unresolved_free_edges_are_not_called_converged() {
     let mesh = flat_plate(ElementOrder::Linear, 10, 0);
     let lift = RectangleSpec::flat(0.923, 0.8632, 10, 10).surface();
-    let params = ConvergeParams::new(8, 1e-2);
+    let mut params = ConvergeParams::new(8, 1e-2);
+    params.stop_when_out_of_reach = false;
     let c = converge_modes(&mesh, Some(&lift), &ROOF, &[], &params, &Silent).unwrap();
     assert!(c.modes.iter().all(|m| m.rigid || m.error < 1e-2));
     assert!(!c.converged);
@@ -87,4 +88,72 @@ fn unresolved_free_edges_are_not_called_converged() {
         "{:?}",
         c.warnings
     );
+}
+
+/// The same mesh with the default caps is refused before any solve: the finest mesh they allow
+/// (6 × 6) still leaves the free edges unresolved, so no tolerance can be met.
+#[test]
+fn unresolved_free_edges_are_refused_before_any_solve() {
+    let mesh = flat_plate(ElementOrder::Linear, 10, 0);
+    let lift = RectangleSpec::flat(0.923, 0.8632, 10, 10).surface();
+    let params = ConvergeParams::new(8, 1e-2);
+    let stages = Stages::default();
+    let err = converge_modes(&mesh, Some(&lift), &ROOF, &[], &params, &stages)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("cannot be met within the limits")
+            && err.contains("6x6")
+            && err.contains("boundary layer"),
+        "{err}"
+    );
+    assert_eq!(stages.0.borrow().len(), 0, "solved before refusing");
+}
+
+/// A tolerance the caps cannot reach is seen after three levels, not after the expensive
+/// ones: MITC4 with edge layers to 1e-6 stops at 3 × 3 saying why, and the full refinement
+/// (to the 6 × 6 cap) confirms that the finest mesh misses it.
+#[test]
+fn an_unreachable_tolerance_stops_after_three_levels() {
+    let mesh = flat_plate(ElementOrder::Linear, 12, 3);
+    let lift = RectangleSpec::flat(0.923, 0.8632, 12, 12).surface();
+    let params = ConvergeParams::new(8, 1e-6);
+    let early = converge_modes(&mesh, Some(&lift), &ROOF, &[], &params, &Silent).unwrap();
+    assert!(!early.converged);
+    assert_eq!(early.levels.len(), 3, "{}", early.stopped);
+    assert!(
+        early.stopped.starts_with("out of reach"),
+        "{}",
+        early.stopped
+    );
+    let full = ConvergeParams {
+        stop_when_out_of_reach: false,
+        ..params
+    };
+    let full = converge_modes(&mesh, Some(&lift), &ROOF, &[], &full, &Silent).unwrap();
+    assert_eq!(full.levels.len(), 6);
+    let (_, worst) = full.worst().unwrap();
+    assert!(worst > 1e-6, "the full refinement met {worst:e}");
+}
+
+/// The dofs counted from the topology are those of the built subdivision, for either order.
+#[test]
+fn subdivided_dofs_are_counted_without_building() {
+    for order in [ElementOrder::Linear, ElementOrder::Quadratic] {
+        let mesh = flat_plate(order, 5, 1);
+        for m in 1..=4 {
+            let built = mesh.subdivided(m, None).unwrap().n_dofs();
+            assert_eq!(subdivided_dofs(&mesh, m), built, "{order:?} m = {m}");
+        }
+    }
+}
+
+/// The stages a run reported, to see whether it solved anything.
+#[derive(Default)]
+struct Stages(std::cell::RefCell<Vec<String>>);
+
+impl lamdyn_fem::eigen::Progress for Stages {
+    fn stage(&self, what: &str) {
+        self.0.borrow_mut().push(what.to_string());
+    }
 }

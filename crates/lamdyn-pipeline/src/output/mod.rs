@@ -31,7 +31,9 @@
 //! **Files** ([`write_file`]: a single file named by the user, such as `--json FILE`): a
 //! temporary file renamed over the target. A symlink is written through (its target is
 //! replaced, the link stays); a target that is not a regular file (a device, a FIFO, a folder)
-//! is refused, as is an input of the run.
+//! is refused, as is an input of the run. [`write_own_file`] adds the folders' rule for a
+//! format that marks its files as lamdyn's (a universal file's 151 header): an existing file
+//! is replaced only when it carries that mark.
 
 use crate::error::{Context, Result};
 use crate::{bail, err};
@@ -49,11 +51,35 @@ const MANIFEST_HEADER: &str = "# lamdyn results: files written by lamdyn (one pa
 /// How many foreign names an error lists.
 const LISTED: usize = 5;
 
+/// How the caller spells the options a refusal points to: the CLI's flags, or the keyword
+/// arguments of the Python module.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OptionNames {
+    /// The results folder's option.
+    pub out: &'static str,
+    /// The option that lets lamdyn write beside foreign files.
+    pub force: &'static str,
+}
+
+impl OptionNames {
+    /// `lamdyn`'s flags: `--out`, `--force`.
+    pub const CLI: Self = Self {
+        out: "--out",
+        force: "--force",
+    };
+    /// Python's keyword arguments: `out`, `force=True`.
+    pub const PYTHON: Self = Self {
+        out: "out",
+        force: "force=True",
+    };
+}
+
 /// A results folder, checked and ready to receive files (module docs).
 #[derive(Debug, Clone)]
 pub struct OutputDir {
     dir: PathBuf,
     force: bool,
+    names: OptionNames,
     inputs: Vec<PathBuf>,
     previous: BTreeSet<String>,
     /// Held from `prepare` until the last clone is dropped.
@@ -91,12 +117,12 @@ fn process_alive(pid: u32) -> bool {
 
 impl FolderLock {
     /// Takes `dir`'s lock, creating the folder if needed; a lock left by a process that is no
-    /// longer running is taken over.
+    /// longer running is taken over. `names` spell the refusal's advice.
     ///
     /// # Errors
     /// Another run (its process named) holds the lock, or the folder or its lock cannot be
     /// created.
-    fn acquire(dir: &Path) -> Result<Self> {
+    fn acquire(dir: &Path, names: OptionNames) -> Result<Self> {
         use std::io::Write;
         let created: Vec<PathBuf> = dir
             .ancestors()
@@ -133,8 +159,9 @@ impl FolderLock {
                             format!("another lamdyn (process {pid})")
                         };
                         bail!(
-                            "{who} is writing results into '{}': wait for it to finish, or choose another --out (if no such run is going, remove '{}')",
+                            "{who} is writing results into '{}': wait for it to finish, or choose another {} (if no such run is going, remove '{}')",
                             dir.display(),
+                            names.out,
                             path.display()
                         );
                     }
@@ -163,28 +190,44 @@ impl OutputDir {
     /// holds it (its process named), holds an input (named), or holds files lamdyn did not
     /// write (the first few named) and `force` is off.
     pub fn prepare(dir: &Path, inputs: &[PathBuf], force: bool) -> Result<Self> {
+        Self::prepare_named(dir, inputs, force, OptionNames::CLI)
+    }
+
+    /// [`OutputDir::prepare`] for a caller whose options are spelled `names` in its messages.
+    ///
+    /// # Errors
+    /// As [`OutputDir::prepare`].
+    pub fn prepare_named(
+        dir: &Path,
+        inputs: &[PathBuf],
+        force: bool,
+        names: OptionNames,
+    ) -> Result<Self> {
         let inputs: Vec<PathBuf> = inputs
             .iter()
             .filter_map(|p| p.canonicalize().ok())
             .collect();
         match std::fs::metadata(dir) {
             Ok(m) if !m.is_dir() => bail!(
-                "--out '{}' is not a folder: give a folder for the results",
+                "{} '{}' is not a folder: give a folder for the results",
+                names.out,
                 dir.display()
             ),
             Ok(_) => probe_writable(dir)?,
             // Something is there that cannot be followed: a link to nothing.
             Err(_) if std::fs::symlink_metadata(dir).is_ok() => bail!(
-                "--out '{}' is a symbolic link to nothing: give a folder for the results",
+                "{} '{}' is a symbolic link to nothing: give a folder for the results",
+                names.out,
                 dir.display()
             ),
             Err(_) => probe_writable(&nearest_existing(dir)?)?,
         }
-        let lock = FolderLock::acquire(dir)?;
+        let lock = FolderLock::acquire(dir, names)?;
         swap::recover(dir);
         let out = Self {
             dir: dir.to_path_buf(),
             force,
+            names,
             inputs,
             previous: read_manifest(dir)?,
             _lock: std::sync::Arc::new(lock),
@@ -208,9 +251,11 @@ impl OutputDir {
             let what = if *input == canonical { "is" } else { "holds" };
             if !self.force {
                 bail!(
-                    "the results folder '{}' {what} an input of this run ('{}'): lamdyn writes its results into a folder of their own; choose another --out (or --force to write beside the inputs, which are never written over)",
+                    "the results folder '{}' {what} an input of this run ('{}'): lamdyn writes its results into a folder of their own; choose another {} (or {} to write beside the inputs, which are never written over)",
                     self.dir.display(),
-                    input.display()
+                    input.display(),
+                    self.names.out,
+                    self.names.force
                 );
             }
         }
@@ -228,11 +273,12 @@ impl OutputDir {
                 .map(|f| format!("'{f}'"))
                 .collect();
             bail!(
-                "the results folder '{}' holds {} file(s) lamdyn did not write ({}{}): lamdyn does not delete them; choose a new or empty folder, or pass --force to write beside them",
+                "the results folder '{}' holds {} file(s) lamdyn did not write ({}{}): lamdyn does not delete them; choose a new or empty folder, or pass {} to write beside them",
                 self.dir.display(),
                 foreign.len(),
                 shown.join(", "),
-                if foreign.len() > LISTED { ", ..." } else { "" }
+                if foreign.len() > LISTED { ", ..." } else { "" },
+                self.names.force
             );
         }
         Ok(())
@@ -253,14 +299,17 @@ impl OutputDir {
             let here = parts[..=k].join("/");
             if meta.file_type().is_symlink() {
                 bail!(
-                    "cannot write '{name}' in '{}': '{here}' there is a symbolic link, and lamdyn does not write through links in its results folder; remove the link or choose another --out",
-                    self.dir.display()
+                    "cannot write '{name}' in '{}': '{here}' there is a symbolic link, and lamdyn does not write through links in its results folder; remove the link or choose another {}",
+                    self.dir.display(),
+                    self.names.out
                 );
             }
             if k + 1 == parts.len() && !self.previous.contains(name) {
                 bail!(
-                    "cannot write '{name}' in '{}': a file of that name is there that lamdyn did not write; --force lets lamdyn write beside such files, never over them: move it or choose another --out",
-                    self.dir.display()
+                    "cannot write '{name}' in '{}': a file of that name is there that lamdyn did not write; {} lets lamdyn write beside such files, never over them: move it or choose another {}",
+                    self.dir.display(),
+                    self.names.force,
+                    self.names.out
                 );
             }
         }
@@ -375,6 +424,44 @@ pub fn write_file(path: &Path, bytes: &[u8], inputs: &[PathBuf]) -> Result<()> {
         let _ = std::fs::remove_file(&tmp);
     }
     written.with_context(|| format!("cannot write '{}'", path.display()))
+}
+
+/// How much of an existing file [`write_own_file`] reads to recognise lamdyn's mark, bytes.
+const MARK_BYTES: u64 = 4096;
+
+/// Writes one file as [`write_file`] does, but replaces an existing file only when `is_own`
+/// recognises its first bytes (at most 4 KiB) as lamdyn's: the folders' rule that lamdyn never
+/// replaces a file it did not write, for a single file. `mark` says what lamdyn's files carry,
+/// for the refusal.
+///
+/// # Errors
+/// As [`write_file`]; an existing file without lamdyn's mark (named, with the mark expected).
+pub fn write_own_file(
+    path: &Path,
+    bytes: &[u8],
+    inputs: &[PathBuf],
+    is_own: impl Fn(&[u8]) -> bool,
+    mark: &str,
+) -> Result<()> {
+    use std::io::Read;
+    let canonical_inputs: Vec<PathBuf> = inputs
+        .iter()
+        .filter_map(|p| p.canonicalize().ok())
+        .collect();
+    let target = resolve_target(path, &canonical_inputs)?;
+    if target.exists() {
+        let mut head = Vec::new();
+        std::fs::File::open(&target)
+            .and_then(|f| f.take(MARK_BYTES).read_to_end(&mut head))
+            .with_context(|| format!("cannot read '{}'", path.display()))?;
+        if !is_own(&head) {
+            bail!(
+                "cannot write '{}': it exists and lamdyn did not write it (it does not open with {mark}); lamdyn replaces only files it wrote: remove it or choose another name",
+                path.display()
+            );
+        }
+    }
+    write_file(path, bytes, inputs)
 }
 
 /// Checks a file target before any work: its folder exists and is writable, it is not a

@@ -315,3 +315,25 @@ fn converge_says_how_far_it_got_and_refuses_impossible_tolerances() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--converge"), "{err}");
 }
+
+/// A tolerance the limits cannot reach is said before the expensive meshes: the built-in
+/// paper plate (uniform MITC4) leaves its free edges unresolved on the finest mesh the caps
+/// allow, so it is refused before any solve (it used to run 6 meshes, about a minute here,
+/// and exit 1); the graded MITC9 plate to 1e-9 stops after three meshes with the mode, the
+/// projection and the subdivisions it would need.
+#[test]
+fn converge_says_up_front_when_the_tolerance_is_out_of_reach() {
+    let (code, out, err) = lamdyn(&["modes", "--example", "paper-plate", "--converge", "1e-4"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains("cannot be met within the limits") && err.contains("edge layers"),
+        "{err}"
+    );
+    let base = [&FLAT_MITC9_6X6[..], &["--modes", "8"]].concat();
+    let (code, out, err) = lamdyn(&[&base[..], &["--converge", "1e-9"]].concat());
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("stopped: out of reach: mode"), "{err}");
+    assert!(err.contains("after 3 meshes"), "{err}");
+    assert!(out.contains("est. error"), "{out}");
+}
