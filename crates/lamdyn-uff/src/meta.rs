@@ -211,9 +211,10 @@ mod tests {
         assert!(written_by_lamdyn(
             format!("\n{own}    -1\n    58b ...").as_bytes()
         ));
-        let foreign = own.replace("lamdyn 0", "pyuff 0");
+        let ours = format!("{PROGRAM} ");
+        let foreign = own.replace(&ours, "pyuff ");
         assert!(!written_by_lamdyn(foreign.as_bytes()));
-        let lookalike = own.replace("lamdyn 0", "lamdyn-clone 0");
+        let lookalike = own.replace(&ours, "lamdyn-clone ");
         assert!(!written_by_lamdyn(lookalike.as_bytes()));
         assert!(!written_by_lamdyn(b"    -1\n  2411\n"));
         assert!(!written_by_lamdyn(b""));
