@@ -19,6 +19,12 @@
 //! A low MPC on a lightly damped pole is a complex or weakly excited mode: doubtful, not a
 //! smear. With fewer than three response components the MPC carries no information (one
 //! component is always collinear) and no smear can be told.
+//!
+//! **No resonance**: a pole damped at ζ ≥ 1/√2 ([`NO_RESONANCE_DAMPING`]) gives a receptance
+//! term without a peak (|1/(ω_n² − ω² + 2iζω_nω)| falls monotonically from ω = 0 when
+//! ζ ≥ 1/√2), so no resonance of the data stands behind it: it shapes the curves between the
+//! modes, as a residual does. Such a pole is doubtful whatever its shape says, and its
+//! damping is named.
 
 use crate::lsfd::{FracSums, ModalFit};
 use crate::shapes::CmifPeak;
@@ -33,6 +39,10 @@ pub const SMEAR_MPC: f64 = 0.5;
 
 /// A smear is damped at least this much (ζ): a cluster spans several half-power bandwidths.
 pub const SMEAR_DAMPING: f64 = 0.02;
+
+/// At or above this damping ratio (1/√2) a pole's receptance term has no peak: no resonance
+/// (module docs).
+pub const NO_RESONANCE_DAMPING: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// Fewer stable poles than this in the mode's column make it doubtful (the automatic selection
 /// asks for three orders at least; a mode seen at a handful of orders may be noise).
@@ -81,6 +91,11 @@ pub enum QualityFlag {
         /// MPD, degrees.
         mpd_deg: f64,
     },
+    /// Damped at or above [`NO_RESONANCE_DAMPING`]: no resonance peak behind the pole.
+    NoResonance {
+        /// Damping ratio.
+        damping_ratio: f64,
+    },
     /// Fewer than [`FEW_STABLE`] stable poles in its column.
     FewStable {
         /// Stable poles.
@@ -104,6 +119,11 @@ impl std::fmt::Display for QualityFlag {
             Self::ComplexShape { mpc, mpd_deg } => write!(
                 f,
                 "MPC {mpc:.2}, MPD {mpd_deg:.0} deg: a complex or weakly excited shape"
+            ),
+            Self::NoResonance { damping_ratio } => write!(
+                f,
+                "zeta {:.0} % is at or above 1/sqrt(2) (70.7 %): its FRF term has no resonance peak, so the pole shapes the curves between modes rather than being a mode",
+                100.0 * damping_ratio
             ),
             Self::FewStable { count } => write!(f, "only {count} stable poles in its column"),
             Self::LittleContribution { frac_drop } => write!(
@@ -207,6 +227,11 @@ pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
             }
         });
     }
+    if mode.damping_ratio >= NO_RESONANCE_DAMPING {
+        flags.push(QualityFlag::NoResonance {
+            damping_ratio: mode.damping_ratio,
+        });
+    }
     if mode.stable_count < FEW_STABLE {
         flags.push(QualityFlag::FewStable {
             count: mode.stable_count,
@@ -304,5 +329,51 @@ impl CurveSums {
             a.iter_mut().zip(b).for_each(|(x, y)| x.merge(y));
         }
         self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sound mode's evidence, damped `damping_ratio`.
+    fn evidence(damping_ratio: f64) -> ModeEvidence {
+        ModeEvidence {
+            freq_hz: 100.0,
+            damping_ratio,
+            mpc: 0.99,
+            mpd_deg: 2.0,
+            shape_len: 9,
+            stable_count: 20,
+            frac_drop: 0.1,
+            line_spacing_hz: 0.25,
+        }
+    }
+
+    /// The single degree of freedom's receptance has a peak below ζ = 1/√2 and none at or above
+    /// it (checked on a grid: the bound is the formula's, not a tuning); a pole damped beyond it
+    /// is doubtful whatever its shape, with its damping named; the heavily damped modes of
+    /// laminated glass (ζ 6-22 %) stay sound.
+    #[test]
+    fn a_pole_without_a_resonance_peak_is_doubtful() {
+        let has_peak = |z: f64| {
+            let receptance = |r: f64| 1.0 / ((1.0 - r * r).powi(2) + (2.0 * z * r).powi(2)).sqrt();
+            (1..400).any(|k| receptance(k as f64 * 0.005) > receptance(0.0) * (1.0 + 1e-12))
+        };
+        assert!(has_peak(NO_RESONANCE_DAMPING - 0.01));
+        assert!(!has_peak(NO_RESONANCE_DAMPING));
+        for z in [0.001, 0.06, 0.15, 0.22, 0.5] {
+            let q = assess(&evidence(z), &[]);
+            assert_eq!(q.verdict, Verdict::Sound, "zeta {z}: {q:?}");
+        }
+        let q = assess(&evidence(0.95), &[]);
+        assert_eq!(q.verdict, Verdict::Doubtful, "{q:?}");
+        assert_eq!(
+            q.flags,
+            vec![QualityFlag::NoResonance {
+                damping_ratio: 0.95
+            }]
+        );
+        assert!(q.reasons().contains("zeta 95 %"), "{}", q.reasons());
     }
 }
