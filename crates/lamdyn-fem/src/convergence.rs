@@ -338,10 +338,7 @@ pub const OUT_OF_REACH_MARGIN: f64 = 2.0;
 
 /// p_nominal: the eigenvalue error's order of a conforming degree-k element, 2k.
 fn nominal_order(order: ElementOrder) -> f64 {
-    match order {
-        ElementOrder::Linear => 2.0,
-        ElementOrder::Quadratic => 4.0,
-    }
+    2.0 * order.degree() as f64
 }
 
 /// The finest subdivision the caps allow, known before any solve: the level cap, the dof cap
@@ -365,8 +362,9 @@ impl Reach {
             n_dofs: mesh.n_dofs(),
             limit: format!("level cap ({} subdivisions)", params.max_levels),
         };
+        let topology = Topology::of(mesh);
         for m in 2..=params.max_levels.min(64) {
-            let n_dofs = subdivided_dofs(mesh, m);
+            let n_dofs = topology.subdivided_dofs(m);
             if n_dofs > params.max_dofs {
                 reach.limit = format!(
                     "dof cap: {m}x{m} subdivision would have {n_dofs} dofs, more than {}",
@@ -434,22 +432,43 @@ impl Reach {
 /// distinct corners, (n − 1) new nodes per distinct edge and (n − 1)² per element, with
 /// n = q·m grid steps per element side (q = 1 for MITC4, 2 for MITC9); six dofs per node.
 pub fn subdivided_dofs(mesh: &Mesh, m: usize) -> usize {
-    let mut corners = std::collections::HashSet::new();
-    let mut edges = std::collections::HashSet::new();
-    for e in 0..mesh.n_elements() {
-        let c = mesh.corners(e);
-        for i in 0..4 {
-            corners.insert(c[i]);
-            let (a, b) = (c[i], c[(i + 1) % 4]);
-            edges.insert((a.min(b), a.max(b)));
+    Topology::of(mesh).subdivided_dofs(m)
+}
+
+/// What the dofs of a subdivision depend on: the mesh's distinct corners and edges, its
+/// elements and their degree (counted once for every m).
+struct Topology {
+    corners: usize,
+    edges: usize,
+    elements: usize,
+    degree: usize,
+}
+
+impl Topology {
+    fn of(mesh: &Mesh) -> Self {
+        let mut corners = std::collections::HashSet::new();
+        let mut edges = std::collections::HashSet::new();
+        for e in 0..mesh.n_elements() {
+            let c = mesh.corners(e);
+            for i in 0..4 {
+                corners.insert(c[i]);
+                let (a, b) = (c[i], c[(i + 1) % 4]);
+                edges.insert((a.min(b), a.max(b)));
+            }
+        }
+        Self {
+            corners: corners.len(),
+            edges: edges.len(),
+            elements: mesh.n_elements(),
+            degree: mesh.order().degree(),
         }
     }
-    let q = match mesh.order() {
-        ElementOrder::Linear => 1,
-        ElementOrder::Quadratic => 2,
-    };
-    let inner = q * m - 1;
-    6 * (corners.len() + edges.len() * inner + mesh.n_elements() * inner * inner)
+
+    /// [`subdivided_dofs`] for m.
+    fn subdivided_dofs(&self, m: usize) -> usize {
+        let inner = self.degree * m - 1;
+        6 * (self.corners + self.edges * inner + self.elements * inner * inner)
+    }
 }
 
 /// The free edges' boundary layer against the outermost elements of a subdivided mesh.
@@ -469,10 +488,7 @@ impl EdgeLayer {
         let layer = EdgeLayer {
             edge_m: outermost_width(mesh) / subdivisions as f64,
             layer_m: material.thickness_m / 10f64.sqrt(),
-            per_element: match mesh.order() {
-                ElementOrder::Linear => 1.0,
-                ElementOrder::Quadratic => 2.0,
-            },
+            per_element: mesh.order().degree() as f64,
         };
         (layer.edge_m > layer.per_element * layer.layer_m).then_some(layer)
     }

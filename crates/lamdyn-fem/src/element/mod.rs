@@ -73,6 +73,15 @@ impl ElementOrder {
         }
     }
 
+    /// The polynomial degree k along an edge: 1 (MITC4) or 2 (MITC9), also the node
+    /// intervals per element side.
+    pub fn degree(self) -> usize {
+        match self {
+            Self::Linear => 1,
+            Self::Quadratic => 2,
+        }
+    }
+
     /// The element's name.
     pub fn name(self) -> &'static str {
         match self {

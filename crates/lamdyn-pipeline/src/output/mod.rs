@@ -203,10 +203,7 @@ impl OutputDir {
         force: bool,
         names: OptionNames,
     ) -> Result<Self> {
-        let inputs: Vec<PathBuf> = inputs
-            .iter()
-            .filter_map(|p| p.canonicalize().ok())
-            .collect();
+        let inputs = canonical_paths(inputs);
         match std::fs::metadata(dir) {
             Ok(m) if !m.is_dir() => bail!(
                 "{} '{}' is not a folder: give a folder for the results",
@@ -413,13 +410,14 @@ fn manifest_text(names: &BTreeSet<String>) -> String {
 /// # Errors
 /// The target is not a regular file, is an input, or cannot be written.
 pub fn write_file(path: &Path, bytes: &[u8], inputs: &[PathBuf]) -> Result<()> {
-    let inputs: Vec<PathBuf> = inputs
-        .iter()
-        .filter_map(|p| p.canonicalize().ok())
-        .collect();
-    let target = resolve_target(path, &inputs)?;
-    let tmp = temporary_beside(&target)?;
-    let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, &target));
+    let target = resolve_target(path, &canonical_paths(inputs))?;
+    write_resolved(path, &target, bytes)
+}
+
+/// Writes `bytes` to `target` (the resolved `path`) through a temporary file beside it.
+fn write_resolved(path: &Path, target: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = temporary_beside(target)?;
+    let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, target));
     if written.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -444,11 +442,7 @@ pub fn write_own_file(
     mark: &str,
 ) -> Result<()> {
     use std::io::Read;
-    let canonical_inputs: Vec<PathBuf> = inputs
-        .iter()
-        .filter_map(|p| p.canonicalize().ok())
-        .collect();
-    let target = resolve_target(path, &canonical_inputs)?;
+    let target = resolve_target(path, &canonical_paths(inputs))?;
     if target.exists() {
         let mut head = Vec::new();
         std::fs::File::open(&target)
@@ -461,7 +455,12 @@ pub fn write_own_file(
             );
         }
     }
-    write_file(path, bytes, inputs)
+    write_resolved(path, &target, bytes)
+}
+
+/// The paths that exist, canonical (an input that does not exist cannot be written over).
+fn canonical_paths(paths: &[PathBuf]) -> Vec<PathBuf> {
+    paths.iter().filter_map(|p| p.canonicalize().ok()).collect()
 }
 
 /// Checks a file target before any work: its folder exists and is writable, it is not a
@@ -470,11 +469,7 @@ pub fn write_own_file(
 /// # Errors
 /// As [`write_file`] would fail.
 pub fn check_file_target(path: &Path, inputs: &[PathBuf]) -> Result<()> {
-    let inputs: Vec<PathBuf> = inputs
-        .iter()
-        .filter_map(|p| p.canonicalize().ok())
-        .collect();
-    let target = resolve_target(path, &inputs)?;
+    let target = resolve_target(path, &canonical_paths(inputs))?;
     let folder = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
