@@ -332,8 +332,8 @@ pub fn converge_modes(
 }
 
 /// How far above the tolerance a projected error must lie before refinement stops: the
-/// projection is not a bound (on the graded MITC9 paper plate, 3 × 3 projected 4.0e-5 for
-/// mode 8 at 6 × 6, where 3.8e-5 was then estimated), so only a clear miss stops the run.
+/// projection is an estimate, not a bound (docs/fem.md gives the measurement behind the
+/// factor), so only a clear miss stops the run.
 pub const OUT_OF_REACH_MARGIN: f64 = 2.0;
 
 /// p_nominal: the eigenvalue error's order of a conforming degree-k element, 2k.
