@@ -32,8 +32,8 @@ pub enum BandSource {
         /// The term of η (else of G').
         loss: bool,
     },
-    /// The identified pole's scatter over the stabilization diagram, the response groups and
-    /// the model orders.
+    /// The identified pole's scatter over the stabilization diagram, the response groups, its
+    /// own covariance and the model orders.
     EmaPole,
     /// The identification's delete-one-hit jackknife.
     HitsLeftOut,

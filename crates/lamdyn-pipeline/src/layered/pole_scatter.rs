@@ -31,23 +31,27 @@ pub struct PoleScatter {
 }
 
 /// The scatter of the pole of the EMA mode nearest `f` ([`PoleScatter`]): as `noise`, the
-/// larger, per part, of the scatter of its stable poles in the stabilization diagram
-/// ([`stabilization_scatter`]) and of the spread of the poles the response groups' own
-/// identifications find for it ([`group_spread`]), both estimates of the noise's effect, and
-/// with it in quadrature the spread across model orders ([`order_spread`]), the method's; as
-/// `hits`, the delete-one-hit jackknife ([`hit_jackknife`]).
+/// largest, per part, of three estimates of the noise's effect: the scatter of its stable
+/// poles in the stabilization diagram ([`stabilization_scatter`]), the spread of the poles the
+/// response groups' own identifications find for it ([`group_spread`]) and the pole's own
+/// standard deviations from the identification's covariance (`Mode::sd`,
+/// [`lamdyn_ema::lsfd::pole_deviations`], widened where the estimator kept the diagram's
+/// pole); with it in quadrature the spread across model orders ([`order_spread`]), the
+/// method's; as `hits`, the delete-one-hit jackknife ([`hit_jackknife`]).
 pub fn pole_scatter(ema: &EmaResult, checks: &PoleChecks, f: f64) -> PoleScatter {
     let Some(mode) = nearest_within(ema, f, 0.02) else {
         return PoleScatter::default();
     };
     let m = &ema.modes[mode];
-    let noise = match (
+    let own = m.sd.map(|sd| [sd.freq_hz, sd.damping_ratio]);
+    let noise = [
         stabilization_scatter(ema, mode),
         group_spread(&same_pole(ema, mode, &checks.groups)),
-    ) {
-        (Some(a), Some(b)) => Some([a[0].max(b[0]), a[1].max(b[1])]),
-        (a, b) => a.or(b),
-    };
+        own.filter(|sd| sd.iter().all(|x| x.is_finite())),
+    ]
+    .into_iter()
+    .flatten()
+    .reduce(|a, b| [a[0].max(b[0]), a[1].max(b[1])]);
     let orders = order_spread(
         [m.freq_hz, m.damping_ratio],
         &same_pole(ema, mode, &checks.orders),

@@ -6,7 +6,9 @@ use super::law::{
     Candidate, SHARED_REMAINDER, Weights, candidates, core_laws, fit_law_with, lowest_akaike,
     share_the_remainder, supports_found, to_real_frequency,
 };
-use super::pole_scatter::{PoleScatter, group_spread, hit_jackknife, order_spread};
+use super::pole_scatter::{
+    PoleChecks, PoleScatter, group_spread, hit_jackknife, order_spread, pole_scatter,
+};
 use super::tuning::{LawTuning, LayeredTuning, PairFitTuning};
 use super::*;
 use crate::band::BandSource;
@@ -305,11 +307,6 @@ fn supported_job() -> Job {
     toml::from_str(text).unwrap()
 }
 
-/// The ladder runs again at the supports the law found only when it moved them beyond
-/// both [`SUPPORTS_RERUN`] and their 95 % interval: points whose supports are 15 % stiffer
-/// than the job says (effects of −3 to −1 on ln G', noise 0.1 %) give the job with every
-/// spring times e^0.15 (to the fit's accuracy) and the dashpots as they were; at 1 % they
-/// give none, and a free part never.
 /// The groups' spread is the standard error of their mean: four estimates 1, 2, 3, 4 have
 /// a sample sd of √(5/3) and a standard error of √(5/3)/2; one group alone gives none.
 #[test]
@@ -322,6 +319,87 @@ fn group_spread_is_the_standard_error_of_the_groups_mean() {
         "{s:?}"
     );
     assert!(group_spread(&found[..1]).is_none());
+}
+
+/// An EMA mode at the pole `pole` (rad/s) with the standard deviations `sd` and nothing
+/// else identified.
+fn ema_mode(pole: Complex64, sd: Option<lamdyn_ema::lsfd::PoleSd>) -> lamdyn_ema::identify::Mode {
+    lamdyn_ema::identify::Mode {
+        freq_hz: pole.norm() / (2.0 * PI),
+        damping_ratio: -pole.re / pole.norm(),
+        loss_factor: -2.0 * pole.re / pole.norm(),
+        pole,
+        stable_count: 10,
+        shape: Vec::new(),
+        participation: Vec::new(),
+        real_shape: Vec::new(),
+        mpc: 1.0,
+        mpd_deg: 0.0,
+        sd,
+        pick: Default::default(),
+        diagram_pole: pole,
+        refined: false,
+        quality: Default::default(),
+    }
+}
+
+/// An identification of `modes` alone (no diagram, no shapes).
+fn ema_of(modes: Vec<lamdyn_ema::identify::Mode>) -> EmaResult {
+    EmaResult {
+        band_hz: [1.0, 500.0],
+        diagram: Vec::new(),
+        modes,
+        rejected: Vec::new(),
+        set_aside: Vec::new(),
+        auto_mac: Vec::new(),
+        correlation: Vec::new(),
+        curve_names: Vec::new(),
+        cmif: Vec::new(),
+        cmif_peaks: Vec::new(),
+        missing_hz: Vec::new(),
+        fit: None,
+        warnings: Vec::new(),
+        timings: Default::default(),
+    }
+}
+
+/// The pole's noise is the largest, per part, of its estimates: a pole whose own covariance
+/// gives sd(f) 0.05 Hz and sd(ζ) 0.002 keeps them where the response groups' spread is
+/// smaller (0.01 Hz, 1e-4), takes the groups' where it is larger (0.2 Hz in f), and has its
+/// own alone without groups; a non-finite sd is no estimate.
+#[test]
+fn the_pole_s_own_sd_joins_its_scatter() {
+    let at = |f: f64, zeta: f64| {
+        let w = 2.0 * PI * f;
+        Complex64::new(-zeta * w, w * (1.0 - zeta * zeta).sqrt())
+    };
+    let sd = |freq_hz: f64, damping_ratio: f64| lamdyn_ema::lsfd::PoleSd {
+        freq_hz,
+        damping_ratio,
+    };
+    let whole = ema_of(vec![ema_mode(at(100.0, 0.05), Some(sd(0.05, 0.002)))]);
+    // Two groups a apart have a standard error of their mean of a/2.
+    let groups = |df: f64, dz: f64| PoleChecks {
+        groups: [-0.5, 0.5]
+            .iter()
+            .map(|s| ema_of(vec![ema_mode(at(100.0 + s * df, 0.05 + s * dz), None)]))
+            .collect(),
+        ..Default::default()
+    };
+    let noise = |checks: &PoleChecks| pole_scatter(&whole, checks, 100.0).noise.unwrap();
+    let close = |a: [f64; 2], b: [f64; 2]| (0..2).all(|k| (a[k] / b[k] - 1.0).abs() < 1e-9);
+    let n = noise(&groups(0.02, 2e-4));
+    assert!(close(n, [0.05, 0.002]), "{n:?}");
+    let n = noise(&groups(0.4, 2e-4));
+    assert!(close(n, [0.2, 0.002]), "{n:?}");
+    let n = noise(&PoleChecks::default());
+    assert!(close(n, [0.05, 0.002]), "{n:?}");
+    let nan = ema_of(vec![ema_mode(at(100.0, 0.05), Some(sd(f64::NAN, 0.002)))]);
+    assert!(
+        pole_scatter(&nan, &PoleChecks::default(), 100.0)
+            .noise
+            .is_none()
+    );
 }
 
 /// The jackknife's sd is √((n − 1)/n Σ (θ_i − θ̄)²) over the sets without each hit (Efron
@@ -429,6 +507,11 @@ fn auto_keeps_the_law_the_modes_favour() {
     assert!(core_laws(crate::job::CoreLawChoice::None).is_empty());
 }
 
+/// The ladder runs again at the supports the law found only when it moved them beyond
+/// both [`LawTuning::supports_rerun`] and their 95 % interval: points whose supports are 15 % stiffer
+/// than the job says (effects of −3 to −1 on ln G', noise 0.1 %) give the job with every
+/// spring times e^0.15 (to the fit's accuracy) and the dashpots as they were; at 1 % they
+/// give none, and a free part never.
 #[test]
 fn the_ladder_reruns_at_supports_found_far_off() {
     let priors = vec![
@@ -713,39 +796,17 @@ fn a_pair_fit_to_the_frfs_recovers_the_core_its_poles_miss() {
         off.iter().all(|&o| o > 3e-3),
         "the given poles miss: {off:?}"
     );
-    let ema_mode = |t: Complex64| lamdyn_ema::identify::Mode {
-        freq_hz: hz(t),
-        damping_ratio: 0.5 * t.im / t.re,
-        loss_factor: t.im / t.re,
-        pole: pole(t),
-        stable_count: 10,
-        shape: Vec::new(),
-        participation: Vec::new(),
-        real_shape: Vec::new(),
-        mpc: 1.0,
-        mpd_deg: 0.0,
-        sd: None,
-        pick: Default::default(),
-        diagram_pole: Complex64::new(0.0, 0.0),
-        refined: false,
-        quality: Default::default(),
-    };
-    let ema = EmaResult {
-        band_hz: [1.0, 500.0],
-        diagram: Vec::new(),
-        modes: given.iter().map(|&t| ema_mode(t)).collect(),
-        rejected: Vec::new(),
-        set_aside: Vec::new(),
-        auto_mac: Vec::new(),
-        correlation: Vec::new(),
-        curve_names: Vec::new(),
-        cmif: Vec::new(),
-        cmif_peaks: Vec::new(),
-        missing_hz: Vec::new(),
-        fit: None,
-        warnings: Vec::new(),
-        timings: Default::default(),
-    };
+    let ema = ema_of(
+        given
+            .iter()
+            .map(|&t| lamdyn_ema::identify::Mode {
+                freq_hz: hz(t),
+                damping_ratio: 0.5 * t.im / t.re,
+                loss_factor: t.im / t.re,
+                ..ema_mode(pole(t), None)
+            })
+            .collect(),
+    );
     let fit = super::pair_fit::fit_pair(
         &model,
         &PairFitTuning::default(),
