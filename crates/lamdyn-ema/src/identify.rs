@@ -11,8 +11,8 @@ use crate::quality::{Measured, ModeEvidence, ModeQuality, assess, contributions}
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode, to_unit};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
-    DiagramPole, Pick, SelectedPole, StabilityCriteria, diagram, rescue_cmif_peaks, select_auto,
-    select_near,
+    CmifCurvePeaks, DiagramPole, Pick, SelectedPole, StabilityCriteria, diagram, explains,
+    rescue_cmif_peaks, select_auto, select_near,
 };
 use lamdyn_frf::FrfSet;
 use num_complex::Complex64;
@@ -397,19 +397,86 @@ const CMIF_REACH: f64 = 0.03;
 /// one mode split in two ([`merge_split_modes`]).
 const SPLIT_MAC: f64 = 0.9;
 
-/// The peaks of the first CMIF over the band's lines `in_band` (prominence ratio
-/// `prominence`).
-fn first_cmif_peaks(
+/// The peaks of the CMIF's `curve`-th singular value (1: the first) over the band's lines
+/// `in_band` (prominence ratio `prominence`); none where the FRF matrix has fewer singular
+/// values (one reference has one).
+fn cmif_curve_peaks(
     freqs: &[f64],
     cmif: &[Vec<f64>],
     in_band: &[usize],
     prominence: f64,
+    curve: usize,
 ) -> Vec<CmifPeak> {
-    let first: Vec<f64> = cmif.iter().map(|v| v[0]).collect();
+    let Some(values) = cmif
+        .iter()
+        .map(|v| v.get(curve - 1).copied())
+        .collect::<Option<Vec<f64>>>()
+    else {
+        return vec![];
+    };
     match (in_band.first(), in_band.last()) {
-        (Some(&a), Some(&b)) => cmif_peaks(&freqs[a..=b], &first[a..=b], prominence),
+        (Some(&a), Some(&b)) => cmif_peaks(&freqs[a..=b], &values[a..=b], prominence),
         _ => vec![],
     }
+}
+
+/// The automatic selection ([`select_auto`]) with the modes behind the CMIF peaks it leaves
+/// unexplained ([`rescue_cmif_peaks`]: the first curve's `first` and the second's `second`),
+/// one warning per pole so added.
+fn select_with_cmif(
+    diag: &[DiagramPole],
+    first: &[CmifPeak],
+    second: &[CmifPeak],
+    c: &StabilityCriteria,
+    warnings: &mut Vec<String>,
+) -> Vec<SelectedPole> {
+    let mut selected = select_auto(diag, c);
+    for (curve, peaks) in [(1, first), (2, second)] {
+        let freqs_hz: Vec<f64> = peaks.iter().map(|p| p.freq_hz).collect();
+        let peaks = CmifCurvePeaks {
+            curve,
+            freqs_hz: &freqs_hz,
+        };
+        for p in rescue_cmif_peaks(diag, &mut selected, peaks, c, CMIF_REACH) {
+            let which = if curve == 1 {
+                "the CMIF"
+            } else {
+                "the second CMIF curve (a close pair)"
+            };
+            warnings.push(format!(
+                "a peak of {which} had no stable pole: the pole at {:.4} Hz (zeta {:.3} %) is taken from a column of {} poles stable in frequency but not in damping or mode vector",
+                p.freq_hz,
+                100.0 * p.damping,
+                p.count
+            ));
+        }
+    }
+    selected
+}
+
+/// One warning per peak of the CMIF's second curve (`second`) that a single mode of `modes`
+/// explains ([`explains`]): two modes respond together there, and one was found.
+fn lone_modes_at_second_peaks(
+    modes: &[Mode],
+    second: &[CmifPeak],
+    c: &StabilityCriteria,
+) -> Vec<String> {
+    second
+        .iter()
+        .filter(|p| {
+            let near = modes
+                .iter()
+                .filter(|m| explains(m.freq_hz, m.damping_ratio, p.freq_hz, c))
+                .count();
+            near == 1
+        })
+        .map(|p| {
+            format!(
+                "the CMIF's second curve peaks at {:.4} Hz, where one mode was found: two modes respond together there (a close pair); pick them with --near-hz, or raise the model order",
+                p.freq_hz
+            )
+        })
+        .collect()
 }
 
 /// The modal model of the selected poles by `s.estimator` (the diagram's poles when
@@ -670,7 +737,8 @@ pub fn identify_with(
             sigma
         })
         .collect();
-    let band_peaks = first_cmif_peaks(freqs, &cmif, &in_band, s.cmif_prominence);
+    let band_peaks = cmif_curve_peaks(freqs, &cmif, &in_band, s.cmif_prominence, 1);
+    let second_peaks = cmif_curve_peaks(freqs, &cmif, &in_band, s.cmif_prominence, 2);
     let (mut selected, missing_hz): (Vec<SelectedPole>, Vec<f64>) = match &s.near_hz {
         Some(targets) => {
             let picks = select_near(&diag, targets, s.window_hz);
@@ -682,19 +750,16 @@ pub fn identify_with(
                 .collect();
             (picks.into_iter().flatten().collect(), missing)
         }
-        None => {
-            let mut selected = select_auto(&diag, &s.criteria);
-            let peaks: Vec<f64> = band_peaks.iter().map(|p| p.freq_hz).collect();
-            for p in rescue_cmif_peaks(&diag, &mut selected, &peaks, &s.criteria, CMIF_REACH) {
-                warnings.push(format!(
-                    "a peak of the CMIF had no stable pole: the pole at {:.4} Hz (zeta {:.3} %) is taken from a column of {} poles stable in frequency but not in damping or mode vector",
-                    p.freq_hz,
-                    100.0 * p.damping,
-                    p.count
-                ));
-            }
-            (selected, vec![])
-        }
+        None => (
+            select_with_cmif(
+                &diag,
+                &band_peaks,
+                &second_peaks,
+                &s.criteria,
+                &mut warnings,
+            ),
+            vec![],
+        ),
     };
     if selected.is_empty() {
         return Err(invalid(
@@ -834,6 +899,13 @@ pub fn identify_with(
             .iter()
             .any(|f| (m.freq_hz - f).abs() <= s.window_hz)
     });
+    if s.near_hz.is_none() {
+        warnings.extend(lone_modes_at_second_peaks(
+            &modes,
+            &second_peaks,
+            &s.criteria,
+        ));
+    }
     let auto_mac = auto_mac(&modes);
     timings.modes += lap(&mut clock);
     Ok(EmaResult {
@@ -852,4 +924,53 @@ pub fn identify_with(
         warnings,
         timings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mode_at(freq_hz: f64, damping_ratio: f64) -> Mode {
+        let w = 2.0 * std::f64::consts::PI * freq_hz;
+        let pole = Complex64::new(-damping_ratio * w, w);
+        Mode {
+            freq_hz,
+            damping_ratio,
+            loss_factor: 2.0 * damping_ratio,
+            pole,
+            stable_count: 10,
+            shape: vec![],
+            participation: vec![],
+            real_shape: vec![],
+            mpc: 1.0,
+            mpd_deg: 0.0,
+            sd: None,
+            pick: Pick::Auto,
+            diagram_pole: pole,
+            refined: false,
+            quality: ModeQuality::default(),
+        }
+    }
+
+    /// A peak of the second CMIF curve with one mode near it is said (a pair's second mode
+    /// was not found); with two modes near it, or none (a crossing of two modes' curves far
+    /// from both), nothing is said.
+    #[test]
+    fn a_lone_mode_at_a_second_curve_peak_is_said() {
+        let c = StabilityCriteria::default();
+        let peak = |freq_hz| CmifPeak {
+            freq_hz,
+            value: 1.0,
+        };
+        let lone = [mode_at(40.0, 0.01), mode_at(60.0, 0.01)];
+        let said = lone_modes_at_second_peaks(&lone, &[peak(40.2), peak(50.0)], &c);
+        assert_eq!(said.len(), 1, "{said:?}");
+        assert!(said[0].contains("40.2000 Hz"), "{said:?}");
+        let pair = [
+            mode_at(40.0, 0.01),
+            mode_at(40.2, 0.01),
+            mode_at(60.0, 0.01),
+        ];
+        assert!(lone_modes_at_second_peaks(&pair, &[peak(40.2), peak(50.0)], &c).is_empty());
+    }
 }

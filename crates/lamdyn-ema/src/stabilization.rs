@@ -17,7 +17,8 @@
 //! represented by its pole at the median frequency (spurious poles of over-modelled noise
 //! wander and do not build long columns).
 //!
-//! **Peaks of the CMIF.** A peak of the first CMIF that no selected pole explains is a mode
+//! **Peaks of the CMIF.** A peak of the first CMIF that no selected pole explains, or of the
+//! second that fewer than two explain (a close pair that several references see), is a mode
 //! the criteria missed where the diagram holds it, stable in frequency but not in damping or
 //! vector (measured data): the columns of frequency-stable poles near it that pass the same
 //! order rule are added ([`rescue_cmif_peaks`]).
@@ -148,7 +149,7 @@ pub enum Pick {
     /// (each criterion the diagram has data for).
     #[default]
     Auto,
-    /// A peak of the first CMIF that no stable column explains, taken from a column of poles
+    /// A CMIF peak that the stable columns leave unexplained, taken from a column of poles
     /// stable in frequency ([`rescue_cmif_peaks`]).
     CmifPeak,
     /// Near a frequency given by the user: the poles stable in frequency within the window.
@@ -293,41 +294,66 @@ fn physical_columns(
         .collect()
 }
 
-/// Whether a selected pole explains a CMIF peak at `peak_hz`: within twice the frequency
-/// tolerance or three half-power half-widths (ζ f) of it.
-fn explains(p: &SelectedPole, peak_hz: f64, c: &StabilityCriteria) -> bool {
-    (p.freq_hz - peak_hz).abs() <= (2.0 * c.freq_tol).max(3.0 * p.damping) * p.freq_hz
+/// Whether the column `col` found at a peak of CMIF curve `curve` is the selected pole `p`:
+/// for the first curve, within the frequency tolerance of it; for a later curve, which stands
+/// for modes closer than that tolerance, `p` inside the column's frequency range.
+fn same_mode(p: &SelectedPole, col: &SelectedPole, curve: usize, c: &StabilityCriteria) -> bool {
+    if curve <= 1 {
+        (p.freq_hz - col.freq_hz).abs() <= c.freq_tol * col.freq_hz
+    } else {
+        (col.freq_range_hz[0]..=col.freq_range_hz[1]).contains(&p.freq_hz)
+    }
 }
 
-/// Adds to `selected` the modes behind the CMIF peaks it leaves unexplained (no selected pole
-/// within twice the frequency tolerance or three half-power half-widths ζf of the peak):
-/// within `reach` (relative, each side of a peak) the columns of poles stable in frequency
-/// alone that pass the selection's order rule (module docs), each kept unless a
-/// selected pole already lies within the frequency tolerance of it. Where measured data move
-/// the damping from order to order by more than its tolerance, a mode has a long column
-/// stable in frequency and too few fully stable poles to be selected: on the measured dam
-/// (26 channels, one reference) the strongest CMIF peak, a pair at 4.08 / 4.17 Hz, had 3 and 5
-/// fully stable poles over 20 orders and was dropped. Returns the poles added, by increasing
-/// frequency (`selected` sorted likewise).
+/// The peaks of one singular value curve of the CMIF.
+#[derive(Debug, Clone, Copy)]
+pub struct CmifCurvePeaks<'a> {
+    /// Which singular value: 1 for the first (largest), 2 for the second.
+    pub curve: usize,
+    /// The peaks' frequencies, Hz.
+    pub freqs_hz: &'a [f64],
+}
+
+/// Whether a pole at `freq_hz` with damping ratio `damping` explains a CMIF peak at
+/// `peak_hz`: within twice the frequency tolerance or three half-power half-widths (ζ f) of it.
+pub fn explains(freq_hz: f64, damping: f64, peak_hz: f64, c: &StabilityCriteria) -> bool {
+    (freq_hz - peak_hz).abs() <= (2.0 * c.freq_tol).max(3.0 * damping) * freq_hz
+}
+
+/// Adds to `selected` the modes behind the peaks of the CMIF's `curve`-th singular value
+/// (1: the first) that it leaves unexplained. The k-th singular value of the FRF matrix peaks
+/// where k modes respond together, so a peak of curve k is unexplained while fewer than k
+/// selected poles explain it (within twice the frequency tolerance or three half-power
+/// half-widths ζf of the peak): a close pair that several references see shows as a peak of
+/// the second curve beside the first's. For each such peak, within `reach` (relative, each
+/// side) the columns of poles stable in frequency alone that pass the selection's order rule
+/// (module docs) are added, each unless a selected pole already lies within the frequency
+/// tolerance of it. Where measured data move the damping from order to order by more than its
+/// tolerance, a mode has a long column stable in frequency and too few fully stable poles to
+/// be selected: on the measured dam (26 channels, one reference) the strongest CMIF peak, a
+/// pair at 4.08 / 4.17 Hz, had 3 and 5 fully stable poles over 20 orders and was dropped.
+/// Returns the poles added, by increasing frequency (`selected` sorted likewise).
 pub fn rescue_cmif_peaks(
     diagram: &[DiagramPole],
     selected: &mut Vec<SelectedPole>,
-    peaks_hz: &[f64],
+    peaks: CmifCurvePeaks<'_>,
     c: &StabilityCriteria,
     reach: f64,
 ) -> Vec<SelectedPole> {
     let mut added = Vec::new();
-    for &peak in peaks_hz {
-        if selected.iter().any(|p| explains(p, peak, c)) {
+    for &peak in peaks.freqs_hz {
+        let explaining = selected
+            .iter()
+            .filter(|p| explains(p.freq_hz, p.damping, peak, c))
+            .count();
+        if explaining >= peaks.curve {
             continue;
         }
         let near = |p: &DiagramPole| {
             p.stability != Stability::New && (p.freq_hz - peak).abs() <= reach * peak
         };
         for col in physical_columns(diagram, c, near, Pick::CmifPeak) {
-            let taken = selected
-                .iter()
-                .any(|p| (p.freq_hz - col.freq_hz).abs() <= c.freq_tol * col.freq_hz);
+            let taken = selected.iter().any(|p| same_mode(p, &col, peaks.curve, c));
             if !taken {
                 selected.push(col);
                 added.push(col);
@@ -390,6 +416,56 @@ mod tests {
             damping_range: z,
             pick: Pick::Auto,
         }
+    }
+
+    /// A diagram at orders 10, 12, …, 40 holding a column at each (f Hz, ζ, fully stable)
+    /// of `columns`, its frequency moved by ±1e-4 from order to order.
+    fn diagram_of(columns: &[(f64, f64, bool)]) -> Vec<DiagramPole> {
+        (10..=40)
+            .step_by(2)
+            .flat_map(|order| {
+                columns.iter().map(move |&(f, z, stable)| {
+                    let f = f * (1.0 + 1e-4 * if order % 4 == 0 { 1.0 } else { -1.0 });
+                    DiagramPole {
+                        order,
+                        pole: Complex64::new(0.0, 2.0 * std::f64::consts::PI * f),
+                        freq_hz: f,
+                        damping: z,
+                        stability: if order == 10 {
+                            Stability::New
+                        } else if stable {
+                            Stability::FrequencyDamping
+                        } else {
+                            Stability::Frequency
+                        },
+                        vector_mac: None,
+                    }
+                })
+            })
+            .collect()
+    }
+
+    /// A pair 0.5 % apart (ζ 2 %) whose upper pole is stable in frequency only: the automatic
+    /// selection takes the lower; the first curve's peak at 40.05 Hz is explained by it, so
+    /// only the second curve's peak at 40.25 Hz brings back the upper pole. A second-curve
+    /// peak between modes far apart (a crossing of their curves) adds nothing.
+    #[test]
+    fn a_peak_of_the_second_cmif_curve_brings_back_a_close_pair() {
+        let c = StabilityCriteria::default();
+        let diag = diagram_of(&[(40.0, 0.02, true), (40.2, 0.024, false), (60.0, 0.02, true)]);
+        let first = [40.05, 60.0];
+        let mut selected = select_auto(&diag, &c);
+        assert_eq!(selected.len(), 2);
+        let peaks = |curve, freqs_hz| CmifCurvePeaks { curve, freqs_hz };
+        assert!(rescue_cmif_peaks(&diag, &mut selected, peaks(1, &first), &c, 0.03).is_empty());
+        assert!(rescue_cmif_peaks(&diag, &mut selected, peaks(2, &[50.0]), &c, 0.03).is_empty());
+        let added = rescue_cmif_peaks(&diag, &mut selected, peaks(2, &[40.25]), &c, 0.03);
+        assert_eq!(added.len(), 1, "{added:?}");
+        assert!((added[0].freq_hz - 40.2).abs() < 0.01 && added[0].pick == Pick::CmifPeak);
+        let found: Vec<f64> = selected.iter().map(|p| p.freq_hz).collect();
+        assert_eq!(found.len(), 3, "{found:?}");
+        // Both explain the peak now: nothing more is added.
+        assert!(rescue_cmif_peaks(&diag, &mut selected, peaks(2, &[40.25]), &c, 0.03).is_empty());
     }
 
     #[test]
