@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, make_dataclass
 from pathlib import Path
 from typing import Any, Optional, Sequence, Union
 
@@ -475,35 +475,33 @@ class _Fields:
         return key in self.keys()
 
 
-@dataclass
-class ModalTable(_Fields):
-    """The core found at each modal frequency of a run: one float array per column, all of
-    the same length, NaN where a route has no value.
+def _modal_table_class() -> type:
+    """``ModalTable`` made from the core table's one definition (``lamdyn_pipeline``'s
+    ``report::core_table``, the columns of ``core_modal.csv`` and of ``lamdyn run``'s summary)."""
+    columns = json.loads(_native.core_columns())
+    lines = [
+        "The core found at each modal frequency of a run: one attribute per column of",
+        "``core_modal.csv``, all of the same length. Numbers are float arrays in SI units (NaN",
+        "where a route has no value, or where the run has no truth or no FRF fit); texts are",
+        "lists of str (\"\" where none).",
+        "",
+        "Attributes:",
+    ]
+    for c in columns:
+        unit = f", {c['unit']}" if c["unit"] else ""
+        lines.append(f"    {c['key']}: {c['about']}{unit}.")
+    cls = make_dataclass(
+        "ModalTable",
+        [(c["key"], list if c["text"] else np.ndarray) for c in columns],
+        bases=(_Fields,),
+    )
+    cls.__doc__ = "\n".join(lines)
+    cls.__module__ = __name__
+    cls._text_columns = frozenset(c["key"] for c in columns if c["text"])
+    return cls
 
-    Attributes:
-        f_hz: the modal frequencies, Hz.
-        e_storage_pa: the laminate's effective E' fitted by the paper's route, Pa.
-        e_loss_factor: its loss factor.
-        phi_abs: |phi| of the paper's inverse (eq. 37; above 0.1 beyond its ~1 % validity).
-        g_paper_storage_pa, g_paper_loss_factor: the core's G' (Pa) and eta by the paper's
-            inverse (eqs. 33-45).
-        g_exact_storage_pa, g_exact_loss_factor: by the exact sandwich inverse (Mead-Markus).
-        g_layered_storage_pa, g_layered_loss_factor: by the layered inverse, the answer.
-        g_true_storage_pa, g_true_loss_factor: the truth of a virtual test (NaN without one).
-    """
 
-    f_hz: np.ndarray
-    e_storage_pa: np.ndarray
-    e_loss_factor: np.ndarray
-    phi_abs: np.ndarray
-    g_paper_storage_pa: np.ndarray
-    g_paper_loss_factor: np.ndarray
-    g_exact_storage_pa: np.ndarray
-    g_exact_loss_factor: np.ndarray
-    g_layered_storage_pa: np.ndarray
-    g_layered_loss_factor: np.ndarray
-    g_true_storage_pa: np.ndarray
-    g_true_loss_factor: np.ndarray
+ModalTable = _modal_table_class()
 
 
 @dataclass
@@ -538,10 +536,14 @@ class RunResult(_Fields):
 
 def _run_out(text: str) -> RunResult:
     r = json.loads(text)
-    rows = r["modal"]
+    columns = r["modal"]
     modal = ModalTable(
         **{
-            f.name: np.array([np.nan if row[f.name] is None else row[f.name] for row in rows], dtype=float)
+            f.name: (
+                ["" if v is None else v for v in columns[f.name]]
+                if f.name in ModalTable._text_columns
+                else np.array([np.nan if v is None else v for v in columns[f.name]], dtype=float)
+            )
             for f in fields(ModalTable)
         }
     )

@@ -144,3 +144,18 @@ def test_run_equals_cli(cli, temperature_jobs, tmp_path):
                 "g_layered_loss_factor"):
         assert rel(r["modal"][col], [row[col] for row in rows]) < TOL, col
     assert r["temperature_k"] == 293.15
+    # One definition of the core table's columns: the CLI's summary (its JSON keys sorted) and
+    # core_modal.csv (in ModalTable's order) are ModalTable's columns, with its values.
+    keys = r.modal.keys()
+    assert set(rows[0].keys()) <= set(keys), set(rows[0].keys()) - set(keys)
+    header, *lines = (tmp_path / "py" / "core_modal.csv").read_text().splitlines()
+    header = header.split(",")
+    order = {k: i for i, k in enumerate(keys)}
+    assert [order[k] for k in header] == sorted(order[k] for k in header), header
+    for k, col in enumerate(header):
+        got = [line.split(",")[k] for line in lines]
+        if col in lamdyn.ModalTable._text_columns:
+            assert got == list(r.modal[col]), col
+        else:
+            values = [float(v) if v else np.nan for v in got]
+            np.testing.assert_array_equal(values, r.modal[col], err_msg=col)

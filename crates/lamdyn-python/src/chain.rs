@@ -4,33 +4,74 @@ use crate::{py_err, py_msg, to_json};
 use lamdyn_pipeline::demo::{DemoSampling, demo_roof, demo_roof_at, write_virtual_test};
 use lamdyn_pipeline::job::{Job, MAX_SAMPLES, base_of};
 use lamdyn_pipeline::output::{OptionNames, OutputDir};
+use lamdyn_pipeline::report::core_table::{CoreValue, Groups, core_table_with};
 use lamdyn_pipeline::{ChainResult, RunOptions, Silent, report, run_job};
-use num_complex::Complex64;
 use pyo3::prelude::*;
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(write_demo_job, m)?)?;
+    m.add_function(wrap_pyfunction!(core_columns, m)?)?;
     Ok(())
 }
 
-/// One modal frequency of the run's core table (what `core_modal.csv` holds, in SI).
+/// One cell of the core table as JSON: a number (null where none) or a text.
 #[derive(Serialize)]
-struct ModalRow {
-    f_hz: f64,
-    e_storage_pa: Option<f64>,
-    e_loss_factor: Option<f64>,
-    phi_abs: Option<f64>,
-    g_paper_storage_pa: Option<f64>,
-    g_paper_loss_factor: Option<f64>,
-    g_exact_storage_pa: Option<f64>,
-    g_exact_loss_factor: Option<f64>,
-    g_layered_storage_pa: Option<f64>,
-    g_layered_loss_factor: Option<f64>,
-    g_true_storage_pa: Option<f64>,
-    g_true_loss_factor: Option<f64>,
+#[serde(untagged)]
+enum CellOut {
+    Number(Option<f64>),
+    Text(Option<String>),
+}
+
+/// The core table of `r` with every group's columns ([`Groups::ALL`]), as JSON key → one
+/// value per modal frequency: the columns Python's `ModalTable` has.
+fn modal_columns(r: &ChainResult) -> BTreeMap<String, Vec<CellOut>> {
+    let table = core_table_with(r, Groups::ALL);
+    table
+        .columns
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let values = table
+                .rows
+                .iter()
+                .map(|row| match &row[k] {
+                    CoreValue::Number(v) => CellOut::Number(*v),
+                    CoreValue::Text(t) => CellOut::Text(t.clone()),
+                })
+                .collect();
+            (c.key.clone(), values)
+        })
+        .collect()
+}
+
+/// One column of Python's `ModalTable` ([`core_columns`]).
+#[derive(Serialize)]
+struct ColumnOut<'a> {
+    key: &'a str,
+    unit: &'a str,
+    about: &'a str,
+    text: bool,
+}
+
+/// The columns of the run's core table with every group, as JSON: what Python's `ModalTable`
+/// is made of (key, SI unit, meaning, and whether it holds text).
+#[pyfunction]
+fn core_columns() -> PyResult<String> {
+    let columns = lamdyn_pipeline::report::core_table::core_columns(Groups::ALL);
+    let out: Vec<ColumnOut<'_>> = columns
+        .iter()
+        .map(|c| ColumnOut {
+            key: &c.key,
+            unit: c.unit,
+            about: &c.about,
+            text: c.shown.is_none(),
+        })
+        .collect();
+    to_json(&out)
 }
 
 #[derive(Serialize)]
@@ -38,7 +79,7 @@ struct RunOut<'a> {
     title: &'a str,
     job: String,
     temperature_k: Option<f64>,
-    modal: Vec<ModalRow>,
+    modal: BTreeMap<String, Vec<CellOut>>,
     ema_modes: Vec<(f64, f64)>,
     modes_without_core: Vec<f64>,
     warnings: &'a [String],
@@ -46,35 +87,8 @@ struct RunOut<'a> {
     report: Option<String>,
 }
 
-fn split(g: Option<Complex64>) -> (Option<f64>, Option<f64>) {
-    (g.map(|g| g.re), g.map(|g| g.im / g.re))
-}
-
 fn run_out(r: &ChainResult, report_dir: Option<String>) -> PyResult<String> {
-    let modal = r
-        .modal
-        .iter()
-        .map(|p| {
-            let (gp, ep) = split(p.paper_g());
-            let (ge, ee) = split(p.exact_g());
-            let (gl, el) = split(p.layered_g());
-            let (gt, et) = split(r.truth.as_ref().and_then(|t| t.at(p.freq_hz)));
-            ModalRow {
-                f_hz: p.freq_hz,
-                e_storage_pa: p.e_storage_pa(),
-                e_loss_factor: p.e_loss_factor(),
-                phi_abs: p.phi(),
-                g_paper_storage_pa: gp,
-                g_paper_loss_factor: ep,
-                g_exact_storage_pa: ge,
-                g_exact_loss_factor: ee,
-                g_layered_storage_pa: gl,
-                g_layered_loss_factor: el,
-                g_true_storage_pa: gt,
-                g_true_loss_factor: et,
-            }
-        })
-        .collect();
+    let modal = modal_columns(r);
     to_json(&RunOut {
         title: &r.job.title,
         job: r.job_path.display().to_string(),

@@ -5,6 +5,7 @@
 //! inputs give the same bytes.
 
 use serde_json::{Map, Value, json};
+use std::borrow::Cow;
 use std::io::Write;
 
 /// How a number is printed in the text table.
@@ -20,9 +21,9 @@ pub enum Fmt {
 #[derive(Debug, Clone)]
 pub struct Column {
     /// CSV/JSON key, with the SI unit in its name.
-    pub key: &'static str,
+    pub key: Cow<'static, str>,
     /// Header in the text table.
-    pub header: &'static str,
+    pub header: Cow<'static, str>,
     /// Unit in the text table ("" for none).
     pub unit: &'static str,
     /// SI value / `scale` is shown in the text table.
@@ -33,10 +34,15 @@ pub struct Column {
 
 impl Column {
     /// A column shown in SI with format `fmt`.
-    pub fn new(key: &'static str, header: &'static str, unit: &'static str, fmt: Fmt) -> Self {
+    pub fn new(
+        key: impl Into<Cow<'static, str>>,
+        header: impl Into<Cow<'static, str>>,
+        unit: &'static str,
+        fmt: Fmt,
+    ) -> Self {
         Self {
-            key,
-            header,
+            key: key.into(),
+            header: header.into(),
             unit,
             scale: 1.0,
             fmt,
@@ -333,7 +339,7 @@ pub fn write_csv_table(
     columns: &[Column],
     rows: &[Vec<Cell>],
 ) -> std::io::Result<()> {
-    let header: Vec<&str> = columns.iter().map(|c| c.key).collect();
+    let header: Vec<&str> = columns.iter().map(|c| c.key.as_ref()).collect();
     writeln!(out, "{}", header.join(","))?;
     for r in rows {
         let cells: Vec<String> = r

@@ -11,6 +11,7 @@
 //! Kramers–Kronig verdict, the warnings and the stage timings.
 
 mod answer;
+pub mod core_table;
 mod frf;
 
 use super::uncertainty::{Band, Bands};
@@ -448,8 +449,9 @@ fn csv_line(cells: &[String]) -> String {
     s
 }
 
-/// Table of the core at the modal frequencies: (header, rows) for HTML, and the CSV.
-fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String) {
+/// Table of the core at the modal frequencies for HTML: (header, rows). All columns, in full
+/// precision: `core_modal.csv` ([`core_table`]).
+fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>) {
     let truth = r.truth.is_some();
     let mut header = vec![
         "f [Hz]",
@@ -486,13 +488,6 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             "err eta_layered [%]",
         ]);
     }
-    let mut csv = String::from(
-        "f_hz,e_storage_pa,e_loss_factor,phi_abs,within_phi_limit,g_paper_storage_pa,g_paper_storage_lo_pa,g_paper_storage_hi_pa,g_paper_loss_factor,g_paper_loss_factor_lo,g_paper_loss_factor_hi,g_exact_storage_pa,g_exact_storage_lo_pa,g_exact_storage_hi_pa,g_exact_loss_factor,g_exact_loss_factor_lo,g_exact_loss_factor_hi,g_layered_storage_pa,g_layered_storage_lo_pa,g_layered_storage_hi_pa,g_layered_loss_factor,g_layered_loss_factor_lo,g_layered_loss_factor_hi,layered_freq_error_finest,layered_loss_error_finest,layered_residual_freq_error,g_layered_coarsest_storage_pa,g_layered_coarsest_loss_factor,layered_discretization_half_width_storage,layered_discretization_half_width_loss_factor,layered_through_thickness_half_width_storage,layered_through_thickness_half_width_loss_factor,layered_band_main_source",
-    );
-    if truth {
-        csv.push_str(",g_true_storage_pa,g_true_loss_factor,err_g_paper_storage,err_g_paper_loss_factor,err_g_exact_storage,err_g_exact_loss_factor,err_g_layered_storage,err_g_layered_loss_factor");
-    }
-    csv.push('\n');
     let mut rows = vec![];
     for p in &r.modal {
         let b = modal_bands(r, p);
@@ -524,48 +519,6 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             pct(lb.coarsest.and_then(|c| rel_err(storage(gl), Some(c.re)))),
             lb.dominant.clone().unwrap_or_else(|| "-".into()),
         ];
-        let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
-        let lo = |b: Option<Band>| opt(b.map(|b| b[0]));
-        let hi = |b: Option<Band>| opt(b.map(|b| b[1]));
-        let mut c = vec![
-            format!("{}", p.freq_hz),
-            opt(p.e_storage_pa()),
-            opt(p.e_loss_factor()),
-            opt(phi),
-            valid.to_lowercase(),
-            opt(storage(gp)),
-            lo(b.paper_storage),
-            hi(b.paper_storage),
-            opt(loss(gp)),
-            lo(b.paper_loss_factor),
-            hi(b.paper_loss_factor),
-            opt(storage(ge)),
-            lo(b.exact_storage),
-            hi(b.exact_storage),
-            opt(loss(ge)),
-            lo(b.exact_loss_factor),
-            hi(b.exact_loss_factor),
-            opt(storage(gl)),
-            lo(lb.storage),
-            hi(lb.storage),
-            opt(loss(gl)),
-            lo(lb.loss),
-            hi(lb.loss),
-            opt(lb.freq_error),
-            opt(lb.loss_error),
-            opt(lb.residual),
-            opt(storage(lb.coarsest)),
-            opt(loss(lb.coarsest)),
-            lb.discretization_half_width
-                .map_or(String::new(), |h| h[0].to_string()),
-            lb.discretization_half_width
-                .map_or(String::new(), |h| h[1].to_string()),
-            lb.through_thickness_half_width
-                .map_or(String::new(), |h| h[0].to_string()),
-            lb.through_thickness_half_width
-                .map_or(String::new(), |h| h[1].to_string()),
-            lb.dominant.clone().unwrap_or_default(),
-        ];
         if let Some(t) = &r.truth {
             let g = t.at(p.freq_hz);
             let errs = [
@@ -579,14 +532,10 @@ fn modal_table(r: &ChainResult) -> (Vec<&'static str>, Vec<Vec<String>>, String)
             row.push(fmt(storage(g), 1e6, 3));
             row.push(fmt(loss(g), 1.0, 3));
             row.extend(errs.iter().map(|e| pct(*e)));
-            c.push(opt(storage(g)));
-            c.push(opt(loss(g)));
-            c.extend(errs.iter().map(|e| opt(*e)));
         }
         rows.push(row);
-        csv.push_str(&csv_line(&c));
     }
-    (header, rows, csv)
+    (header, rows)
 }
 
 /// The layered inverse's columns of one modal point: its 95 % band (inputs, pole scatter and
@@ -955,7 +904,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         "The core's loss factor η(f), as above.",
         &answer::chart(r, true),
     )?;
-    let (header, rows, modal_csv) = modal_table(r);
+    let (header, rows) = modal_table(r);
     lead_section(&mut html, r, &header, &rows);
     law_section(&mut html, &mut files, r);
     frf::section(&mut html, &mut files, r)?;
@@ -1027,7 +976,10 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         &h,
         t,
     );
-    files.push(("core_modal.csv".into(), modal_csv.into_bytes()));
+    files.push((
+        "core_modal.csv".into(),
+        core_table::core_table(r).csv().into_bytes(),
+    ));
     if let Some(t) = &r.truth {
         html.paragraph(&format!(
             "Truth: {}. Errors are recovered/true - 1 at each modal frequency.",

@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 use lamdyn_fem::eigen::Progress;
 use lamdyn_pipeline::job::{Job, base_of};
 use lamdyn_pipeline::output::OutputDir;
+use lamdyn_pipeline::report::core_table::core_table;
 use lamdyn_pipeline::{ChainResult, RunOptions, report, run_job};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -58,45 +59,25 @@ pub(crate) fn write_report(result: &ChainResult, dir: &OutputDir, spinner: &Spin
     dir.write(&files).context("stage 'report' failed")
 }
 
-/// The summary table: the core at each modal frequency (errors when the truth is known).
+/// The summary table: the columns of the core table ([`core_table`]) marked for the summary,
+/// at each modal frequency (errors when the truth is known).
 pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
-    let truth = r.truth.is_some();
-    let mut columns = vec![
-        Column::new("f_hz", "f", "Hz", Fmt::Fixed(3)),
-        Column::new("e_storage_pa", "E'", "GPa", Fmt::Fixed(3)).scaled(1e9),
-        Column::new("phi_abs", "|phi|", "", Fmt::Fixed(4)),
-        Column::new("g_paper_storage_pa", "G'_paper", "MPa", Fmt::Fixed(3)).scaled(1e6),
-        Column::new("g_paper_loss_factor", "eta_paper", "", Fmt::Fixed(3)),
-        Column::new("g_exact_storage_pa", "G'_exact", "MPa", Fmt::Fixed(3)).scaled(1e6),
-        Column::new("g_exact_loss_factor", "eta_exact", "", Fmt::Fixed(3)),
-        Column::new("g_layered_storage_pa", "G'_layer", "MPa", Fmt::Fixed(3)).scaled(1e6),
-        Column::new("g_layered_loss_factor", "eta_layer", "", Fmt::Fixed(3)),
-    ];
-    if truth {
-        columns.extend([
-            Column::new("g_true_storage_pa", "G'_true", "MPa", Fmt::Fixed(3)).scaled(1e6),
-            Column::new("g_true_loss_factor", "eta_true", "", Fmt::Fixed(3)),
-            Column::new("err_g_paper", "err G'_p", "%", Fmt::Fixed(1)).scaled(0.01),
-            Column::new("err_eta_paper", "err eta_p", "%", Fmt::Fixed(1)).scaled(0.01),
-            Column::new("err_g_exact", "err G'_x", "%", Fmt::Fixed(1)).scaled(0.01),
-            Column::new("err_eta_exact", "err eta_x", "%", Fmt::Fixed(1)).scaled(0.01),
-            Column::new("err_g_layered", "err G'_l", "%", Fmt::Fixed(1)).scaled(0.01),
-            Column::new("err_eta_layered", "err eta_l", "%", Fmt::Fixed(1)).scaled(0.01),
-        ]);
-    }
+    let table = core_table(r);
+    let shown: Vec<usize> = (0..table.columns.len())
+        .filter(|&k| table.columns[k].in_summary && table.columns[k].shown.is_some())
+        .collect();
+    let columns = shown
+        .iter()
+        .filter_map(|&k| {
+            let c = &table.columns[k];
+            let s = c.shown?;
+            Some(
+                Column::new(c.key.clone(), c.label.clone(), s.unit, Fmt::Fixed(s.digits))
+                    .scaled(s.scale),
+            )
+        })
+        .collect();
     let frf = r.frf.route();
-    if frf.is_some() {
-        columns.extend([
-            Column::new("g_frf_storage_pa", "G'_frf", "MPa", Fmt::Fixed(3)).scaled(1e6),
-            Column::new("g_frf_loss_factor", "eta_frf", "", Fmt::Fixed(3)),
-        ]);
-        if truth {
-            columns.extend([
-                Column::new("err_g_frf", "err G'_f", "%", Fmt::Fixed(1)).scaled(0.01),
-                Column::new("err_eta_frf", "err eta_f", "%", Fmt::Fixed(1)).scaled(0.01),
-            ]);
-        }
-    }
     let mut rep = Report::new("run", columns);
     rep.input("job", r.job_path.display().to_string());
     rep.input("measurement", r.measured.source.clone());
@@ -131,46 +112,8 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
         })
         .collect();
     rep.input("stages", times.join(", "));
-    let split = |g: Option<num_complex::Complex64>| -> [Cell; 2] {
-        match g {
-            Some(g) => [g.re.into(), (g.im / g.re).into()],
-            None => [Cell::Empty, Cell::Empty],
-        }
-    };
-    let err = |a: Option<f64>, b: Option<f64>| -> Cell {
-        match (a, b) {
-            (Some(a), Some(b)) => (a / b - 1.0).into(),
-            _ => Cell::Empty,
-        }
-    };
-    for p in &r.modal {
-        let (gp, ge, gl) = (p.paper_g(), p.exact_g(), p.layered_g());
-        let mut row: Vec<Cell> = vec![p.freq_hz.into(), p.e_storage_pa().into(), p.phi().into()];
-        row.extend(split(gp));
-        row.extend(split(ge));
-        row.extend(split(gl));
-        if let Some(t) = &r.truth {
-            let g = t.at(p.freq_hz);
-            row.extend(split(g));
-            let re = |x: Option<num_complex::Complex64>| x.map(|x| x.re);
-            let eta = |x: Option<num_complex::Complex64>| x.map(|x| x.im / x.re);
-            row.push(err(re(gp), re(g)));
-            row.push(err(eta(gp), eta(g)));
-            row.push(err(re(ge), re(g)));
-            row.push(err(eta(ge), eta(g)));
-            row.push(err(re(gl), re(g)));
-            row.push(err(eta(gl), eta(g)));
-        }
-        if let Some(route) = frf {
-            let gf = route.modulus(p.freq_hz);
-            row.extend(split(Some(gf)));
-            if let Some(t) = &r.truth {
-                let g = t.at(p.freq_hz);
-                row.push(err(Some(gf.re), g.map(|g| g.re)));
-                row.push(err(Some(gf.im / gf.re), g.map(|g| g.im / g.re)));
-            }
-        }
-        rep.row(row);
+    for row in &table.rows {
+        rep.row(shown.iter().map(|&k| Cell::from(row[k].number())).collect());
     }
     rep.warnings.extend(r.warnings.iter().cloned());
     let failed = r.modes_without_core();

@@ -34,10 +34,10 @@ fn demo_and_run_print_the_core_at_each_mode() {
     assert!(rows.len() >= 3, "{rows:?}");
     for r in rows {
         for k in [
-            "err_g_paper",
-            "err_g_exact",
-            "err_g_layered",
-            "err_eta_layered",
+            "err_g_paper_storage",
+            "err_g_exact_storage",
+            "err_g_layered_storage",
+            "err_g_layered_loss_factor",
         ] {
             assert!(r[k].is_number(), "{k} missing in {r}");
         }
