@@ -479,16 +479,21 @@ fn lone_modes_at_second_peaks(
         .collect()
 }
 
+/// The curves an identification fits: the lines (Hz), the curves at unit scale, their
+/// quantity and the band (Hz).
+type BandCurves<'a> = (
+    &'a [f64],
+    &'a [&'a [Complex64]],
+    lamdyn_frf::Quantity,
+    [f64; 2],
+);
+
 /// The modal model of the selected poles by `s.estimator` (the diagram's poles when
 /// `s.refine_iterations` is 0; the check needs `context`, without it the refined poles are
 /// taken), each refined pole that left its column put back ([`keep_poles_in_their_columns`]);
 /// with one warning per pole put back.
-#[allow(clippy::too_many_arguments)]
 fn fit_selected(
-    freqs: &[f64],
-    curves: &[&[Complex64]],
-    quantity: lamdyn_frf::Quantity,
-    band: [f64; 2],
+    (freqs, curves, quantity, band): BandCurves<'_>,
     selected: &[SelectedPole],
     context: Option<&LscfContext>,
     s: &EmaSettings,
@@ -641,6 +646,279 @@ fn merge_split_modes(
     (kept, notes)
 }
 
+/// Refuses settings that do not fit `set`: a driving point beyond its responses, a CMIF
+/// prominence below 1.
+fn check_settings(set: &FrfSet, s: &EmaSettings) -> Result<(), EmaError> {
+    let nr = set.responses().len();
+    if let Some(d) = s.driving {
+        if d >= nr {
+            return Err(invalid(
+                "driving point",
+                format!("response index {d}, but the set has {nr} responses"),
+            ));
+        }
+    }
+    if s.cmif_prominence.is_nan() || s.cmif_prominence < 1.0 {
+        return Err(invalid(
+            "CMIF prominence",
+            format!(
+                "{} must be at least 1 (a factor above the peak's bases)",
+                s.cmif_prominence
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Each curve's name, `response@reference`, response-major.
+fn curve_names(set: &FrfSet) -> Vec<String> {
+    let references = set.references();
+    set.responses()
+        .iter()
+        .flat_map(|r| {
+            references
+                .iter()
+                .map(move |f| format!("{}@{}", r.name, f.name))
+        })
+        .collect()
+}
+
+/// `curves` times `scale`, or `None` at scale 1 (the curves are used as they are).
+fn at_scale(curves: &[&[Complex64]], scale: f64) -> Option<Vec<Vec<Complex64>>> {
+    (scale != 1.0).then(|| {
+        curves
+            .iter()
+            .map(|c| c.iter().map(|v| v * scale).collect())
+            .collect()
+    })
+}
+
+/// The stabilization diagram over `s.orders` (PolyMAX over the `references` when
+/// `s.polymax`), and the highest order's denominator as the context of the refinement's check.
+fn stabilization(
+    freqs: &[f64],
+    curves: &[&[Complex64]],
+    band: [f64; 2],
+    references: usize,
+    s: &EmaSettings,
+    on_stage: &dyn Fn(&str),
+) -> Result<(Vec<DiagramPole>, Option<LscfContext>), EmaError> {
+    let (lo, hi, step) = s.orders;
+    on_stage(&format!(
+        "stabilization diagram: orders {lo} to {hi}, {} curves",
+        curves.len()
+    ));
+    let orders = lscf(
+        freqs,
+        curves,
+        &LscfSettings {
+            references: if s.polymax { references } else { 1 },
+            mode_vectors: s.mode_vectors,
+            ..LscfSettings::new(band, (lo, hi, step))
+        },
+    )?;
+    let diag = diagram(&orders, &s.criteria);
+    let context = orders.into_iter().last().map(|top| LscfContext {
+        dt: sample_interval(band),
+        roots: top.roots,
+    });
+    Ok((diag, context))
+}
+
+/// The CMIF at each of `lines` lines: the singular values of the FRF matrix (curves at unit
+/// scale `scale`, `references` per response), scaled back.
+fn cmif_curves(
+    lines: usize,
+    curves: &[&[Complex64]],
+    references: usize,
+    scale: f64,
+) -> Vec<Vec<f64>> {
+    (0..lines)
+        .map(|k| {
+            let h: Vec<Complex64> = curves.iter().map(|c| c[k]).collect();
+            let mut sigma = cmif_line(&h, references);
+            sigma.iter_mut().for_each(|v| *v /= scale);
+            sigma
+        })
+        .collect()
+}
+
+/// The selected poles and the given frequencies without one: near `s.near_hz` when given
+/// ([`select_near`]), else automatic with the CMIF's first and second curves' `peaks`
+/// ([`select_with_cmif`]).
+fn select(
+    diag: &[DiagramPole],
+    peaks: &[Vec<CmifPeak>; 2],
+    s: &EmaSettings,
+    warnings: &mut Vec<String>,
+) -> (Vec<SelectedPole>, Vec<f64>) {
+    let Some(targets) = &s.near_hz else {
+        let selected = select_with_cmif(diag, &peaks[0], &peaks[1], &s.criteria, warnings);
+        return (selected, vec![]);
+    };
+    let picks = select_near(diag, targets, s.window_hz);
+    let missing = targets
+        .iter()
+        .zip(&picks)
+        .filter(|(_, p)| p.is_none())
+        .map(|(t, _)| *t)
+        .collect();
+    (picks.into_iter().flatten().collect(), missing)
+}
+
+/// What each identified mode is made of ([`ModeSources::mode`]).
+struct ModeSources<'a> {
+    /// The modal model in the data's units.
+    fit: &'a ModalFit,
+    settings: &'a EmaSettings,
+    responses: usize,
+    references: usize,
+    /// The selection, index-aligned with the fit's poles.
+    selected: &'a [SelectedPole],
+    /// With the checked estimator: the refined poles, taken or not.
+    refined: Option<&'a [Complex64]>,
+    /// The poles' standard deviations.
+    deviations: Option<&'a [PoleSd]>,
+    /// Each mode's FRAC drop ([`contributions`]).
+    frac_drop: &'a [f64],
+    line_spacing_hz: f64,
+    /// The first CMIF curve's peaks.
+    cmif_peaks: &'a [CmifPeak],
+}
+
+impl ModeSources<'_> {
+    /// Every mode of the fit, split into those `--reject-hz` names (within the window) and
+    /// the others: (rejected, modes).
+    fn modes(&self) -> (Vec<Mode>, Vec<Mode>) {
+        let s = self.settings;
+        (0..self.fit.poles.len())
+            .map(|r| self.mode(r))
+            .partition(|m| {
+                s.reject_hz
+                    .iter()
+                    .any(|f| (m.freq_hz - f).abs() <= s.window_hz)
+            })
+    }
+
+    /// Mode `r`: its shape over the responses for reference 0 (over the references for a
+    /// roving hammer: one response, several references; by reciprocity the residues of the
+    /// response to each hammer point), its pole with the exponential window's damping removed,
+    /// its standard deviation (widened where the diagram's pole was kept) and its verdict.
+    fn mode(&self, r: usize) -> Mode {
+        let (fit, s, nr, nf) = (self.fit, self.settings, self.responses, self.references);
+        let all = fit.shape(r, s.driving.map(|d| d * nf));
+        let shape: Vec<Complex64> = if nr == 1 && nf > 1 {
+            all[..nf].to_vec()
+        } else {
+            (0..nr).map(|i| all[i * nf]).collect()
+        };
+        let corrected = |p: Complex64| {
+            s.exp_tau_s
+                .map_or(p, |tau| correct_exponential_window(p, tau))
+        };
+        let pole = corrected(fit.poles[r]);
+        let selected = self.selected.get(r);
+        let diagram_pole = selected.map_or(fit.poles[r], |p| p.pole);
+        let z = pole_damping(pole);
+        let evidence = ModeEvidence {
+            freq_hz: pole_freq_hz(pole),
+            damping_ratio: z,
+            mpc: mpc(&shape),
+            mpd_deg: mpd(&shape),
+            shape_len: shape.len(),
+            stable_count: selected.map_or(0, |p| p.count),
+            frac_drop: self.frac_drop[r],
+            line_spacing_hz: self.line_spacing_hz,
+        };
+        let sd = self.deviations.and_then(|d| d.get(r).copied()).map(|sd| {
+            match self.refined.and_then(|p| p.get(r)) {
+                Some(&q) if fit.poles[r] != q => widened_by_the_refinement(sd, fit.poles[r], q),
+                _ => sd,
+            }
+        });
+        Mode {
+            freq_hz: evidence.freq_hz,
+            damping_ratio: z,
+            loss_factor: 2.0 * z,
+            pole,
+            stable_count: evidence.stable_count,
+            real_shape: real_mode(&shape),
+            participation: participation(fit, r, nr, nf),
+            mpc: evidence.mpc,
+            mpd_deg: evidence.mpd_deg,
+            shape,
+            sd,
+            pick: selected.map_or(Pick::Auto, |p| p.pick),
+            diagram_pole: corrected(diagram_pole),
+            refined: diagram_pole != fit.poles[r],
+            quality: assess(&evidence, self.cmif_peaks),
+        }
+    }
+}
+
+/// The band of `s`, by default the data's from its first positive line, checked against the
+/// data's lines ([`check_band_in_data`]).
+fn band_of(s: &EmaSettings, freqs: &[f64]) -> Result<[f64; 2], EmaError> {
+    let band = s.band_hz.unwrap_or([
+        freqs.iter().copied().find(|f| *f > 0.0).unwrap_or(0.0),
+        freqs[freqs.len() - 1],
+    ]);
+    check_band_in_data(band, freqs)?;
+    Ok(band)
+}
+
+/// Every curve of `set`, response-major.
+fn set_curves(set: &FrfSet) -> Vec<&[Complex64]> {
+    let nf = set.references().len();
+    (0..set.responses().len())
+        .flat_map(|i| (0..nf).map(move |j| (i, j)))
+        .map(|(i, j)| set.curve(i, j))
+        .collect()
+}
+
+/// The error of a diagram with no stable pole in `band` up to order `highest`.
+fn no_stable_pole(band: [f64; 2], highest: usize) -> EmaError {
+    invalid(
+        "poles",
+        format!(
+            "no stable pole in [{}, {}] Hz up to order {highest}: raise the order or widen the band",
+            band[0], band[1]
+        ),
+    )
+}
+
+/// A note for a roving-hammer test (one response, several references): what the shapes are
+/// over.
+fn roving_hammer_note(set: &FrfSet) -> Option<String> {
+    let nf = set.references().len();
+    (set.responses().len() == 1 && nf > 1).then(|| format!(
+        "one response and {nf} references (a roving-hammer test): the shapes, MPC, MPD and auto-MAC are over the references (by reciprocity, the residues of the response to each hammer point)"
+    ))
+}
+
+/// The spacing of the first two of `lines` (Hz), 0 with fewer.
+fn line_spacing(freqs: &[f64], lines: &[usize]) -> f64 {
+    match lines {
+        [a, b, ..] => (freqs[*b] - freqs[*a]).abs(),
+        _ => 0.0,
+    }
+}
+
+/// The poles' standard deviations ([`pole_deviations`]) when the settings refine them, else
+/// none.
+fn deviations_of(
+    (freqs, curves, quantity, band): BandCurves<'_>,
+    poles: &[Complex64],
+    s: &EmaSettings,
+    on_stage: &dyn Fn(&str),
+) -> Result<Option<Vec<PoleSd>>, EmaError> {
+    if s.refine_iterations == 0 {
+        return Ok(None);
+    }
+    on_stage("the poles' standard deviations");
+    pole_deviations(freqs, curves, quantity, poles, band, s.refine_lines)
+}
+
 /// Identifies the modes of `set` (module docs).
 ///
 /// # Errors
@@ -662,127 +940,32 @@ pub fn identify_with(
 ) -> Result<EmaResult, EmaError> {
     let mut clock = Instant::now();
     let mut timings = EmaTimings::default();
+    check_settings(set, s)?;
     let freqs = set.freqs_hz();
-    let (nr, nf) = (set.responses().len(), set.references().len());
-    if let Some(d) = s.driving {
-        if d >= nr {
-            return Err(invalid(
-                "driving point",
-                format!("response index {d}, but the set has {nr} responses"),
-            ));
-        }
-    }
-    if s.cmif_prominence.is_nan() || s.cmif_prominence < 1.0 {
-        return Err(invalid(
-            "CMIF prominence",
-            format!(
-                "{} must be at least 1 (a factor above the peak's bases)",
-                s.cmif_prominence
-            ),
-        ));
-    }
-    let band = s.band_hz.unwrap_or([
-        freqs.iter().copied().find(|f| *f > 0.0).unwrap_or(0.0),
-        freqs[freqs.len() - 1],
-    ]);
-    check_band_in_data(band, freqs)?;
-    let curves: Vec<&[Complex64]> = (0..nr)
-        .flat_map(|i| (0..nf).map(move |j| (i, j)))
-        .map(|(i, j)| set.curve(i, j))
-        .collect();
-    let names: Vec<String> = (0..nr)
-        .flat_map(|i| {
-            (0..nf)
-                .map(move |j| format!("{}@{}", set.responses()[i].name, set.references()[j].name))
-        })
-        .collect();
+    let nf = set.references().len();
+    let band = band_of(s, freqs)?;
+    let curves = set_curves(set);
+    let names = curve_names(set);
     let in_band = crate::band::lines(freqs, band);
     let mut warnings = zero_curves(&curves, &in_band, &names, band);
     let scale = unit_scale(&curves, &in_band, band)?;
-    let scaled: Option<Vec<Vec<Complex64>>> = (scale != 1.0).then(|| {
-        curves
-            .iter()
-            .map(|c| c.iter().map(|v| v * scale).collect())
-            .collect()
-    });
+    let scaled = at_scale(&curves, scale);
     let curves: Vec<&[Complex64]> = match &scaled {
         Some(owned) => owned.iter().map(Vec::as_slice).collect(),
         None => curves,
     };
-    let (lo, hi, step) = s.orders;
-    on_stage(&format!(
-        "stabilization diagram: orders {lo} to {hi}, {} curves",
-        curves.len()
-    ));
-    let orders = lscf(
-        freqs,
-        &curves,
-        &LscfSettings {
-            references: if s.polymax { nf } else { 1 },
-            mode_vectors: s.mode_vectors,
-            ..LscfSettings::new(band, (lo, hi, step))
-        },
-    )?;
-    let diag = diagram(&orders, &s.criteria);
-    let context = orders.into_iter().last().map(|top| LscfContext {
-        dt: sample_interval(band),
-        roots: top.roots,
-    });
+    let (diag, context) = stabilization(freqs, &curves, band, nf, s, on_stage)?;
     timings.diagram = lap(&mut clock);
-    let cmif: Vec<Vec<f64>> = (0..freqs.len())
-        .map(|k| {
-            let h: Vec<Complex64> = curves.iter().map(|c| c[k]).collect();
-            let mut sigma = cmif_line(&h, nf);
-            sigma.iter_mut().for_each(|v| *v /= scale);
-            sigma
-        })
-        .collect();
-    let band_peaks = cmif_curve_peaks(freqs, &cmif, &in_band, s.cmif_prominence, 1);
-    let second_peaks = cmif_curve_peaks(freqs, &cmif, &in_band, s.cmif_prominence, 2);
-    let (mut selected, missing_hz): (Vec<SelectedPole>, Vec<f64>) = match &s.near_hz {
-        Some(targets) => {
-            let picks = select_near(&diag, targets, s.window_hz);
-            let missing = targets
-                .iter()
-                .zip(&picks)
-                .filter(|(_, p)| p.is_none())
-                .map(|(t, _)| *t)
-                .collect();
-            (picks.into_iter().flatten().collect(), missing)
-        }
-        None => (
-            select_with_cmif(
-                &diag,
-                &band_peaks,
-                &second_peaks,
-                &s.criteria,
-                &mut warnings,
-            ),
-            vec![],
-        ),
-    };
+    let cmif = cmif_curves(freqs.len(), &curves, nf, scale);
+    let peaks = [1, 2].map(|k| cmif_curve_peaks(freqs, &cmif, &in_band, s.cmif_prominence, k));
+    let (mut selected, missing_hz) = select(&diag, &peaks, s, &mut warnings);
     if selected.is_empty() {
-        return Err(invalid(
-            "poles",
-            format!(
-                "no stable pole in [{}, {}] Hz up to order {hi}: raise the order or widen the band",
-                band[0], band[1]
-            ),
-        ));
+        return Err(no_stable_pole(band, s.orders.1));
     }
     timings.selection = lap(&mut clock);
     let fit_poles = |selected: &[SelectedPole], timings: &mut EmaTimings| {
-        fit_selected(
-            freqs,
-            &curves,
-            set.quantity(),
-            band,
-            selected,
-            context.as_ref(),
-            s,
-            on_stage,
-            timings,
-        )
+        let data = (freqs, curves.as_slice(), set.quantity(), band);
+        fit_selected(data, selected, context.as_ref(), s, on_stage, timings)
     };
     let mut fitted = fit_poles(&selected, &mut timings)?;
     if s.near_hz.is_none() {
@@ -793,121 +976,44 @@ pub fn identify_with(
             fitted = fit_poles(&selected, &mut timings)?;
         }
     }
-    let SelectedFit {
-        fit,
-        warnings: kept,
-        refined,
-    } = fitted;
-    let fit = fit.scaled(1.0 / scale);
+    warnings.extend(std::mem::take(&mut fitted.warnings));
     clock = Instant::now();
     let positive: Vec<usize> = in_band
         .iter()
         .copied()
         .filter(|&k| freqs[k] > 0.0)
         .collect();
-    let contributions = contributions(
-        &fit,
-        Measured {
-            freqs_hz: freqs,
-            curves: &curves,
-            lines: &positive,
-        },
-    );
-    let line_spacing_hz = match positive[..] {
-        [a, b, ..] => (freqs[b] - freqs[a]).abs(),
-        _ => 0.0,
+    let measured = Measured {
+        freqs_hz: freqs,
+        curves: &curves,
+        lines: &positive,
     };
-    // Shapes over the responses for reference 0 (curve index i·nf).
-    // A roving-hammer test (one response, several references): the shapes are over the
-    // references — by reciprocity the residues of the response to each hammer point.
-    let roving = nr == 1 && nf > 1;
-    warnings.extend(kept);
-    if roving {
-        warnings.push(format!(
-            "one response and {nf} references (a roving-hammer test): the shapes, MPC, MPD and auto-MAC are over the references (by reciprocity, the residues of the response to each hammer point)"
-        ));
-    }
+    let scaled_fit = fitted.fit.scaled(1.0 / scale);
+    let contributions = contributions(&scaled_fit, measured);
+    warnings.extend(roving_hammer_note(set));
     timings.modes = lap(&mut clock);
-    let deviations = if s.refine_iterations > 0 {
-        on_stage("the poles' standard deviations");
-        pole_deviations(
-            freqs,
-            &curves,
-            set.quantity(),
-            &fit.poles,
-            band,
-            s.refine_lines,
-        )?
-    } else {
-        None
-    };
+    let data = (freqs, curves.as_slice(), set.quantity(), band);
+    let deviations = deviations_of(data, &scaled_fit.poles, s, on_stage)?;
     timings.deviations = lap(&mut clock);
-    let all_modes: Vec<Mode> = (0..fit.poles.len())
-        .map(|r| {
-            let all = fit.shape(r, s.driving.map(|d| d * nf));
-            let shape: Vec<Complex64> = if roving {
-                all[..nf].to_vec()
-            } else {
-                (0..nr).map(|i| all[i * nf]).collect()
-            };
-            let corrected = |p: Complex64| {
-                s.exp_tau_s
-                    .map_or(p, |tau| correct_exponential_window(p, tau))
-            };
-            let pole = corrected(fit.poles[r]);
-            let diagram_pole = selected.get(r).map_or(fit.poles[r], |p| p.pole);
-            let z = pole_damping(pole);
-            let evidence = ModeEvidence {
-                freq_hz: pole_freq_hz(pole),
-                damping_ratio: z,
-                mpc: mpc(&shape),
-                mpd_deg: mpd(&shape),
-                shape_len: shape.len(),
-                stable_count: selected.get(r).map_or(0, |p| p.count),
-                frac_drop: contributions.frac_drop[r],
-                line_spacing_hz,
-            };
-            Mode {
-                freq_hz: evidence.freq_hz,
-                damping_ratio: z,
-                loss_factor: 2.0 * z,
-                pole,
-                stable_count: evidence.stable_count,
-                real_shape: real_mode(&shape),
-                participation: participation(&fit, r, nr, nf),
-                mpc: evidence.mpc,
-                mpd_deg: evidence.mpd_deg,
-                shape,
-                sd: deviations
-                    .as_ref()
-                    .and_then(|d| d.get(r).copied())
-                    .map(|sd| match refined.as_ref().and_then(|p| p.get(r)) {
-                        Some(&q) if fit.poles[r] != q => {
-                            widened_by_the_refinement(sd, fit.poles[r], q)
-                        }
-                        _ => sd,
-                    }),
-                pick: selected.get(r).map_or(Pick::Auto, |p| p.pick),
-                diagram_pole: corrected(diagram_pole),
-                refined: diagram_pole != fit.poles[r],
-                quality: assess(&evidence, &band_peaks),
-            }
-        })
-        .collect();
-    let (rejected, modes): (Vec<Mode>, Vec<Mode>) = all_modes.into_iter().partition(|m| {
-        s.reject_hz
-            .iter()
-            .any(|f| (m.freq_hz - f).abs() <= s.window_hz)
-    });
+    let sources = ModeSources {
+        fit: &scaled_fit,
+        settings: s,
+        responses: set.responses().len(),
+        references: nf,
+        selected: &selected,
+        refined: fitted.refined.as_deref(),
+        deviations: deviations.as_deref(),
+        frac_drop: &contributions.frac_drop,
+        line_spacing_hz: line_spacing(freqs, &positive),
+        cmif_peaks: &peaks[0],
+    };
+    let (rejected, modes) = sources.modes();
     if s.near_hz.is_none() {
-        warnings.extend(lone_modes_at_second_peaks(
-            &modes,
-            &second_peaks,
-            &s.criteria,
-        ));
+        warnings.extend(lone_modes_at_second_peaks(&modes, &peaks[1], &s.criteria));
     }
     let auto_mac = auto_mac(&modes);
     timings.modes += lap(&mut clock);
+    let [cmif_peaks, _] = peaks;
     Ok(EmaResult {
         band_hz: band,
         diagram: diag,
@@ -918,9 +1024,9 @@ pub fn identify_with(
         correlation: contributions.frac,
         curve_names: names,
         cmif,
-        cmif_peaks: band_peaks,
+        cmif_peaks,
         missing_hz,
-        fit: Some(fit),
+        fit: Some(scaled_fit),
         warnings,
         timings,
     })

@@ -184,28 +184,7 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
             .unwrap_or(0),
         n => n,
     };
-    if !(s.rate_hz.is_finite()
-        && s.rate_hz > 0.0
-        && length >= 4
-        && s.force_window_s > 0.0
-        && (0.0..1.0).contains(&s.trigger))
-    {
-        return Err(invalid(
-            "settings",
-            format!(
-                "rate {} Hz, length {}, force window {} s, trigger {}: rate and window must be positive, length at least 4, trigger in [0, 1)",
-                s.rate_hz, length, s.force_window_s, s.trigger
-            ),
-        ));
-    }
-    if let Some(t) = s.exp_tau_s {
-        if !(t.is_finite() && t > 0.0) {
-            return Err(invalid(
-                "settings",
-                format!("exponential window tau = {t} s must be positive"),
-            ));
-        }
-    }
+    check_settings(s, length)?;
     let n_resp = hits[0].responses.len();
     let nl = length / 2 + 1;
     let mut planner = RealFftPlanner::<f64>::new();
@@ -236,38 +215,14 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
                 ),
             ));
         }
-        if double_hit(&hit.force, s.double_hit) {
-            warnings.push(format!("hit {hn}: double hit (the force rises above {:.0} % of its peak after the first impact)", 100.0 * s.double_hit));
-        }
-        if clipped(&hit.force) {
-            warnings.push(format!("hit {hn}: force overload (clipped samples)"));
-        }
-        for (c, r) in hit.responses.iter().enumerate() {
-            if clipped(r) {
-                warnings.push(format!("hit {hn}: response {c} overload (clipped samples)"));
-            }
-        }
+        warnings.extend(hit_warnings(hit, hn, s.double_hit));
         let win: Vec<f64> = (0..length)
             .map(|k| {
                 s.exp_tau_s
                     .map_or(1.0, |tau| (-(k as f64) / (s.rate_hz * tau)).exp())
             })
             .collect();
-        let fw = (s.force_window_s * s.rate_hz).round() as usize;
-        let taper = (fw / 10).max(1);
-        let mut x: Vec<f64> = (0..length)
-            .map(|k| {
-                let w = if k >= fw {
-                    0.0
-                } else if k + taper > fw {
-                    0.5 * (1.0
-                        + (std::f64::consts::PI * (k + taper - fw) as f64 / taper as f64).cos())
-                } else {
-                    1.0
-                };
-                hit.force[start + k] * w * win[k]
-            })
-            .collect();
+        let mut x = force_record(&hit.force[start..start + length], &win, s);
         fft.process(&mut x, &mut spectrum)
             .map_err(|e| invalid("FFT", e.to_string()))?;
         let xs = spectrum.clone();
@@ -291,6 +246,71 @@ pub fn estimate(hits: &[Hit], s: &SpectraSettings) -> Result<Spectra, EmaError> 
         warnings.push(one_average("hit"));
     }
     Ok(from_sums(freqs_hz, &sxx, &syx, &syy, warnings))
+}
+
+/// Refuses non-physical settings for records of `length` samples.
+fn check_settings(s: &SpectraSettings, length: usize) -> Result<(), EmaError> {
+    if !(s.rate_hz.is_finite()
+        && s.rate_hz > 0.0
+        && length >= 4
+        && s.force_window_s > 0.0
+        && (0.0..1.0).contains(&s.trigger))
+    {
+        return Err(invalid(
+            "settings",
+            format!(
+                "rate {} Hz, length {}, force window {} s, trigger {}: rate and window must be positive, length at least 4, trigger in [0, 1)",
+                s.rate_hz, length, s.force_window_s, s.trigger
+            ),
+        ));
+    }
+    if let Some(t) = s.exp_tau_s {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(invalid(
+                "settings",
+                format!("exponential window tau = {t} s must be positive"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A hit's double hit (the force above `double_hit` of its peak after the first impact) and
+/// its clipped channels, one line each, the hit numbered `hn`.
+fn hit_warnings(hit: &Hit, hn: usize, double_hit_level: f64) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if double_hit(&hit.force, double_hit_level) {
+        warnings.push(format!("hit {hn}: double hit (the force rises above {:.0} % of its peak after the first impact)", 100.0 * double_hit_level));
+    }
+    if clipped(&hit.force) {
+        warnings.push(format!("hit {hn}: force overload (clipped samples)"));
+    }
+    for (c, r) in hit.responses.iter().enumerate() {
+        if clipped(r) {
+            warnings.push(format!("hit {hn}: response {c} overload (clipped samples)"));
+        }
+    }
+    warnings
+}
+
+/// The force's record (`force`, from its start) under the force window (flat over
+/// `s.force_window_s`, a cosine taper over its last tenth, zero after) and the exponential
+/// window `win`.
+fn force_record(force: &[f64], win: &[f64], s: &SpectraSettings) -> Vec<f64> {
+    let fw = (s.force_window_s * s.rate_hz).round() as usize;
+    let taper = (fw / 10).max(1);
+    (0..force.len())
+        .map(|k| {
+            let w = if k >= fw {
+                0.0
+            } else if k + taper > fw {
+                0.5 * (1.0 + (std::f64::consts::PI * (k + taper - fw) as f64 / taper as f64).cos())
+            } else {
+                1.0
+            };
+            force[k] * w * win[k]
+        })
+        .collect()
 }
 
 /// H1, H2, Hv and coherence of every response from the summed auto- and cross-spectra

@@ -215,18 +215,7 @@ pub fn welch(records: &[Hit], s: &WelchSettings) -> Result<Spectra, EmaError> {
     };
     for (r, rec) in records.iter().enumerate() {
         let rn = r + 1;
-        if clipped(&rec.force) {
-            warnings.push(format!(
-                "record {rn}: force overload (clipped samples at its peak)"
-            ));
-        }
-        for (c, y) in rec.responses.iter().enumerate() {
-            if clipped(y) {
-                warnings.push(format!(
-                    "record {rn}: response {c} overload (clipped samples at its peak)"
-                ));
-            }
-        }
+        warnings.extend(overloads(rec, rn));
         for start in starts(rec.force.len(), segment, overlap) {
             spectrum_of(&rec.force[start..start + segment], &mut buf, &mut spectrum)?;
             let xs = spectrum.clone();
@@ -263,19 +252,7 @@ pub fn welch(records: &[Hit], s: &WelchSettings) -> Result<Spectra, EmaError> {
         .map(|k| k as f64 * s.rate_hz / segment as f64)
         .collect();
     let band = s.band_hz.unwrap_or([freqs_hz[1], freqs_hz[nl - 1]]);
-    let weak = weak_force(&sxx, &freqs_hz, band);
-    if !weak.is_empty() {
-        let list: Vec<String> = weak
-            .iter()
-            .take(6)
-            .map(|r| format!("{:.1}-{:.1} Hz", r[0], r[1]))
-            .collect();
-        warnings.push(format!(
-            "the force has no energy (autospectrum 40 dB below its level in the band) at {}{}: H1 there is noise; excite that band or leave it out",
-            list.join(", "),
-            if weak.len() > 6 { ", ..." } else { "" }
-        ));
-    }
+    warnings.extend(weak_force_warning(&sxx, &freqs_hz, band));
     if !ringing.is_empty() {
         warnings.push(format!(
             "leakage: with the rectangular window {} segment(s) end while the response still rings (record {}, response {} first): use a Hann window, longer segments, or a burst that stops earlier",
@@ -285,6 +262,43 @@ pub fn welch(records: &[Hit], s: &WelchSettings) -> Result<Spectra, EmaError> {
         ));
     }
     Ok(from_sums(freqs_hz, &sxx, &syx, &syy, warnings))
+}
+
+/// A record's clipped channels (numbered `rn`), one line each.
+fn overloads(rec: &Hit, rn: usize) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if clipped(&rec.force) {
+        warnings.push(format!(
+            "record {rn}: force overload (clipped samples at its peak)"
+        ));
+    }
+    for (c, y) in rec.responses.iter().enumerate() {
+        if clipped(y) {
+            warnings.push(format!(
+                "record {rn}: response {c} overload (clipped samples at its peak)"
+            ));
+        }
+    }
+    warnings
+}
+
+/// A warning naming the bands where the force's autospectrum `sxx` has no energy
+/// ([`weak_force`]), if there are any in `band`.
+fn weak_force_warning(sxx: &[f64], freqs_hz: &[f64], band: [f64; 2]) -> Option<String> {
+    let weak = weak_force(sxx, freqs_hz, band);
+    if weak.is_empty() {
+        return None;
+    }
+    let list: Vec<String> = weak
+        .iter()
+        .take(6)
+        .map(|r| format!("{:.1}-{:.1} Hz", r[0], r[1]))
+        .collect();
+    Some(format!(
+        "the force has no energy (autospectrum 40 dB below its level in the band) at {}{}: H1 there is noise; excite that band or leave it out",
+        list.join(", "),
+        if weak.len() > 6 { ", ..." } else { "" }
+    ))
 }
 
 /// RMS of a segment's last 5 % over the whole segment's RMS (after its mean).

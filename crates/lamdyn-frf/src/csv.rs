@@ -381,63 +381,7 @@ pub fn parse_frf(
     let mut columns = Vec::new();
     let mut filled = vec![[false; 2]; n_pairs];
     for name in &header[1..] {
-        let (pair, part) = name.rsplit_once(':').ok_or_else(|| {
-            err(
-                path,
-                hl,
-                format!(
-                    "column '{name}' must be RESPONSE@REFERENCE:re or :im",
-                    name = quoted(name)
-                ),
-            )
-        })?;
-        let (r, f) = pair.split_once('@').ok_or_else(|| {
-            err(
-                path,
-                hl,
-                format!(
-                    "column '{name}' must be RESPONSE@REFERENCE:re or :im",
-                    name = quoted(name)
-                ),
-            )
-        })?;
-        let i = *resp.get(r).ok_or_else(|| {
-            err(
-                path,
-                hl,
-                format!(
-                    "column '{name}': response '{r}' is not in the channels file",
-                    name = quoted(name),
-                    r = quoted(r)
-                ),
-            )
-        })?;
-        let j = *refs.get(f).ok_or_else(|| {
-            err(
-                path,
-                hl,
-                format!(
-                    "column '{name}': reference '{f}' is not in the channels file",
-                    name = quoted(name),
-                    f = quoted(f)
-                ),
-            )
-        })?;
-        let im = match part {
-            "re" => false,
-            "im" => true,
-            other => {
-                return Err(err(
-                    path,
-                    hl,
-                    format!(
-                        "column '{name}': part '{other}' must be re or im",
-                        name = quoted(name),
-                        other = quoted(other)
-                    ),
-                ));
-            }
-        };
+        let (i, j, im) = column_of(path, hl, name, (&resp, &refs))?;
         let p = i * references.len() + j;
         if filled[p][im as usize] {
             return Err(err(
@@ -497,6 +441,78 @@ pub fn parse_frf(
     let data = values.into_iter().flatten().collect();
     FrfSet::new(freqs, responses, references, quantity, data)
         .map_err(|e| err(path, 0, e.to_string()))
+}
+
+/// The response's and reference's indices of an FRF file's header column `name`
+/// (`RESPONSE@REFERENCE:re` or `:im`) and whether it is the imaginary part.
+///
+/// # Errors
+/// [`FrfError::File`] naming the header's line `hl`: a malformed name, a channel not in the
+/// channels file, a part other than re or im.
+fn column_of(
+    path: &str,
+    hl: usize,
+    name: &str,
+    (resp, refs): (&HashMap<&str, usize>, &HashMap<&str, usize>),
+) -> Result<(usize, usize, bool), FrfError> {
+    let (pair, part) = name.rsplit_once(':').ok_or_else(|| {
+        err(
+            path,
+            hl,
+            format!(
+                "column '{name}' must be RESPONSE@REFERENCE:re or :im",
+                name = quoted(name)
+            ),
+        )
+    })?;
+    let (r, f) = pair.split_once('@').ok_or_else(|| {
+        err(
+            path,
+            hl,
+            format!(
+                "column '{name}' must be RESPONSE@REFERENCE:re or :im",
+                name = quoted(name)
+            ),
+        )
+    })?;
+    let i = *resp.get(r).ok_or_else(|| {
+        err(
+            path,
+            hl,
+            format!(
+                "column '{name}': response '{r}' is not in the channels file",
+                name = quoted(name),
+                r = quoted(r)
+            ),
+        )
+    })?;
+    let j = *refs.get(f).ok_or_else(|| {
+        err(
+            path,
+            hl,
+            format!(
+                "column '{name}': reference '{f}' is not in the channels file",
+                name = quoted(name),
+                f = quoted(f)
+            ),
+        )
+    })?;
+    let im = match part {
+        "re" => false,
+        "im" => true,
+        other => {
+            return Err(err(
+                path,
+                hl,
+                format!(
+                    "column '{name}': part '{other}' must be re or im",
+                    name = quoted(name),
+                    other = quoted(other)
+                ),
+            ));
+        }
+    };
+    Ok((i, j, im))
 }
 
 /// Writes the channels table of a set.

@@ -353,8 +353,6 @@ pub fn converge_keeping_levels(
         if meshes.len() >= settings.max_levels || too_big {
             // Each mode that misses the tolerance fails alone and says how far it got; the
             // others stand (a mode mixed with a support's bounce need not hold them back).
-            let last = meshes[meshes.len() - 1];
-            let finest = dofs[dofs.len() - 1];
             let remedy = if too_big {
                 format!(
                     "the next level, {} x {}, would have {about}{} dofs, above inverse.layered_max_dofs = {}: raise it if the memory allows, or inverse.tolerance",
@@ -363,22 +361,7 @@ pub fn converge_keeping_levels(
             } else {
                 "raise inverse.tolerance or the number of levels".to_string()
             };
-            let modes = modes
-                .into_iter()
-                .map(|m| match m {
-                    Ok(m) if m.residual_freq_error > settings.tolerance => {
-                        Err(LayeredError::Tolerance(format!(
-                            "the layered model's estimated frequency error {:.2e} is above the tolerance {:.1e} after {} levels up to {} x {} elements ({finest} dofs); {remedy}",
-                            m.residual_freq_error,
-                            settings.tolerance,
-                            meshes.len(),
-                            last[0],
-                            last[1],
-                        )))
-                    }
-                    other => other,
-                })
-                .collect();
+            let modes = out_of_tolerance(modes, settings, &meshes, &dofs, &remedy);
             return Ok((
                 Converged {
                     modes,
@@ -391,6 +374,36 @@ pub fn converge_keeping_levels(
         finer.push(build(next)?);
         meshes.push(next);
     }
+}
+
+/// `modes` with each that misses the tolerance turned into an error saying how far it got
+/// over `meshes` (`dofs` each) and `remedy`; the others stand (a mode mixed with a support's
+/// bounce need not hold them back).
+fn out_of_tolerance(
+    modes: Vec<Result<ConvergedMode, LayeredError>>,
+    settings: &LadderSettings,
+    meshes: &[[usize; 2]],
+    dofs: &[usize],
+    remedy: &str,
+) -> Vec<Result<ConvergedMode, LayeredError>> {
+    let last = meshes[meshes.len() - 1];
+    let finest = dofs[dofs.len() - 1];
+    modes
+        .into_iter()
+        .map(|m| match m {
+            Ok(m) if m.residual_freq_error > settings.tolerance => {
+                Err(LayeredError::Tolerance(format!(
+                    "the layered model's estimated frequency error {:.2e} is above the tolerance {:.1e} after {} levels up to {} x {} elements ({finest} dofs); {remedy}",
+                    m.residual_freq_error,
+                    settings.tolerance,
+                    meshes.len(),
+                    last[0],
+                    last[1],
+                )))
+            }
+            other => other,
+        })
+        .collect()
 }
 
 /// Checks the settings and the lengths.

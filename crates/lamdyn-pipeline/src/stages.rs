@@ -123,20 +123,8 @@ pub fn run_job(
     if sandwich.stack.is_none() && job.uncertainty.samples > 0 {
         warnings.push(text::monte_carlo_skipped(job.stack.layers.len()));
     }
-    let mc = match (fit_result, &sandwich.stack) {
-        (Some(fit), Some(_)) if job.uncertainty.samples > 0 => {
-            Some(t.stage("uncertainty", || {
-                let freqs_hz = hz.concat();
-                let mc = monte_carlo(&job, fit, sandwich.paper, freqs_hz, spinner)?;
-                Ok((mc, false))
-            })?)
-        }
-        _ => None,
-    };
-    let truth = match &job.truth {
-        Some(path) => Some(t.stage("truth", || Ok((read_truth(&relative(&base, path))?, false)))?),
-        None => None,
-    };
+    let mc = uncertainty_stage(&mut t, &job, fit_result, &sandwich, hz.concat())?;
+    let truth = truth_stage(&mut t, &job, &base)?;
     warnings.extend(cache.notes());
     collect_warnings(
         &job,
@@ -174,6 +162,41 @@ pub fn run_job(
         warnings,
         timings: t.timings,
     })
+}
+
+/// Stage "truth": the truth of a virtual test, when the job names one.
+fn truth_stage(t: &mut Timed<'_>, job: &Job, base: &Path) -> Result<Option<Truth>> {
+    match &job.truth {
+        Some(path) => {
+            Ok(Some(t.stage("truth", || {
+                Ok((read_truth(&relative(base, path))?, false))
+            })?))
+        }
+        None => Ok(None),
+    }
+}
+
+/// Stage "uncertainty": the Monte Carlo over the stack and the paper's fit at `freqs_hz`,
+/// when the job asks for samples and the paper's route and a three-layer sandwich are there.
+fn uncertainty_stage(
+    t: &mut Timed<'_>,
+    job: &Job,
+    fit: Option<&FitResult>,
+    sandwich: &InverseSetup,
+    freqs_hz: Vec<f64>,
+) -> Result<Option<uncertainty::McResult>> {
+    let (Some(fit), Some(_)) = (fit, &sandwich.stack) else {
+        return Ok(None);
+    };
+    if job.uncertainty.samples == 0 {
+        return Ok(None);
+    }
+    let spinner = t.spinner;
+    let mc = t.stage("uncertainty", || {
+        let mc = monte_carlo(job, fit, sandwich.paper, freqs_hz, spinner)?;
+        Ok((mc, false))
+    })?;
+    Ok(Some(mc))
 }
 
 /// The paper's and the exact inverse at the modal frequencies and on the curve, and the

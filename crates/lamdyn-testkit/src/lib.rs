@@ -6,6 +6,7 @@
 
 #![deny(missing_docs)]
 
+pub mod functions;
 pub mod modules;
 
 use num_complex::Complex64;

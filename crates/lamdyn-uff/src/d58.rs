@@ -225,6 +225,51 @@ fn header(ds: &RawDataset) -> Result<Header, UffError> {
         node: int_field(r6, 66, 76, 0, a6, w)?,
         direction: int_field(r6, 76, 80, 0, a6, w)?,
     };
+    let DataForm {
+        ordinate_type,
+        n,
+        even,
+        start,
+        step,
+        z_value,
+    } = data_form(ds)?;
+    let axes = axis_records(ds)?;
+    let (a6, r6l) = (a6, r6);
+    let w = "record 6";
+    let f = Function58 {
+        id_lines: [id(0), id(1), id(2), id(3), id(4)],
+        function_type: int_field(r6l, 0, 5, 0, a6, w)?,
+        function_id: int_field(r6l, 5, 15, 0, a6, w)?,
+        version: int_field(r6l, 15, 20, 0, a6, w)?,
+        load_case: int_field(r6l, 20, 30, 0, a6, w)?,
+        response,
+        reference,
+        ordinate_type,
+        abscissa: if even {
+            Abscissa::Even { start, step }
+        } else {
+            Abscissa::Uneven(vec![])
+        },
+        z_value,
+        axes,
+        data: Ordinate::Real(vec![]),
+    };
+    Ok(Header { f, n, even })
+}
+
+/// Record 7 of a dataset 58: the ordinate's type, the point count, the spacing and the
+/// abscissa's start and step, the z value.
+struct DataForm {
+    ordinate_type: OrdinateType,
+    n: usize,
+    even: bool,
+    start: f64,
+    step: f64,
+    z_value: f64,
+}
+
+fn data_form(ds: &RawDataset) -> Result<DataForm, UffError> {
+    let l = &ds.lines;
     let (a7, r7) = record(l, 6, ds.line, "record 7 (data form)")?;
     let w = "record 7";
     let code = int_field(r7, 0, 10, -1, a7, w)?;
@@ -269,6 +314,20 @@ fn header(ds: &RawDataset) -> Result<Header, UffError> {
         real(43, 56, "abscissa increment")?,
         real(56, 69, "z-axis value")?,
     );
+    Ok(DataForm {
+        ordinate_type,
+        n: n as usize,
+        even,
+        start,
+        step,
+        z_value,
+    })
+}
+
+/// Records 8–11 of a dataset 58: the abscissa's, the ordinate's numerator's and
+/// denominator's, and the z axis's units.
+fn axis_records(ds: &RawDataset) -> Result<[AxisSpec; 4], UffError> {
+    let l = &ds.lines;
     let mut axes = Vec::with_capacity(4);
     for (k, what) in [
         "record 8 (abscissa)",
@@ -282,34 +341,8 @@ fn header(ds: &RawDataset) -> Result<Header, UffError> {
         let (at, r) = record(l, 7 + k, ds.line, what)?;
         axes.push(axis(r, at, what)?);
     }
-    let axes: [AxisSpec; 4] = axes
-        .try_into()
-        .map_err(|_| syntax(ds.line, "four axis records expected"))?;
-    let (a6, r6l) = (a6, r6);
-    let w = "record 6";
-    let f = Function58 {
-        id_lines: [id(0), id(1), id(2), id(3), id(4)],
-        function_type: int_field(r6l, 0, 5, 0, a6, w)?,
-        function_id: int_field(r6l, 5, 15, 0, a6, w)?,
-        version: int_field(r6l, 15, 20, 0, a6, w)?,
-        load_case: int_field(r6l, 20, 30, 0, a6, w)?,
-        response,
-        reference,
-        ordinate_type,
-        abscissa: if even {
-            Abscissa::Even { start, step }
-        } else {
-            Abscissa::Uneven(vec![])
-        },
-        z_value,
-        axes,
-        data: Ordinate::Real(vec![]),
-    };
-    Ok(Header {
-        f,
-        n: n as usize,
-        even,
-    })
+    axes.try_into()
+        .map_err(|_| syntax(ds.line, "four axis records expected"))
 }
 
 /// A dataset 58 header only (records 1–11), for listings: the function with empty data and the

@@ -164,6 +164,25 @@ impl Geometry<'_> {
     }
 }
 
+impl<'a> Geometry<'a> {
+    /// The nodes and coordinate systems of `file`, lengths in its unit `length` (m per unit).
+    fn of(file: &'a UffFile, length: f64) -> Self {
+        let mut geo = Geometry {
+            nodes: HashMap::new(),
+            systems: HashMap::new(),
+            length,
+        };
+        for d in &file.datasets {
+            match &d.dataset {
+                Dataset::Nodes(n) => geo.nodes.extend(n.nodes.iter().map(|n| (n.label, n))),
+                Dataset::CoordinateSystems(c) => geo.systems.extend(c.iter().map(|c| (c.label, c))),
+                _ => {}
+            }
+        }
+        geo
+    }
+}
+
 /// The FRF set of a file's FRFs (module docs).
 ///
 /// # Errors
@@ -181,18 +200,7 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
         ));
     };
     let x = first.x();
-    let mut geo = Geometry {
-        nodes: HashMap::new(),
-        systems: HashMap::new(),
-        length: units.length,
-    };
-    for d in &file.datasets {
-        match &d.dataset {
-            Dataset::Nodes(n) => geo.nodes.extend(n.nodes.iter().map(|n| (n.label, n))),
-            Dataset::CoordinateSystems(c) => geo.systems.extend(c.iter().map(|c| (c.label, c))),
-            _ => {}
-        }
-    }
+    let geo = Geometry::of(file, units.length);
     let mut responses: Vec<Dof> = Vec::new();
     let mut references: Vec<Dof> = Vec::new();
     let mut quantity = None;
@@ -303,6 +311,71 @@ fn dof_of(c: &Channel, index: usize) -> Result<Dof, UffError> {
     })
 }
 
+/// One node per channel's node label, at the channel's point.
+///
+/// # Errors
+/// As [`from_frf_set`].
+fn channel_nodes(set: &FrfSet) -> Result<Vec<Node>, UffError> {
+    let mut nodes: Vec<Node> = Vec::new();
+    for (k, c) in set.responses().iter().chain(set.references()).enumerate() {
+        let d = dof_of(c, k)?;
+        match nodes.iter().find(|n| n.label == d.node) {
+            Some(n) if n.xyz != c.point_m => {
+                return Err(convert(format!(
+                    "channel '{}' puts node {} at {:?}, another channel at {:?}",
+                    c.name, d.node, c.point_m, n.xyz
+                )));
+            }
+            Some(_) => {}
+            None => nodes.push(Node {
+                label: d.node,
+                definition_cs: 0,
+                displacement_cs: 0,
+                color: 1,
+                xyz: c.point_m,
+            }),
+        }
+    }
+    Ok(nodes)
+}
+
+/// A dataset 58's axes for an FRF of `quantity` in SI: frequency in Hz, the ordinate, the
+/// force in N.
+fn frf_axes(quantity: Quantity) -> [AxisSpec; 4] {
+    let (data_type, units, lexp) = match quantity {
+        Quantity::Receptance => (8, "m/N", 1),
+        Quantity::Mobility => (11, "m/s/N", 1),
+        Quantity::Accelerance => (12, "m/s^2/N", 1),
+    };
+    [
+        AxisSpec {
+            data_type: 18,
+            length_exp: 0,
+            force_exp: 0,
+            temperature_exp: 0,
+            label: "Frequency".into(),
+            units: "Hz".into(),
+        },
+        AxisSpec {
+            data_type,
+            length_exp: lexp,
+            force_exp: 0,
+            temperature_exp: 0,
+            label: format!("{quantity:?}"),
+            units: units.into(),
+        },
+        AxisSpec {
+            data_type: 13,
+            length_exp: 0,
+            force_exp: 1,
+            temperature_exp: 0,
+            label: "Force".into(),
+            units: "N".into(),
+        },
+        AxisSpec::none(),
+    ]
+}
+
 /// lamdyn's 151 header ([`crate::meta::Header151::lamdyn`]: how lamdyn knows its own file
 /// before replacing it), a dataset 2411 with the channels' nodes (metres), then datasets 58
 /// (complex double, even
@@ -327,31 +400,7 @@ pub fn from_frf_set(set: &FrfSet) -> Result<Vec<Dataset>, UffError> {
     } else {
         Abscissa::Uneven(f.to_vec())
     };
-    let (data_type, units, lexp) = match set.quantity() {
-        Quantity::Receptance => (8, "m/N", 1),
-        Quantity::Mobility => (11, "m/s/N", 1),
-        Quantity::Accelerance => (12, "m/s^2/N", 1),
-    };
-    let mut nodes: Vec<Node> = Vec::new();
-    for (k, c) in set.responses().iter().chain(set.references()).enumerate() {
-        let d = dof_of(c, k)?;
-        match nodes.iter().find(|n| n.label == d.node) {
-            Some(n) if n.xyz != c.point_m => {
-                return Err(convert(format!(
-                    "channel '{}' puts node {} at {:?}, another channel at {:?}",
-                    c.name, d.node, c.point_m, n.xyz
-                )));
-            }
-            Some(_) => {}
-            None => nodes.push(Node {
-                label: d.node,
-                definition_cs: 0,
-                displacement_cs: 0,
-                color: 1,
-                xyz: c.point_m,
-            }),
-        }
-    }
+    let nodes = channel_nodes(set)?;
     let mut out = vec![
         Dataset::Header(crate::meta::Header151::lamdyn("FRFs")),
         Dataset::Nodes(crate::geometry::Nodes {
@@ -380,33 +429,7 @@ pub fn from_frf_set(set: &FrfSet) -> Result<Vec<Dataset>, UffError> {
                 ordinate_type: OrdinateType::ComplexDouble,
                 abscissa: abscissa.clone(),
                 z_value: 0.0,
-                axes: [
-                    AxisSpec {
-                        data_type: 18,
-                        length_exp: 0,
-                        force_exp: 0,
-                        temperature_exp: 0,
-                        label: "Frequency".into(),
-                        units: "Hz".into(),
-                    },
-                    AxisSpec {
-                        data_type,
-                        length_exp: lexp,
-                        force_exp: 0,
-                        temperature_exp: 0,
-                        label: format!("{:?}", set.quantity()),
-                        units: units.into(),
-                    },
-                    AxisSpec {
-                        data_type: 13,
-                        length_exp: 0,
-                        force_exp: 1,
-                        temperature_exp: 0,
-                        label: "Force".into(),
-                        units: "N".into(),
-                    },
-                    AxisSpec::none(),
-                ],
+                axes: frf_axes(set.quantity()),
                 data: Ordinate::Complex(set.curve(i, j).to_vec()),
             })));
         }

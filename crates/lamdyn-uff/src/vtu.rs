@@ -8,6 +8,7 @@
 
 use crate::d55::Modal55;
 use crate::error::UffError;
+use crate::geometry::Node;
 use crate::{Dataset, UffFile};
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -104,33 +105,39 @@ pub fn to_vtu(file: &UffFile) -> Result<String, UffError> {
     );
     let _ = writeln!(s, "</DataArray>\n</Cells>\n<PointData>");
     for (k, m) in modes.iter().enumerate() {
-        let values: HashMap<i64, &[num_complex::Complex64]> = m
-            .nodes
-            .iter()
-            .map(|n| (n.node, n.values.as_slice()))
-            .collect();
-        let f = m
-            .frequency_hz()
-            .map_or(String::new(), |f| format!("_{f:.3}Hz"));
-        let parts: &[(&str, bool)] = if m.complex {
-            &[("", false), ("_imag", true)]
-        } else {
-            &[("", false)]
-        };
-        for (suffix, imag) in parts {
-            let _ = writeln!(
-                s,
-                "<DataArray type=\"Float64\" Name=\"mode_{:02}{f}{suffix}\" NumberOfComponents=\"3\" format=\"ascii\">",
-                k + 1
-            );
-            for n in &nodes {
-                let v = values.get(&n.label).copied().unwrap_or(&[]);
-                let c = |i: usize| v.get(i).map_or(0.0, |z| if *imag { z.im } else { z.re });
-                let _ = writeln!(s, "{:e} {:e} {:e}", c(0), c(1), c(2));
-            }
-            let _ = writeln!(s, "</DataArray>");
-        }
+        write_mode(&mut s, k, m, &nodes);
     }
     let _ = writeln!(s, "</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>");
     Ok(s)
+}
+
+/// Mode `m` (the `k`-th) at `nodes` as point data: its real part, and its imaginary part when
+/// it is complex; zero at a node it has no value for.
+fn write_mode(s: &mut String, k: usize, m: &Modal55, nodes: &[Node]) {
+    let values: HashMap<i64, &[num_complex::Complex64]> = m
+        .nodes
+        .iter()
+        .map(|n| (n.node, n.values.as_slice()))
+        .collect();
+    let f = m
+        .frequency_hz()
+        .map_or(String::new(), |f| format!("_{f:.3}Hz"));
+    let parts: &[(&str, bool)] = if m.complex {
+        &[("", false), ("_imag", true)]
+    } else {
+        &[("", false)]
+    };
+    for (suffix, imag) in parts {
+        let _ = writeln!(
+            s,
+            "<DataArray type=\"Float64\" Name=\"mode_{:02}{f}{suffix}\" NumberOfComponents=\"3\" format=\"ascii\">",
+            k + 1
+        );
+        for n in nodes {
+            let v = values.get(&n.label).copied().unwrap_or(&[]);
+            let c = |i: usize| v.get(i).map_or(0.0, |z| if *imag { z.im } else { z.re });
+            let _ = writeln!(s, "{:e} {:e} {:e}", c(0), c(1), c(2));
+        }
+        let _ = writeln!(s, "</DataArray>");
+    }
 }

@@ -365,25 +365,7 @@ pub fn fit_core_to_frfs(
     start: Option<StartCurve<'_>>,
     settings: &FrfFitSettings,
 ) -> Result<FrfFit, FitError> {
-    if set.responses().len() != model.n_sensors() || set.references().len() != model.n_references()
-    {
-        return Err(inconsistent(
-            CONTEXT,
-            format!(
-                "the data have {} response(s) × {} reference(s), the model {} × {}",
-                set.responses().len(),
-                set.references().len(),
-                model.n_sensors(),
-                model.n_references()
-            ),
-        ));
-    }
-    if !(assembled_modulus_pa.is_finite() && assembled_modulus_pa > 0.0) {
-        return Err(inconsistent(
-            CONTEXT,
-            format!("assembled core modulus {assembled_modulus_pa} Pa must be positive"),
-        ));
-    }
+    check_model_and_data(model, set, assembled_modulus_pa)?;
     let inputs = fitted_inputs(model, &settings.inputs)?;
     let n_params = law.n_params() + inputs.len() + set.references().len();
     let data = BandData::from_set(set, settings.band_hz, settings.dynamic_range_db, n_params)?;
@@ -400,25 +382,7 @@ pub fn fit_core_to_frfs(
     };
     let mut problem = problem;
     let starts = problem.starts(start, settings)?;
-    let mut best: Option<LmOutcome> = None;
-    let mut work = [0usize; 2];
-    for x0 in starts {
-        let run = problem.minimise(&x0, settings.lm);
-        if let Some(r) = &run {
-            work = [work[0] + r.iterations, work[1] + r.evaluations];
-        }
-        if let Some(run) = run
-            && best.as_ref().is_none_or(|b| run.cost < b.cost)
-        {
-            best = Some(run);
-        }
-    }
-    let first = best.ok_or_else(|| {
-        inconsistent(
-            CONTEXT,
-            "the model could not be solved at any start (a singular dynamic stiffness)".into(),
-        )
-    })?;
+    let (first, mut work) = best_of_starts(&problem, starts, settings.lm)?;
     // The data's own noise scale, then the fit again with the data rows on that scale, so the
     // priors weigh against the data as they should: a fixed point (module docs). The first
     // pass, on an unknown scale, need not settle; the passes after it must.
@@ -470,6 +434,64 @@ pub fn fit_core_to_frfs(
         }
     }
     Ok(fit)
+}
+
+/// Refuses data whose channel counts differ from the model's and a non-positive assembled
+/// modulus ([`fit_core_to_frfs`]'s errors).
+fn check_model_and_data(
+    model: &dyn CoreFrfModel,
+    set: &FrfSet,
+    assembled_modulus_pa: f64,
+) -> Result<(), FitError> {
+    if set.responses().len() != model.n_sensors() || set.references().len() != model.n_references()
+    {
+        return Err(inconsistent(
+            CONTEXT,
+            format!(
+                "the data have {} response(s) × {} reference(s), the model {} × {}",
+                set.responses().len(),
+                set.references().len(),
+                model.n_sensors(),
+                model.n_references()
+            ),
+        ));
+    }
+    if !(assembled_modulus_pa.is_finite() && assembled_modulus_pa > 0.0) {
+        return Err(inconsistent(
+            CONTEXT,
+            format!("assembled core modulus {assembled_modulus_pa} Pa must be positive"),
+        ));
+    }
+    Ok(())
+}
+
+/// The lowest-cost minimisation from `starts`, and the iterations and evaluations all of them
+/// took.
+fn best_of_starts(
+    problem: &Problem<'_>,
+    starts: Vec<Vec<f64>>,
+    lm: LmSettings,
+) -> Result<(LmOutcome, [usize; 2]), FitError> {
+    let mut best: Option<LmOutcome> = None;
+    let mut work = [0usize; 2];
+    for x0 in starts {
+        let run = problem.minimise(&x0, lm);
+        if let Some(r) = &run {
+            work = [work[0] + r.iterations, work[1] + r.evaluations];
+        }
+        if let Some(run) = run
+            && best.as_ref().is_none_or(|b| run.cost < b.cost)
+        {
+            best = Some(run);
+        }
+    }
+    let first = best.ok_or_else(|| {
+        inconsistent(
+            CONTEXT,
+            "the model could not be solved at any start (a singular dynamic stiffness)".into(),
+        )
+    })?;
+    Ok((first, work))
 }
 
 /// How laws fitted to the same FRFs compare ([`compare_laws`]).

@@ -359,43 +359,8 @@ fn fit_once(
     };
     let priors = input_priors(setup);
     let inputs: Vec<Input> = priors.iter().map(|p| p.input).collect();
-    let (sensors, references) = (points(set.responses()), points(set.references()));
-    spinner.stage(&format!(
-        "FRF fit: layered model {} read at {} channel(s), {} reference(s)",
-        setup.plate.plan.level_label(level),
-        sensors.len(),
-        references.len()
-    ));
     let t = Instant::now();
-    let build = |basis: &FrfBasis| {
-        let model = ObservedModel::build(
-            &setup.plate,
-            level,
-            g_ref,
-            basis,
-            (&sensors, &references),
-            &inputs,
-        )
-        .context("cannot build the FRF fit's layered model")?;
-        // The basis holds the modes below BASIS_COVER of its highest one (at its softest core).
-        let held_hz = BASIS_COVER * model.model().top_eigenvalue.max(0.0).sqrt() / (2.0 * PI);
-        Ok::<_, crate::PipelineError>((model, held_hz))
-    };
-    let (mut model, mut held_hz) = build(&basis)?;
-    // A band beyond the basis: once more with the modes the band needs (a plate's modes are
-    // about evenly spaced in frequency), up to MAX_FRF_MODES.
-    if held_hz < input.band_hz[1] && basis.modes < MAX_FRF_MODES {
-        let wanted = (basis.modes as f64 * 1.15 * input.band_hz[1] / held_hz.max(1.0)).ceil();
-        let more = FrfBasis {
-            modes: (wanted as usize).clamp(basis.modes + 1, MAX_FRF_MODES),
-            ..basis.clone()
-        };
-        spinner.stage(&format!(
-            "FRF fit: the basis holds {held_hz:.1} Hz of the band's {:.1} Hz; again with {} modes",
-            input.band_hz[1], more.modes
-        ));
-        (model, held_hz) = build(&more)?;
-    }
+    let (model, held_hz) = observed_model(setup, input, level, g_ref, (&basis, &inputs), spinner)?;
     let build_s = t.elapsed().as_secs_f64();
     let band_hz = [input.band_hz[0], input.band_hz[1].min(held_hz)];
     if band_hz[1] <= band_hz[0] {
@@ -449,6 +414,57 @@ fn fit_once(
         laws,
         times_s: [build_s, t.elapsed().as_secs_f64()],
     })
+}
+
+/// The layered model on `level` read at the set's channels, its basis at `g_ref` ×
+/// `basis.ratios`, and the frequency (Hz) up to which the basis holds its modes; built again
+/// with more modes (up to [`MAX_FRF_MODES`]) when that falls below the band.
+fn observed_model(
+    setup: &LayeredSetup,
+    input: &FrfFitInput,
+    level: [usize; 2],
+    g_ref: f64,
+    (basis, inputs): (&FrfBasis, &[Input]),
+    spinner: &dyn Reporter,
+) -> Result<(ObservedModel, f64)> {
+    let set = input.set;
+    let (sensors, references) = (points(set.responses()), points(set.references()));
+    spinner.stage(&format!(
+        "FRF fit: layered model {} read at {} channel(s), {} reference(s)",
+        setup.plate.plan.level_label(level),
+        sensors.len(),
+        references.len()
+    ));
+    let build = |basis: &FrfBasis| {
+        let model = ObservedModel::build(
+            &setup.plate,
+            level,
+            g_ref,
+            basis,
+            (&sensors, &references),
+            inputs,
+        )
+        .context("cannot build the FRF fit's layered model")?;
+        // The basis holds the modes below BASIS_COVER of its highest one (at its softest core).
+        let held_hz = BASIS_COVER * model.model().top_eigenvalue.max(0.0).sqrt() / (2.0 * PI);
+        Ok::<_, crate::PipelineError>((model, held_hz))
+    };
+    let (mut model, mut held_hz) = build(basis)?;
+    // A band beyond the basis: once more with the modes the band needs (a plate's modes are
+    // about evenly spaced in frequency), up to MAX_FRF_MODES.
+    if held_hz < input.band_hz[1] && basis.modes < MAX_FRF_MODES {
+        let wanted = (basis.modes as f64 * 1.15 * input.band_hz[1] / held_hz.max(1.0)).ceil();
+        let more = FrfBasis {
+            modes: (wanted as usize).clamp(basis.modes + 1, MAX_FRF_MODES),
+            ..basis.clone()
+        };
+        spinner.stage(&format!(
+            "FRF fit: the basis holds {held_hz:.1} Hz of the band's {:.1} Hz; again with {} modes",
+            input.band_hz[1], more.modes
+        ));
+        (model, held_hz) = build(&more)?;
+    }
+    Ok((model, held_hz))
 }
 
 /// The fitted law's lowest and highest G' over its band's ends and 20 points between (Pa).

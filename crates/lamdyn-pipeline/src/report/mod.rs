@@ -19,6 +19,7 @@ use super::{ChainResult, CorePoint};
 use crate::err;
 use crate::error::Result;
 use lamdyn_fit::fit::FitResult;
+use lamdyn_fit::joint::CoreLawFit;
 use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
 use lamdyn_report::chart::{Axis, Chart, Mark, Series};
 use lamdyn_report::{HtmlReport, shape_map};
@@ -256,27 +257,7 @@ fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
     let value = |g: Option<Complex64>| if loss_factor { loss(g) } else { storage(g) };
     let mut c = Chart::new(title, Axis::linear("frequency (Hz)"), Axis::linear(label));
     let xs: Vec<f64> = r.curve.iter().map(|p| p.freq_hz).collect();
-    if r.uncertainty.is_some() {
-        let (pb, eb): (BandPick, BandPick) = if loss_factor {
-            (|b| b.paper_loss_factor, |b| b.exact_loss_factor)
-        } else {
-            (|b| b.paper_storage, |b| b.exact_storage)
-        };
-        c.series.push(band_series(
-            "paper: 95 % band",
-            BLUE,
-            &xs,
-            &curve_bands(r, pb),
-            scale,
-        ));
-        c.series.push(band_series(
-            "exact: 95 % band",
-            ORANGE,
-            &xs,
-            &curve_bands(r, eb),
-            scale,
-        ));
-    }
+    c.series.extend(inverse_bands(r, &xs, loss_factor, scale));
     let line = |name: &str, color, g: fn(&CorePoint) -> Option<Complex64>, mark| {
         Series::new(
             name,
@@ -332,43 +313,7 @@ fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
         xs.last().copied().unwrap_or(0.0),
     ];
     c.series.extend(truth_series(r, span, loss_factor, scale));
-    if let Some(Ok(law)) = &r.core_law {
-        let curve = law.curve(60);
-        let xs: Vec<f64> = curve.iter().map(|p| p.freq_hz).collect();
-        let bands: Vec<Option<Band>> = curve
-            .iter()
-            .map(|p| {
-                Some(if loss_factor {
-                    p.loss_factor_ci95
-                } else {
-                    p.storage_ci95
-                })
-            })
-            .collect();
-        c.series.push(band_series(
-            "core law fitted to all modes: 95 % band",
-            PURPLE,
-            &xs,
-            &bands,
-            scale,
-        ));
-        c.series.push(Series::new(
-            &format!("core law ({})", law.law.name()),
-            PURPLE,
-            Mark::Line,
-            curve
-                .iter()
-                .map(|p| {
-                    let v = if loss_factor {
-                        p.loss_factor
-                    } else {
-                        p.storage_pa
-                    };
-                    [p.freq_hz, v / scale]
-                })
-                .collect(),
-        ));
-    }
+    c.series.extend(law_series(r, loss_factor, scale));
     // The answer last, on top of everything.
     if r.modal.iter().any(|p| p.layered_g().is_some()) {
         let mut layered = modal(
@@ -380,6 +325,80 @@ fn core_chart(r: &ChainResult, loss_factor: bool) -> Chart {
         c.series.push(layered);
     }
     c
+}
+
+/// The Monte Carlo's 95 % bands of the paper's and the exact inverse over the curve's lines
+/// `xs` (none without a Monte Carlo): G' divided by `scale`, or η.
+fn inverse_bands(r: &ChainResult, xs: &[f64], loss_factor: bool, scale: f64) -> Vec<Series> {
+    let mut out = Vec::new();
+    if r.uncertainty.is_none() {
+        return out;
+    }
+    let (pb, eb): (BandPick, BandPick) = if loss_factor {
+        (|b| b.paper_loss_factor, |b| b.exact_loss_factor)
+    } else {
+        (|b| b.paper_storage, |b| b.exact_storage)
+    };
+    out.push(band_series(
+        "paper: 95 % band",
+        BLUE,
+        xs,
+        &curve_bands(r, pb),
+        scale,
+    ));
+    out.push(band_series(
+        "exact: 95 % band",
+        ORANGE,
+        xs,
+        &curve_bands(r, eb),
+        scale,
+    ));
+    out
+}
+
+/// The core's law over all modes and its 95 % band (none without one): G' divided by
+/// `scale`, or η.
+fn law_series(r: &ChainResult, loss_factor: bool, scale: f64) -> Vec<Series> {
+    let mut out = Vec::new();
+    let Some(Ok(law)) = &r.core_law else {
+        return out;
+    };
+    let curve = law.curve(60);
+    let xs: Vec<f64> = curve.iter().map(|p| p.freq_hz).collect();
+    let bands: Vec<Option<Band>> = curve
+        .iter()
+        .map(|p| {
+            Some(if loss_factor {
+                p.loss_factor_ci95
+            } else {
+                p.storage_ci95
+            })
+        })
+        .collect();
+    out.push(band_series(
+        "core law fitted to all modes: 95 % band",
+        PURPLE,
+        &xs,
+        &bands,
+        scale,
+    ));
+    out.push(Series::new(
+        &format!("core law ({})", law.law.name()),
+        PURPLE,
+        Mark::Line,
+        curve
+            .iter()
+            .map(|p| {
+                let v = if loss_factor {
+                    p.loss_factor
+                } else {
+                    p.storage_pa
+                };
+                [p.freq_hz, v / scale]
+            })
+            .collect(),
+    ));
+    out
 }
 
 /// The truth of a virtual test (none without one) as a line over `span` Hz widened by 10 %:
@@ -684,6 +703,18 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
             return;
         }
     };
+    law_summary(html, law);
+    if let Some(why) = &law.selection {
+        html.paragraph(&format!("The {} law was {why}.", law.form()));
+    }
+    law_at_modes(html, r, law);
+    law_parameters(html, law);
+    files.push(("core_law.csv".into(), law_csv(law).into_bytes()));
+}
+
+/// The joint law fit in a paragraph: the law, χ², the scale of the noise, the inputs found
+/// and what the data do not determine.
+fn law_summary(html: &mut HtmlReport, law: &CoreLawFit) {
     // The shared remainder's two terms are no physical inputs (their unit is their prior's sd).
     let inputs: Vec<String> = law
         .inputs()
@@ -731,9 +762,11 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
             )
         }
     ));
-    if let Some(why) = &law.selection {
-        html.paragraph(&format!("The {} law was {why}.", law.form()));
-    }
+}
+
+/// The law and its band at each mode, the mode's own point against it, and the errors
+/// against the truth of a virtual test.
+fn law_at_modes(html: &mut HtmlReport, r: &ChainResult, law: &CoreLawFit) {
     let truth = |f: f64| r.truth.as_ref().and_then(|t| t.at(f));
     let mut header = vec![
         "f [Hz]",
@@ -782,6 +815,11 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
         &header,
         rows,
     );
+}
+
+/// The law's parameters and the inputs' changes with their 95 % intervals; a parameter the
+/// data do not determine is said to be.
+fn law_parameters(html: &mut HtmlReport, law: &CoreLawFit) {
     html.table(
         "The law's parameters and the inputs' relative changes with 95 % intervals (correlations in result.json).",
         &["parameter", "value", "95% low", "95% high"],
@@ -817,6 +855,10 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
             .collect(),
     );
     html.paragraph("Positive parameters and alpha have intervals of their logarithm or logit, mapped back; the two terms 'inputs beyond second order, shared' are in units of their unit prior. An interval spanning more than three decades is shown as not determined: the data do not fix that parameter (core_law.csv and result.json keep the numbers).");
+}
+
+/// `core_law.csv`: the law and its band on 60 lines over the modes.
+fn law_csv(law: &CoreLawFit) -> String {
     let mut csv = String::from(
         "f_hz,storage_pa,storage_lo_pa,storage_hi_pa,loss_factor,loss_factor_lo,loss_factor_hi,main_source_storage,main_source_loss_factor\n",
     );
@@ -835,7 +877,7 @@ fn law_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) {
             p.dominant[1]
         );
     }
-    files.push(("core_law.csv".into(), csv.into_bytes()));
+    csv
 }
 
 fn curve_csv(r: &ChainResult) -> String {
@@ -889,21 +931,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     let mut files: Files = vec![];
     let mut html = HtmlReport::new(&r.job.title);
     // The first screen: the answer in a sentence, then its figures.
-    html.answer(&answer::sentence(r));
-    add_figure(
-        &mut html,
-        &mut files,
-        "answer_storage",
-        "The core's G'(f): the answer with its 95 % band and the layered inverse at each mode.",
-        &answer::chart(r, false),
-    )?;
-    add_figure(
-        &mut html,
-        &mut files,
-        "answer_loss",
-        "The core's loss factor η(f), as above.",
-        &answer::chart(r, true),
-    )?;
+    answer_section(&mut html, &mut files, r)?;
     let (header, rows) = modal_table(r);
     lead_section(&mut html, r, &header, &rows);
     law_section(&mut html, &mut files, r);
@@ -918,24 +946,60 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     } else {
         html.warnings(&r.warnings);
     }
+    reference_methods_section(&mut html, &mut files, r, &header, &rows)?;
+    identification_section(&mut html, &mut files, r)?;
+    uncertainty_and_run_section(&mut html, r);
+    files.push(("result.json".into(), result_json(r, band_widths)?));
+    files.push(("report.html".into(), html.render().into_bytes()));
+    Ok(files)
+}
 
+/// The report's first screen: the answer's sentence and its two figures.
+fn answer_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) -> Result<()> {
+    html.answer(&answer::sentence(r));
+    add_figure(
+        html,
+        files,
+        "answer_storage",
+        "The core's G'(f): the answer with its 95 % band and the layered inverse at each mode.",
+        &answer::chart(r, false),
+    )?;
+    add_figure(
+        html,
+        files,
+        "answer_loss",
+        "The core's loss factor η(f), as above.",
+        &answer::chart(r, true),
+    )?;
+    Ok(())
+}
+
+/// The paper's and the exact inverse at the modal frequencies (figures, tables picked from
+/// the modal table's `header` and `rows`, `core_modal.csv`) and the paper's route's sections.
+fn reference_methods_section(
+    html: &mut HtmlReport,
+    files: &mut Files,
+    r: &ChainResult,
+    header: &[&'static str],
+    rows: &[Vec<String>],
+) -> Result<()> {
     html.heading("The reference methods at the modal frequencies");
     add_figure(
-        &mut html,
-        &mut files,
+        html,
+        files,
         "core_storage",
         "Core G'(f) by every route: the paper's and the exact inverse with their 95 % bands (paper Fig. 7), the law and the layered inverse per mode.",
         &core_chart(r, false),
     )?;
     html.paragraph("The axes are scaled to the estimates: a band beyond them is clipped, and its legend entry says so.");
     add_figure(
-        &mut html,
-        &mut files,
+        html,
+        files,
         "core_loss",
         "Core loss factor eta(f), as above.",
         &core_chart(r, true),
     )?;
-    let pick = |names: &[(&'static str, usize)]| pick_columns(&header, &rows, names);
+    let pick = |names: &[(&'static str, usize)]| pick_columns(header, rows, names);
     let with_truth = |mut cols: Vec<(&'static str, usize)>, errs: [&'static str; 2]| {
         if r.truth.is_some() {
             cols.extend(errs.map(|e| (e, 0)));
@@ -987,25 +1051,31 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         ));
     }
     match &r.fit {
-        Some(fit) => paper_route_sections(&mut html, &mut files, r, fit)?,
+        Some(fit) => paper_route_sections(html, files, r, fit)?,
         None => html.paragraph(&format!(
             "The paper's route has no result: {}. Its figures and files (core_curve.csv, parameters.csv, table3.csv, rms.csv) are not written; the layered route above does not depend on it.",
             r.paper_route_error.as_deref().unwrap_or("not run")
         )),
     }
 
+    Ok(())
+}
+
+/// The modal identification: the stabilization diagram, the CMIF, the modes' table and
+/// verdicts (`ema_modes.csv`), the shapes.
+fn identification_section(html: &mut HtmlReport, files: &mut Files, r: &ChainResult) -> Result<()> {
     html.heading("Modal identification");
     let f = r.measured.set.freqs_hz();
     add_figure(
-        &mut html,
-        &mut files,
+        html,
+        files,
         "stabilization",
         "Stabilization diagram with the first CMIF behind it",
         &lamdyn_report::ema::stabilization_chart(&r.ema, f),
     )?;
     add_figure(
-        &mut html,
-        &mut files,
+        html,
+        files,
         "cmif",
         "Complex mode indicator function",
         &lamdyn_report::ema::cmif_chart(&r.ema, f),
@@ -1035,9 +1105,14 @@ pub fn build(r: &ChainResult) -> Result<Files> {
     }
     files.push(("ema_modes.csv".into(), modes_csv.into_bytes()));
     for (name, caption, chart) in shape_charts(r) {
-        add_figure(&mut html, &mut files, &name, &caption, &chart)?;
+        add_figure(html, files, &name, &caption, &chart)?;
     }
 
+    Ok(())
+}
+
+/// The Monte Carlo's settings and the run's inputs and stage times.
+fn uncertainty_and_run_section(html: &mut HtmlReport, r: &ChainResult) {
     html.heading("Uncertainty");
     html.paragraph(&match &r.uncertainty {
         Some(m) => format!(
@@ -1076,6 +1151,14 @@ pub fn build(r: &ChainResult) -> Result<Files> {
             })
             .collect(),
     );
+}
+
+/// `result.json`: the run's inputs, the paper's fit, the core's law, the modes, the
+/// uncertainty, the band widths, the warnings and the stage times.
+fn result_json(
+    r: &ChainResult,
+    band_widths: Option<crate::band_widths::BandWidths>,
+) -> Result<Vec<u8>> {
     let json = serde_json::json!({
         "job": r.job_path.display().to_string(),
         "measurement": r.measured.source,
@@ -1089,9 +1172,7 @@ pub fn build(r: &ChainResult) -> Result<Files> {
         "warnings": r.warnings,
         "timings": r.timings.iter().map(|t| serde_json::json!({"stage": t.name, "seconds": t.seconds, "cached": t.cached})).collect::<Vec<_>>(),
     });
-    files.push(("result.json".into(), serde_json::to_vec_pretty(&json)?));
-    files.push(("report.html".into(), html.render().into_bytes()));
-    Ok(files)
+    Ok(serde_json::to_vec_pretty(&json)?)
 }
 
 /// The paper's route's own sections: causality of its curve, the laminate's effective

@@ -241,46 +241,7 @@ fn build_report(config: &CoreConfig, lines: &[CoreLine]) -> Result<Report> {
         Column::new("causality_exact", "KK_exact", "", Fmt::Fixed(0)),
     ];
     let mut report = Report::new("core", columns);
-    let stack = &config.stack;
-    let h = stack.thickness_m();
-    let bonded = stack
-        .section(Complex64::new(1.0, 0.0), config.options.kinematics)
-        .without_bending_of(1)
-        .bending_stiffness()
-        .re;
-    report.input("laminate modulus", config.source.clone());
-    report.input("stack", config.stack_label.clone());
-    report.input(
-        "faces / core",
-        format!(
-            "{:.4} mm + {:.4} mm + {:.4} mm, E_faces = {:.4e} Pa",
-            stack.bottom().thickness_m * 1e3,
-            stack.core().thickness_m * 1e3,
-            stack.top().thickness_m * 1e3,
-            stack.bottom().young_pa
-        ),
-    );
-    report.input(
-        "surface density",
-        format!("{:.4} kg/m^2", stack.surface_density_kg_m2()),
-    );
-    report.input(
-        "bonded faces",
-        format!(
-            "B_eq = {bonded:.6e} N m, 12 B_eq/h^3 = {:.4} GPa (E_eff' must stay below)",
-            12.0 * bonded / h.powi(3) * config.options.kinematics.effective_modulus_factor() / 1e9
-        ),
-    );
-    report.input("paper inverse", config.options.label());
-    report.input(
-        "exact inverse",
-        "Mead-Markus sandwich beam, closed form".to_string(),
-    );
-    report.input("kinematics", kinematics_label(config.options.kinematics));
-    report.input(
-        "omega convention",
-        "omega = 2 pi f in rad/s wherever a law takes a frequency".to_string(),
-    );
+    add_inputs(&mut report, config);
 
     let verdict = |v: Option<CausalityVerdict>| v.map_or("n/a".into(), |v| v.label().to_string());
     let mut beyond = 0;
@@ -324,6 +285,64 @@ fn build_report(config: &CoreConfig, lines: &[CoreLine]) -> Result<Report> {
             lines.len()
         ));
     }
+    add_causality_warnings(&mut report, lines);
+    report.warnings.extend(failures);
+    report.notes.push("G'_paper, eta_paper: paper eqs. 33-45; G'_exact, eta_exact: Mead-Markus exact sandwich inverse.".into());
+    report.notes.push("|phi|: paper eq. 37; phi<=0.1: within the paper model's ~1 % accuracy range (method-notes section 3).".into());
+    report.notes.push("KK: local Kramers-Kronig check of the recovered G*(f) (causal | G' falls | too little loss | negative loss).".into());
+    report.extra = Some(serde_json::to_value(
+        lines.iter().map(CoreLine::json).collect::<Vec<_>>(),
+    )?);
+    Ok(report)
+}
+
+/// The inputs: the laminate's modulus, the stack, the bonded faces' bound, the inverses, the
+/// kinematics and the frequency convention.
+fn add_inputs(report: &mut Report, config: &CoreConfig) {
+    let stack = &config.stack;
+    let h = stack.thickness_m();
+    let bonded = stack
+        .section(Complex64::new(1.0, 0.0), config.options.kinematics)
+        .without_bending_of(1)
+        .bending_stiffness()
+        .re;
+    report.input("laminate modulus", config.source.clone());
+    report.input("stack", config.stack_label.clone());
+    report.input(
+        "faces / core",
+        format!(
+            "{:.4} mm + {:.4} mm + {:.4} mm, E_faces = {:.4e} Pa",
+            stack.bottom().thickness_m * 1e3,
+            stack.core().thickness_m * 1e3,
+            stack.top().thickness_m * 1e3,
+            stack.bottom().young_pa
+        ),
+    );
+    report.input(
+        "surface density",
+        format!("{:.4} kg/m^2", stack.surface_density_kg_m2()),
+    );
+    report.input(
+        "bonded faces",
+        format!(
+            "B_eq = {bonded:.6e} N m, 12 B_eq/h^3 = {:.4} GPa (E_eff' must stay below)",
+            12.0 * bonded / h.powi(3) * config.options.kinematics.effective_modulus_factor() / 1e9
+        ),
+    );
+    report.input("paper inverse", config.options.label());
+    report.input(
+        "exact inverse",
+        "Mead-Markus sandwich beam, closed form".to_string(),
+    );
+    report.input("kinematics", kinematics_label(config.options.kinematics));
+    report.input(
+        "omega convention",
+        "omega = 2 pi f in rad/s wherever a law takes a frequency".to_string(),
+    );
+}
+
+/// A warning per inverse whose G*(f) fails the Kramers-Kronig check at some line.
+fn add_causality_warnings(report: &mut Report, lines: &[CoreLine]) {
     let non_causal = |pick: fn(&CoreLine) -> Option<CausalityVerdict>| {
         lines
             .iter()
@@ -341,14 +360,6 @@ fn build_report(config: &CoreConfig, lines: &[CoreLine]) -> Result<Report> {
             ));
         }
     }
-    report.warnings.extend(failures);
-    report.notes.push("G'_paper, eta_paper: paper eqs. 33-45; G'_exact, eta_exact: Mead-Markus exact sandwich inverse.".into());
-    report.notes.push("|phi|: paper eq. 37; phi<=0.1: within the paper model's ~1 % accuracy range (method-notes section 3).".into());
-    report.notes.push("KK: local Kramers-Kronig check of the recovered G*(f) (causal | G' falls | too little loss | negative loss).".into());
-    report.extra = Some(serde_json::to_value(
-        lines.iter().map(CoreLine::json).collect::<Vec<_>>(),
-    )?);
-    Ok(report)
 }
 
 /// (G', η) cells of an optional complex modulus.

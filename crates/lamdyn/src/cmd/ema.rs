@@ -296,31 +296,7 @@ fn time_json(read_s: f64, t: &EmaTimings) -> serde_json::Value {
 }
 
 fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read_s: f64) -> Report {
-    let mut report = Report::new(
-        "ema",
-        vec![
-            Column::new("mode", "mode", "", Fmt::Fixed(0)),
-            Column::new("freq_hz", "f", "Hz", Fmt::Fixed(4)),
-            Column::new("freq_sd_hz", "sd(f)", "Hz", Fmt::Sci(1)),
-            Column::new("damping_ratio", "zeta", "%", Fmt::Fixed(4)).scaled(0.01),
-            Column::new("damping_sd", "sd(zeta)", "%", Fmt::Sci(1)).scaled(0.01),
-            Column::new("loss_factor", "eta", "", Fmt::Sci(4)),
-            Column::new("mpc", "MPC", "", Fmt::Fixed(4)),
-            Column::new("mpd_deg", "MPD", "deg", Fmt::Fixed(2)),
-            Column::new("stable_poles", "stable", "", Fmt::Fixed(0)),
-            Column::new("frac_drop", "FRAC drop", "", Fmt::Sci(2)),
-            Column::new("verdict", "verdict", "", Fmt::Fixed(0)),
-            Column::new("pole", "pole", "", Fmt::Fixed(0)),
-            Column::new("diagram_freq_hz", "f (diagram)", "Hz", Fmt::Fixed(4)),
-            Column::new(
-                "diagram_damping_ratio",
-                "zeta (diagram)",
-                "%",
-                Fmt::Fixed(4),
-            )
-            .scaled(0.01),
-        ],
-    );
+    let mut report = Report::new("ema", mode_columns());
     report.input("data", source.to_string());
     report.input(
         "FRFs",
@@ -332,27 +308,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read
             set.quantity().unit()
         ),
     );
-    report.input(
-        "method",
-        format!(
-            "{} orders {}-{} step {} on {:.3}-{:.3} Hz; stable: df/f <= {} %, dzeta/zeta <= {} %{}; {}; {}",
-            if s.polymax && set.references().len() > 1 {
-                "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
-            } else {
-                "LSCF (z-domain common denominator)"
-            },
-            s.orders.0,
-            s.orders.1,
-            s.orders.2,
-            r.band_hz[0],
-            r.band_hz[1],
-            100.0 * s.criteria.freq_tol,
-            100.0 * s.criteria.damping_tol,
-            if s.mode_vectors { format!(", 1 - MAC(mode vectors) <= {} %", 100.0 * s.criteria.vector_tol) } else { String::new() },
-            if s.near_hz.is_some() { "poles picked near the given frequencies" } else { "automatic selection (clusters stable over half the orders)" },
-            estimator_text(s)
-        ),
-    );
+    report.input("method", method_line(set, s, r));
     if let Some(t) = s.exp_tau_s {
         report.input(
             "exponential window",
@@ -388,6 +344,75 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read
             report.notes.push(line);
         }
     }
+    add_sections(&mut report, r);
+    add_warnings_and_notes(&mut report, s, r);
+    report.extra = Some(extra_json(set, r, read_s));
+    report
+}
+
+/// The modes table's columns.
+fn mode_columns() -> Vec<Column> {
+    vec![
+        Column::new("mode", "mode", "", Fmt::Fixed(0)),
+        Column::new("freq_hz", "f", "Hz", Fmt::Fixed(4)),
+        Column::new("freq_sd_hz", "sd(f)", "Hz", Fmt::Sci(1)),
+        Column::new("damping_ratio", "zeta", "%", Fmt::Fixed(4)).scaled(0.01),
+        Column::new("damping_sd", "sd(zeta)", "%", Fmt::Sci(1)).scaled(0.01),
+        Column::new("loss_factor", "eta", "", Fmt::Sci(4)),
+        Column::new("mpc", "MPC", "", Fmt::Fixed(4)),
+        Column::new("mpd_deg", "MPD", "deg", Fmt::Fixed(2)),
+        Column::new("stable_poles", "stable", "", Fmt::Fixed(0)),
+        Column::new("frac_drop", "FRAC drop", "", Fmt::Sci(2)),
+        Column::new("verdict", "verdict", "", Fmt::Fixed(0)),
+        Column::new("pole", "pole", "", Fmt::Fixed(0)),
+        Column::new("diagram_freq_hz", "f (diagram)", "Hz", Fmt::Fixed(4)),
+        Column::new(
+            "diagram_damping_ratio",
+            "zeta (diagram)",
+            "%",
+            Fmt::Fixed(4),
+        )
+        .scaled(0.01),
+    ]
+}
+
+/// The method line: the estimator, orders, band, stability criteria, selection and pole
+/// estimator.
+fn method_line(set: &FrfSet, s: &EmaSettings, r: &EmaResult) -> String {
+    format!(
+        "{} orders {}-{} step {} on {:.3}-{:.3} Hz; stable: df/f <= {} %, dzeta/zeta <= {} %{}; {}; {}",
+        if s.polymax && set.references().len() > 1 {
+            "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
+        } else {
+            "LSCF (z-domain common denominator)"
+        },
+        s.orders.0,
+        s.orders.1,
+        s.orders.2,
+        r.band_hz[0],
+        r.band_hz[1],
+        100.0 * s.criteria.freq_tol,
+        100.0 * s.criteria.damping_tol,
+        if s.mode_vectors {
+            format!(
+                ", 1 - MAC(mode vectors) <= {} %",
+                100.0 * s.criteria.vector_tol
+            )
+        } else {
+            String::new()
+        },
+        if s.near_hz.is_some() {
+            "poles picked near the given frequencies"
+        } else {
+            "automatic selection (clusters stable over half the orders)"
+        },
+        estimator_text(s)
+    )
+}
+
+/// The sections beside the modes: the regenerated FRFs' correlation, the rejected poles and
+/// the CMIF peaks.
+fn add_sections(report: &mut Report, r: &EmaResult) {
     let mut corr = Section::new(
         "correlation",
         "Regenerated FRFs against the measured ones (FRAC over the band)",
@@ -426,6 +451,10 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read
         report.sections.push(rej);
     }
     report.sections.push(peaks);
+}
+
+/// Low correlations and missing picks as warnings; the columns' notes.
+fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
     let low: Vec<&String> = r
         .curve_names
         .iter()
@@ -447,8 +476,13 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read
     report.notes.push(stable_footnote(&r.modes));
     report.notes.push("pole: refined, or diagram where the refinement did not fit the curves significantly better in the LSCF model's context (or was not run); f and zeta (diagram): the diagram's pole it started from.".into());
     report.notes.push("FRAC drop: the mean FRAC the regenerated FRFs lose without the mode; verdict: sound, doubtful (kept; the reasons above) or smear (one pole over a cluster of modes: its f and zeta describe no mode).".into());
+}
+
+/// The JSON's extra fields: the modes in full, the rejected poles, the auto-MAC, the diagram,
+/// the first CMIF curve, the lines, the responses and the step times.
+fn extra_json(set: &FrfSet, r: &EmaResult, read_s: f64) -> serde_json::Value {
     let cell = |v: f64| serde_json::json!(v);
-    report.extra = Some(serde_json::json!({
+    serde_json::json!({
         "modes": r.modes,
         "rejected": r.rejected,
         "auto_mac": r.auto_mac,
@@ -457,8 +491,7 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read
         "freqs_hz": set.freqs_hz(),
         "responses": set.responses().iter().map(|c| &c.name).collect::<Vec<_>>(),
         "seconds": time_json(read_s, &r.timings),
-    }));
-    report
+    })
 }
 
 /// Coherence per response over the band and the estimator's warnings.

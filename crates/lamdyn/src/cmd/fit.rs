@@ -256,6 +256,55 @@ fn build_report(
     fitted_rms: &[f64],
 ) -> Report {
     let truth = problem.truth.as_ref().map(|(t, _)| t.as_ref());
+    let mut report = Report::new("fit", law_columns(truth.is_some()));
+    add_inputs(&mut report, problem, r, objective);
+    let s = &problem.settings;
+    let truth_params = problem.truth.as_ref().map(|(_, p)| p.as_slice());
+    report.sections.push(parameters_section(r, truth_params));
+    report.sections.push(starts_section(r));
+    report
+        .sections
+        .push(table3_section(problem, objective, fitted_rms));
+    report.sections.push(modewise_section(problem, r));
+    for pk in &r.peaks {
+        let w = 2.0 * PI * pk.freq_hz;
+        let (e, eta, sd) = r.modulus_uncertainty(w);
+        let mut row: Vec<Cell> = vec![
+            pk.freq_hz.into(),
+            e.into(),
+            sd.map(|s| s.0).into(),
+            eta.into(),
+            sd.map(|s| s.1).into(),
+        ];
+        if let Some(t) = truth {
+            let tm = t.modulus(w);
+            row.push((e / tm.re - 1.0).into());
+            row.push((eta / (tm.im / tm.re) - 1.0).into());
+        }
+        report.row(row);
+    }
+    report.notes.push("Main table: the fitted law at the measured resonances (sd by the delta method through the parameter covariance); its CSV (--csv) is a `lamdyn core --table` input.".into());
+    report.notes.push("Table 3: peaks of the measured and fitted RMS FRFs, parabolic refinement in log magnitude; damping ratio by the half-power bandwidth on the RMS curve, linearly interpolated between lines ('-' when the bandwidth spans less than two lines).".into());
+    report.notes.push(
+        "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak (or identified pole); eta = 2 zeta (1 - beta/2), zeta the resonance's damping (half-power or the pole's), beta = d ln E'/d ln f between neighbouring resonances (docs/fit.md)."
+            .into(),
+    );
+    report.warnings.extend(problem.notes.iter().cloned());
+    report.warnings.extend(r.warnings.iter().cloned());
+    if !r.converged {
+        report.warnings.push(format!(
+            "the best start stopped without meeting a tolerance: {}",
+            r.reason
+        ));
+    }
+    report.extra = Some(
+        serde_json::json!({ "fit": r, "settings": { "law": s.law, "misfit": s.misfit, "covariance": s.covariance } }),
+    );
+    report
+}
+
+/// The main table's columns: the law at the resonances, with its errors against a truth.
+fn law_columns(truth: bool) -> Vec<Column> {
     let mut columns = vec![
         Column::new("f_hz", "f", "Hz", Fmt::Fixed(3)),
         Column::new("e_storage_pa", "E'", "GPa", Fmt::Fixed(4)).scaled(1e9),
@@ -263,14 +312,18 @@ fn build_report(
         Column::new("loss_factor", "eta", "", Fmt::Sci(4)),
         Column::new("loss_factor_sd", "sd eta", "", Fmt::Sci(2)),
     ];
-    if truth.is_some() {
+    if truth {
         columns
             .push(Column::new("truth_e_storage_error", "E' err", "%", Fmt::Fixed(4)).scaled(0.01));
         columns.push(
             Column::new("truth_loss_factor_error", "eta err", "%", Fmt::Fixed(2)).scaled(0.01),
         );
     }
-    let mut report = Report::new("fit", columns);
+    columns
+}
+
+/// The inputs: the data, the model, the measurement, the misfit, the law and the convergence.
+fn add_inputs(report: &mut Report, problem: &Problem, r: &FitResult, objective: &Objective<'_>) {
     report.input("data", problem.source.clone());
     report.input(
         "model",
@@ -320,48 +373,6 @@ fn build_report(
             r.seconds
         ),
     );
-    let truth_params = problem.truth.as_ref().map(|(_, p)| p.as_slice());
-    report.sections.push(parameters_section(r, truth_params));
-    report.sections.push(starts_section(r));
-    report
-        .sections
-        .push(table3_section(problem, objective, fitted_rms));
-    report.sections.push(modewise_section(problem, r));
-    for pk in &r.peaks {
-        let w = 2.0 * PI * pk.freq_hz;
-        let (e, eta, sd) = r.modulus_uncertainty(w);
-        let mut row: Vec<Cell> = vec![
-            pk.freq_hz.into(),
-            e.into(),
-            sd.map(|s| s.0).into(),
-            eta.into(),
-            sd.map(|s| s.1).into(),
-        ];
-        if let Some(t) = truth {
-            let tm = t.modulus(w);
-            row.push((e / tm.re - 1.0).into());
-            row.push((eta / (tm.im / tm.re) - 1.0).into());
-        }
-        report.row(row);
-    }
-    report.notes.push("Main table: the fitted law at the measured resonances (sd by the delta method through the parameter covariance); its CSV (--csv) is a `lamdyn core --table` input.".into());
-    report.notes.push("Table 3: peaks of the measured and fitted RMS FRFs, parabolic refinement in log magnitude; damping ratio by the half-power bandwidth on the RMS curve, linearly interpolated between lines ('-' when the bandwidth spans less than two lines).".into());
-    report.notes.push(
-        "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak (or identified pole); eta = 2 zeta (1 - beta/2), zeta the resonance's damping (half-power or the pole's), beta = d ln E'/d ln f between neighbouring resonances (docs/fit.md)."
-            .into(),
-    );
-    report.warnings.extend(problem.notes.iter().cloned());
-    report.warnings.extend(r.warnings.iter().cloned());
-    if !r.converged {
-        report.warnings.push(format!(
-            "the best start stopped without meeting a tolerance: {}",
-            r.reason
-        ));
-    }
-    report.extra = Some(
-        serde_json::json!({ "fit": r, "settings": { "law": s.law, "misfit": s.misfit, "covariance": s.covariance } }),
-    );
-    report
 }
 
 /// "log_rms over 320 lines (band 1-80 Hz, excluding 17-21 Hz; 1 weighted band), reference 0".

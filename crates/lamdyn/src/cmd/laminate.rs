@@ -35,27 +35,7 @@ pub fn run(args: &LaminateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Res
         args.grid.f_step_hz,
     )?;
 
-    let mut columns = vec![
-        Column::new("f_hz", "f", "Hz", Fmt::Fixed(2)),
-        Column::new("b_eq_storage_n_m", "B_eq'", "N m", Fmt::Sci(4)),
-        Column::new("k_eq_storage_n_per_m", "K_eq'", "N/m", Fmt::Sci(4)),
-        Column::new("phi_abs", "|phi|", "", Fmt::Fixed(4)),
-        Column::new("e_eff_storage_pa", "E_eff'", "GPa", Fmt::Fixed(4)).scaled(1e9),
-        Column::new("e_eff_loss_factor", "eta_eff", "", Fmt::Sci(3)),
-        Column::new("within_phi_limit", "phi<=0.1", "", Fmt::Fixed(0)),
-        Column::new("paper_valid", "valid", "", Fmt::Fixed(0)),
-    ];
-    if sandwich.is_some() {
-        columns
-            .push(Column::new("e_exact_storage_pa", "E_exact'", "GPa", Fmt::Fixed(4)).scaled(1e9));
-        columns.push(Column::new(
-            "e_exact_loss_factor",
-            "eta_exact",
-            "",
-            Fmt::Sci(3),
-        ));
-    }
-    let mut report = Report::new("laminate", columns);
+    let mut report = Report::new("laminate", columns(sandwich.is_some()));
     report.input("stack", file);
     report.input("layers", layer_summary(&stack));
     report.input("thickness", format!("{:.6e} m", stack.thickness_m()));
@@ -99,19 +79,65 @@ pub fn run(args: &LaminateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Res
         report.row(row);
         details.push(h);
     }
+    add_warnings_and_notes(
+        &mut report,
+        freqs.len(),
+        &beyond,
+        &disagree,
+        sandwich.is_some(),
+    );
+    report.extra = Some(serde_json::to_value(&details)?);
+    report.write(args.output.format(), out, err)?;
+    Ok(Outcome::Done)
+}
+
+/// The table's columns, with exact sandwich theory's for a three-layer stack.
+fn columns(sandwich: bool) -> Vec<Column> {
+    let mut columns = vec![
+        Column::new("f_hz", "f", "Hz", Fmt::Fixed(2)),
+        Column::new("b_eq_storage_n_m", "B_eq'", "N m", Fmt::Sci(4)),
+        Column::new("k_eq_storage_n_per_m", "K_eq'", "N/m", Fmt::Sci(4)),
+        Column::new("phi_abs", "|phi|", "", Fmt::Fixed(4)),
+        Column::new("e_eff_storage_pa", "E_eff'", "GPa", Fmt::Fixed(4)).scaled(1e9),
+        Column::new("e_eff_loss_factor", "eta_eff", "", Fmt::Sci(3)),
+        Column::new("within_phi_limit", "phi<=0.1", "", Fmt::Fixed(0)),
+        Column::new("paper_valid", "valid", "", Fmt::Fixed(0)),
+    ];
+    if sandwich {
+        columns
+            .push(Column::new("e_exact_storage_pa", "E_exact'", "GPa", Fmt::Fixed(4)).scaled(1e9));
+        columns.push(Column::new(
+            "e_exact_loss_factor",
+            "eta_exact",
+            "",
+            Fmt::Sci(3),
+        ));
+    }
+    columns
+}
+
+/// The lines beyond the paper's |φ| limit (`beyond`) and those where it disagrees with exact
+/// sandwich theory (`disagree`), of `lines`, as warnings; the columns' notes.
+fn add_warnings_and_notes(
+    report: &mut Report,
+    lines: usize,
+    beyond: &[f64],
+    disagree: &[f64],
+    sandwich: bool,
+) {
     if !beyond.is_empty() {
         report.warnings.push(format!(
             "|phi| > 0.1 at {} of {} lines ({:.2} Hz and above): the paper's homogenization is beyond its ~1 % accuracy range there",
             beyond.len(),
-            freqs.len(),
+            lines,
             beyond[0]
         ));
     }
-    if let [first, .., last] | [first @ last] = disagree.as_slice() {
+    if let [first, .., last] | [first @ last] = disagree {
         report.warnings.push(format!(
             "the paper's homogenization disagrees with exact sandwich theory at {} of {} lines ({first:.2}-{last:.2} Hz): E_eff' more than {:.0} % or its loss factor more than {:.0} % from E_exact's, though |phi| may be small (a core whose own bending or extension matters): the paper's model is not valid there",
             disagree.len(),
-            freqs.len(),
+            lines,
             100.0 * PAPER_STORAGE_AGREEMENT,
             100.0 * PAPER_LOSS_AGREEMENT
         ));
@@ -125,12 +151,9 @@ pub fn run(args: &LaminateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Res
         "B_eq' and K_eq' are real parts per unit width; E_eff = 12 B_K / h^3 (paper eqs. 29-33)."
             .into(),
     );
-    if sandwich.is_some() {
+    if sandwich {
         report.notes.push("E_exact: Mead-Markus sandwich beam at the same frequency (faces in bending and extension, core in shear).".into());
     }
-    report.extra = Some(serde_json::to_value(&details)?);
-    report.write(args.output.format(), out, err)?;
-    Ok(Outcome::Done)
 }
 
 /// A yes/no cell.

@@ -294,81 +294,8 @@ fn build_report(
     sol: &ModalSolution,
     compare: Option<&ShapesFile>,
 ) -> Result<Report> {
-    let mut columns = vec![
-        Column::new("mode", "mode", "", Fmt::Fixed(0)),
-        Column::new("freq_hz", "f", "Hz", Fmt::Fixed(4)),
-        Column::new("rigid", "rigid", "", Fmt::Fixed(0)),
-        Column::new("modal_mass_kg", "modal mass", "kg", Fmt::Sci(4)),
-        Column::new(
-            "effective_mass_z_fraction",
-            "eff. mass z",
-            "%",
-            Fmt::Fixed(2),
-        )
-        .scaled(0.01),
-        Column::new("residual", "residual", "", Fmt::Sci(2)),
-    ];
-    if compare.is_some() {
-        columns.push(Column::new("compare_mode", "match", "", Fmt::Fixed(0)));
-        columns.push(Column::new("compare_mac", "MAC", "", Fmt::Fixed(4)));
-        columns.push(Column::new("compare_freq_diff", "df", "%", Fmt::Fixed(3)).scaled(0.01));
-    }
-    let mut report = Report::new("modes", columns);
-    let m = &spec.material;
-    report.input("model", source.to_string());
-    report.input(
-        "mesh",
-        format!(
-            "{} nodes, {} {} elements, {} dofs, area {:.6} m^2",
-            mesh.nodes().len(),
-            mesh.n_elements(),
-            mesh.order().name(),
-            mesh.n_dofs(),
-            mesh.area()
-        ),
-    );
-    report.input(
-        "material",
-        format!(
-            "E = {:.6e} Pa, nu = {}, rho = {} kg/m^3, t = {} m",
-            m.young_pa, m.poisson, m.density_kg_m3, m.thickness_m
-        ),
-    );
-    report.input(
-        "supports",
-        format!("{} elastic supports", asm.springs.len()),
-    );
-    let info = sol.info;
-    report.input(
-        "solver",
-        format!(
-            "shift {:.4e} rad^2/s^2, factor {} entries, {} operator applications, {} restarts",
-            info.shift, info.factor_nnz, info.applications, info.restarts
-        ),
-    );
-    report.input(
-        "time",
-        format!(
-            "symbolic {:.3} s, factorization {:.3} s, Lanczos {:.3} s, Sturm check {:.3} s",
-            info.seconds[0], info.seconds[1], info.seconds[2], info.seconds[3]
-        ),
-    );
-    if let Some(s) = sol.sturm {
-        report.input(
-            "Sturm check",
-            format!(
-                "{} eigenvalues below {:.6e} rad^2/s^2, {} modes returned: {}",
-                s.count,
-                s.cutoff,
-                s.returned,
-                if s.count == s.returned {
-                    "none missed"
-                } else {
-                    "MISMATCH"
-                }
-            ),
-        );
-    }
+    let mut report = Report::new("modes", mode_columns(compare.is_some()));
+    add_inputs(&mut report, source, mesh, spec, asm, sol);
     // Mass projections on the z translation.
     let n = asm.n_dofs();
     let ez = Mat::from_fn(n, 1, |i, _| if i % 6 == 2 { 1.0 } else { 0.0 });
@@ -427,4 +354,95 @@ fn build_report(
     report.extra =
         Some(serde_json::json!({ "sturm": sol.sturm, "info": sol.info, "modes": sol.modes }));
     Ok(report)
+}
+
+/// The modes table's columns, with the match in the other run when one is compared.
+fn mode_columns(compared: bool) -> Vec<Column> {
+    let mut columns = vec![
+        Column::new("mode", "mode", "", Fmt::Fixed(0)),
+        Column::new("freq_hz", "f", "Hz", Fmt::Fixed(4)),
+        Column::new("rigid", "rigid", "", Fmt::Fixed(0)),
+        Column::new("modal_mass_kg", "modal mass", "kg", Fmt::Sci(4)),
+        Column::new(
+            "effective_mass_z_fraction",
+            "eff. mass z",
+            "%",
+            Fmt::Fixed(2),
+        )
+        .scaled(0.01),
+        Column::new("residual", "residual", "", Fmt::Sci(2)),
+    ];
+    if compared {
+        columns.push(Column::new("compare_mode", "match", "", Fmt::Fixed(0)));
+        columns.push(Column::new("compare_mac", "MAC", "", Fmt::Fixed(4)));
+        columns.push(Column::new("compare_freq_diff", "df", "%", Fmt::Fixed(3)).scaled(0.01));
+    }
+    columns
+}
+
+/// The run's inputs: the model, the mesh, the material, the supports, the solver, its times
+/// and the Sturm check.
+fn add_inputs(
+    report: &mut Report,
+    source: &str,
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    asm: &Assembly,
+    sol: &ModalSolution,
+) {
+    let m = &spec.material;
+    report.input("model", source.to_string());
+    report.input(
+        "mesh",
+        format!(
+            "{} nodes, {} {} elements, {} dofs, area {:.6} m^2",
+            mesh.nodes().len(),
+            mesh.n_elements(),
+            mesh.order().name(),
+            mesh.n_dofs(),
+            mesh.area()
+        ),
+    );
+    report.input(
+        "material",
+        format!(
+            "E = {:.6e} Pa, nu = {}, rho = {} kg/m^3, t = {} m",
+            m.young_pa, m.poisson, m.density_kg_m3, m.thickness_m
+        ),
+    );
+    report.input(
+        "supports",
+        format!("{} elastic supports", asm.springs.len()),
+    );
+    let info = sol.info;
+    report.input(
+        "solver",
+        format!(
+            "shift {:.4e} rad^2/s^2, factor {} entries, {} operator applications, {} restarts",
+            info.shift, info.factor_nnz, info.applications, info.restarts
+        ),
+    );
+    report.input(
+        "time",
+        format!(
+            "symbolic {:.3} s, factorization {:.3} s, Lanczos {:.3} s, Sturm check {:.3} s",
+            info.seconds[0], info.seconds[1], info.seconds[2], info.seconds[3]
+        ),
+    );
+    if let Some(s) = sol.sturm {
+        report.input(
+            "Sturm check",
+            format!(
+                "{} eigenvalues below {:.6e} rad^2/s^2, {} modes returned: {}",
+                s.count,
+                s.cutoff,
+                s.returned,
+                if s.count == s.returned {
+                    "none missed"
+                } else {
+                    "MISMATCH"
+                }
+            ),
+        );
+    }
 }
