@@ -455,7 +455,7 @@ fn column_of(
     name: &str,
     (resp, refs): (&HashMap<&str, usize>, &HashMap<&str, usize>),
 ) -> Result<(usize, usize, bool), FrfError> {
-    let (pair, part) = name.rsplit_once(':').ok_or_else(|| {
+    let malformed = || {
         err(
             path,
             hl,
@@ -464,39 +464,22 @@ fn column_of(
                 name = quoted(name)
             ),
         )
-    })?;
-    let (r, f) = pair.split_once('@').ok_or_else(|| {
+    };
+    let unknown = |role: &str, channel: &str| {
         err(
             path,
             hl,
             format!(
-                "column '{name}' must be RESPONSE@REFERENCE:re or :im",
-                name = quoted(name)
-            ),
-        )
-    })?;
-    let i = *resp.get(r).ok_or_else(|| {
-        err(
-            path,
-            hl,
-            format!(
-                "column '{name}': response '{r}' is not in the channels file",
+                "column '{name}': {role} '{channel}' is not in the channels file",
                 name = quoted(name),
-                r = quoted(r)
+                channel = quoted(channel)
             ),
         )
-    })?;
-    let j = *refs.get(f).ok_or_else(|| {
-        err(
-            path,
-            hl,
-            format!(
-                "column '{name}': reference '{f}' is not in the channels file",
-                name = quoted(name),
-                f = quoted(f)
-            ),
-        )
-    })?;
+    };
+    let (pair, part) = name.rsplit_once(':').ok_or_else(malformed)?;
+    let (r, f) = pair.split_once('@').ok_or_else(malformed)?;
+    let i = *resp.get(r).ok_or_else(|| unknown("response", r))?;
+    let j = *refs.get(f).ok_or_else(|| unknown("reference", f))?;
     let im = match part {
         "re" => false,
         "im" => true,
