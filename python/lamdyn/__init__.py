@@ -40,10 +40,14 @@ __all__ = [
     "read_uff_functions",
     "write_uff",
     "ema",
+    "EmaResult",
     "modes",
+    "Modes",
     "fit",
     "fit_job",
+    "FitResult",
     "core_inverse",
+    "CoreInverse",
     "run",
     "RunResult",
     "ModalTable",
@@ -58,6 +62,28 @@ PathLike = Union[str, os.PathLike]
 #: WLF constants of the demo core (:func:`write_demo_job`): C1, C2 in K, T_ref = 293.15 K
 #: (20 degC, where the demo roof's core law is given). Values of the order published for PVB.
 DEMO_WLF = {"c1": 12.0, "c2_k": 90.0, "reference_temperature_k": 293.15}
+
+
+class _Fields:
+    """Dict-style reading of a result's attributes (``r["modal"]`` is ``r.modal``), for code
+    written against the dicts earlier versions returned."""
+
+    def keys(self) -> list:
+        return [f.name for f in fields(self)]
+
+    def items(self) -> list:
+        return [(k, getattr(self, k)) for k in self.keys()]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return getattr(self, key) if key in self.keys() else default
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self.keys():
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.keys()
 
 
 def version() -> str:
@@ -195,6 +221,82 @@ def write_uff(
     )
 
 
+def _typed(cls: type, values: dict) -> Any:
+    """``cls`` from ``values``, which must hold its fields and nothing else: a key the Rust
+    side added or dropped fails here (and in the tests) instead of vanishing."""
+    names = {f.name for f in fields(cls)}
+    if set(values) != names:
+        raise LamdynError(
+            f"internal: {cls.__name__} expects {sorted(names - set(values))} and got "
+            f"{sorted(set(values) - names)} beyond its fields"
+        )
+    return cls(**values)
+
+
+@dataclass
+class EmaResult(_Fields):
+    """What :func:`ema` identified: one entry per mode in each array.
+
+    Attributes:
+        freq_hz: natural frequencies |lambda|/2 pi, Hz.
+        damping_ratio: viscous damping ratios -Re(lambda)/|lambda|.
+        loss_factor: 2 x the damping ratio.
+        poles: the poles lambda, complex, rad/s.
+        shapes: complex shapes, modes x responses (mass-normalised with a driving point).
+        mpc: modal phase collinearity (1 for a real mode).
+        mpd_deg: mean phase deviation, degrees.
+        freq_sd_hz, damping_sd: standard deviations from the fit's noise (NaN without
+            refinement); they leave out the estimator's bias.
+        verdict: per mode "sound", "doubtful" or "smear" (the reasons in
+            ``modes[k]["quality"]``).
+        diagram_freq_hz, diagram_damping_ratio: the stabilization diagram's pole each mode
+            started from, Hz and ratio.
+        refined: whether the reported pole is the refined one (bool array).
+        auto_mac: MAC of the shapes with each other, modes x modes.
+        cmif: the CMIF, lines x singular values (in the data's units).
+        modes: each mode in full as the CLI's result.json has it (list of dicts).
+        diagram: the stabilization diagram's poles (list of dicts: order, pole, freq_hz,
+            damping, stability).
+        cmif_peaks: the first CMIF curve's peaks in the band (list of dicts: freq_hz, value).
+        rejected: poles named by ``reject_hz`` (kept in the model, not structural modes).
+        set_aside: modes set aside from a chain's inverses (empty here).
+        band_hz: the band identified, Hz.
+        correlation: FRAC of each regenerated curve against the measured one.
+        curve_names: each curve's name, ``response@reference``.
+        missing_hz: frequencies of ``near_hz`` without a stable pole within the window.
+        warnings: what the identification warns of.
+        timings: seconds per step (read, diagram, selection, refinement, check, residues,
+            deviations, modes).
+    """
+
+    freq_hz: np.ndarray
+    damping_ratio: np.ndarray
+    loss_factor: np.ndarray
+    poles: np.ndarray
+    shapes: np.ndarray
+    mpc: np.ndarray
+    mpd_deg: np.ndarray
+    freq_sd_hz: np.ndarray
+    damping_sd: np.ndarray
+    verdict: list
+    diagram_freq_hz: np.ndarray
+    diagram_damping_ratio: np.ndarray
+    refined: np.ndarray
+    auto_mac: np.ndarray
+    cmif: np.ndarray
+    modes: list
+    diagram: list
+    cmif_peaks: list
+    rejected: list
+    set_aside: list
+    band_hz: list
+    correlation: list
+    curve_names: list
+    missing_hz: list
+    warnings: list
+    timings: dict
+
+
 def ema(
     freqs_hz: Any,
     frf: Any,
@@ -211,7 +313,7 @@ def ema(
     driving: Union[str, int, None] = None,
     cmif_prominence: float = 2.0,
     poles: str = "checked",
-) -> dict:
+) -> EmaResult:
     """Modal identification of FRFs, as ``lamdyn ema``.
 
     Poles by PolyMAX (several references) or LSCF over ``orders`` (lowest, highest, step; the
@@ -222,7 +324,8 @@ def ema(
     diagram's highest-order LSCF model (``poles="checked"``; ``"refined"``: every refined pole;
     ``"diagram"`` or ``refine=False``: the diagram's poles).
 
-    Returns a dict: ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,
+    Returns an :class:`EmaResult` (its attributes also read as ``r["freq_hz"]``):
+    ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,
     ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses), ``mpc``,
     ``mpd_deg``, ``freq_sd_hz`` and ``damping_sd`` (standard deviations from the fit's noise,
     NaN without refinement), ``verdict`` (per mode: "sound", "doubtful" or "smear", the
@@ -279,7 +382,7 @@ def ema(
     r["refined"] = np.array([bool(m["refined"]) for m in modes_], dtype=bool)
     r["auto_mac"] = np.array(r["auto_mac"])
     r["cmif"] = np.array(r["cmif"])
-    return r
+    return _typed(EmaResult, r)
 
 
 def _model_json(model: Union[dict, PathLike]) -> tuple:
@@ -300,12 +403,34 @@ def _model_json(model: Union[dict, PathLike]) -> tuple:
     return json.dumps(spec), os.fspath(path.parent)
 
 
-def modes(model: Union[dict, PathLike], n_modes: Optional[int] = None) -> dict:
+@dataclass
+class Modes(_Fields):
+    """What :func:`modes` computed.
+
+    Attributes:
+        freqs_hz: natural frequencies, Hz (n_modes,).
+        nodes: node coordinates, m (n_nodes, 3).
+        shapes: mass-normalised shapes (n_modes, 6 n_nodes): per node u_x, u_y, u_z, m, and
+            theta_x, theta_y, theta_z, rad (phi^T M phi = 1).
+        rigid: whether each mode is a rigid-body mode (bool array).
+        residual: each mode's relative eigen-residual |K phi - lambda M phi| / (|K| |phi|).
+        elements: each element's node indices (list of lists).
+    """
+
+    freqs_hz: np.ndarray
+    nodes: np.ndarray
+    shapes: np.ndarray
+    rigid: np.ndarray
+    residual: np.ndarray
+    elements: list
+
+
+def modes(model: Union[dict, PathLike], n_modes: Optional[int] = None) -> Modes:
     """The lowest modes of a shell model (MITC4 or MITC9, Lanczos on the sparse Cholesky), as
     ``lamdyn modes``.
 
     ``model`` is a dict laid out as a model TOML (``mesh``, ``material``, ``solver``,
-    ``supports``) or the path of one. Returns ``freqs_hz`` (n_modes,), ``nodes`` (n_nodes, 3)
+    ``supports``) or the path of one. Returns :class:`Modes`: ``freqs_hz`` (n_modes,), ``nodes`` (n_nodes, 3)
     in m, ``shapes`` (n_modes, 6 n_nodes), mass normalised (phi^T M phi = 1; per node
     u_x, u_y, u_z, theta_x, theta_y, theta_z), ``rigid`` (bool per mode) and ``residual``
     (relative eigen-residual per mode).
@@ -317,26 +442,56 @@ def modes(model: Union[dict, PathLike], n_modes: Optional[int] = None) -> dict:
         text = json.dumps(spec)
     freqs, nodes, shapes, info = _native.modes(text, base)
     info = json.loads(info)
-    return {
-        "freqs_hz": freqs,
-        "nodes": nodes,
-        "shapes": shapes,
-        "rigid": np.array(info["rigid"]),
-        "residual": np.array(info["residual"]),
-        "elements": info["elements"],
-    }
+    return Modes(
+        freqs_hz=freqs,
+        nodes=nodes,
+        shapes=shapes,
+        rigid=np.array(info["rigid"]),
+        residual=np.array(info["residual"]),
+        elements=info["elements"],
+    )
 
 
-def _fit_out(text: str) -> dict:
+@dataclass
+class FitResult(_Fields):
+    """What :func:`fit` and :func:`fit_job` found: the law E*(f) fitted to the FRFs.
+
+    Attributes:
+        freqs_hz: the measured lines, Hz.
+        e_storage_pa, e_loss_factor: the fitted law's E' (Pa) and loss factor there.
+        e_storage_sd_pa, e_loss_factor_sd: their standard deviations by the delta method
+            through the parameters' covariance (NaN without one).
+        parameters: each law parameter by name: a dict with its value, sd and 95 % interval.
+        peaks_hz: the measured resonances the fit read, Hz.
+        result: the whole fit as the CLI's JSON has it (starts, peaks, convergence).
+        source: where the data came from.
+        model_line: the model, in a line.
+        notes: what the fit notes of its inputs.
+    """
+
+    freqs_hz: np.ndarray
+    e_storage_pa: np.ndarray
+    e_loss_factor: np.ndarray
+    e_storage_sd_pa: np.ndarray
+    e_loss_factor_sd: np.ndarray
+    parameters: dict
+    peaks_hz: np.ndarray
+    result: dict
+    source: str
+    model_line: str
+    notes: list
+
+
+def _fit_out(text: str) -> FitResult:
     r = json.loads(text)
     for k in ("freqs_hz", "e_storage_pa", "e_loss_factor", "e_storage_sd_pa", "e_loss_factor_sd"):
         r[k] = np.array([np.nan if v is None else v for v in r[k]], dtype=float)
     r["parameters"] = {p["name"]: p for p in r["result"]["parameters"]}
     r["peaks_hz"] = np.array([p["freq_hz"] for p in r["result"]["peaks"]])
-    return r
+    return _typed(FitResult, r)
 
 
-def fit_job(job: PathLike) -> dict:
+def fit_job(job: PathLike) -> FitResult:
     """``lamdyn fit JOB``: the job's measurement, model and ``[fit]`` settings; returns the
     fitted law (``parameters`` by name with value, sd and 95 % interval), ``result`` (the
     CLI's full result), and E'(f) (Pa), eta(f) with standard deviations on the measured
@@ -361,7 +516,7 @@ def fit(
     residual: bool = True,
     tolerance_m: float = 1e-3,
     sensor_mapping: str = "surface",
-) -> dict:
+) -> FitResult:
     """The effective modulus law E*(f) of the laminate fitted to FRF arrays (paper eqs. 2-10):
     the shell ``model`` (free, E_ref in its material) scaled by the law, modes projected on the
     channels (each placed within ``tolerance_m``, m, on the nearest point of the mid-surface and
@@ -413,6 +568,29 @@ def _stack_json(stack: Union[dict, PathLike]) -> str:
         raise LamdynError(f"cannot read the stack '{path}': {e}") from e
 
 
+@dataclass
+class CoreInverse(_Fields):
+    """What :func:`core_inverse` found at each line (NaN where an inverse has no solution).
+
+    Attributes:
+        paper_storage_pa, paper_loss_factor: the core's G' (Pa) and eta by the paper's inverse
+            (eqs. 33-45).
+        paper_phi_abs: |phi| of the paper's inverse (eq. 37; above 0.1 beyond its ~1 %
+            validity).
+        paper_error: why the paper's inverse has no solution at a line (None where it has).
+        exact_storage_pa, exact_loss_factor: by the exact Mead-Markus inverse.
+        exact_error: why the exact inverse has none (None where it has).
+    """
+
+    paper_storage_pa: np.ndarray
+    paper_loss_factor: np.ndarray
+    paper_phi_abs: np.ndarray
+    paper_error: list
+    exact_storage_pa: np.ndarray
+    exact_loss_factor: np.ndarray
+    exact_error: list
+
+
 def core_inverse(
     freqs_hz: Any,
     e_storage_pa: Any,
@@ -422,7 +600,7 @@ def core_inverse(
     core_formula: str = "eq41",
     face_shear: str = "neglect",
     bending: str = "faces",
-) -> dict:
+) -> CoreInverse:
     """The core's G*(f) from the laminate's effective E*(f) (``lamdyn core``, same defaults):
     by the paper's inverse (eqs. 33-45: ``core_formula`` eq41, eq43 or eq26; ``face_shear``
     neglect (eq. 40) or include (eq. 39); ``bending`` faces (eq. 35) or full (eq. 14)) and by
@@ -450,29 +628,7 @@ def core_inverse(
     for k, v in list(r.items()):
         if not k.endswith("_error"):
             r[k] = np.array([np.nan if x is None else x for x in v], dtype=float)
-    return r
-
-
-class _Fields:
-    """Dict-style reading of a result's attributes (``r["modal"]`` is ``r.modal``), for code
-    written against the dicts earlier versions returned."""
-
-    def keys(self) -> list:
-        return [f.name for f in fields(self)]
-
-    def items(self) -> list:
-        return [(k, getattr(self, k)) for k in self.keys()]
-
-    def get(self, key: str, default: Any = None) -> Any:
-        return getattr(self, key) if key in self.keys() else default
-
-    def __getitem__(self, key: str) -> Any:
-        if key not in self.keys():
-            raise KeyError(key)
-        return getattr(self, key)
-
-    def __contains__(self, key: object) -> bool:
-        return key in self.keys()
+    return _typed(CoreInverse, r)
 
 
 def _modal_table_class() -> type:

@@ -18,11 +18,15 @@ PUBLIC = {
     'read_uff': "(path: 'PathLike', lenient: 'bool' = False) -> 'FrfData'",
     'read_uff_functions': "(path: 'PathLike', lenient: 'bool' = False) -> 'list'",
     'write_uff': "(path: 'PathLike', freqs_hz: 'Any', frf: 'Any', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, quantity: 'str' = 'accelerance', binary: 'bool' = False) -> 'None'",
-    'ema': "(freqs_hz: 'Any', frf: 'Any', quantity: 'str' = 'accelerance', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, band_hz: 'Optional[Sequence[float]]' = None, orders: 'Sequence[int]' = (2, 60, 2), near_hz: 'Optional[Sequence[float]]' = None, reject_hz: 'Optional[Sequence[float]]' = None, window_hz: 'float' = 1.0, polymax: 'bool' = True, refine: 'bool' = True, driving: 'Union[str, int, None]' = None, cmif_prominence: 'float' = 2.0, poles: 'str' = 'checked') -> 'dict'",
-    'modes': "(model: 'Union[dict, PathLike]', n_modes: 'Optional[int]' = None) -> 'dict'",
-    'fit': "(freqs_hz: 'Any', frf: 'Any', responses: 'Sequence[Any]', references: 'Sequence[Any]', model: 'Union[dict, PathLike]', quantity: 'str' = 'accelerance', law: 'str' = 'per_mode', band_hz: 'Optional[Sequence[float]]' = None, misfit: 'str' = 'log_rms', reference: 'int' = 0, exclude_hz: 'Optional[Sequence[Sequence[float]]]' = None, covariance: 'str' = 'robust_hc3', n_modes: 'Optional[int]' = None, residual: 'bool' = True, tolerance_m: 'float' = 0.001, sensor_mapping: 'str' = 'surface') -> 'dict'",
-    'fit_job': "(job: 'PathLike') -> 'dict'",
-    'core_inverse': "(freqs_hz: 'Any', e_storage_pa: 'Any', e_loss_factor: 'Any', stack: 'Union[dict, PathLike]', kinematics: 'str' = 'beam', core_formula: 'str' = 'eq41', face_shear: 'str' = 'neglect', bending: 'str' = 'faces') -> 'dict'",
+    'ema': "(freqs_hz: 'Any', frf: 'Any', quantity: 'str' = 'accelerance', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, band_hz: 'Optional[Sequence[float]]' = None, orders: 'Sequence[int]' = (2, 60, 2), near_hz: 'Optional[Sequence[float]]' = None, reject_hz: 'Optional[Sequence[float]]' = None, window_hz: 'float' = 1.0, polymax: 'bool' = True, refine: 'bool' = True, driving: 'Union[str, int, None]' = None, cmif_prominence: 'float' = 2.0, poles: 'str' = 'checked') -> 'EmaResult'",
+    'EmaResult': None,
+    'modes': "(model: 'Union[dict, PathLike]', n_modes: 'Optional[int]' = None) -> 'Modes'",
+    'Modes': None,
+    'fit': "(freqs_hz: 'Any', frf: 'Any', responses: 'Sequence[Any]', references: 'Sequence[Any]', model: 'Union[dict, PathLike]', quantity: 'str' = 'accelerance', law: 'str' = 'per_mode', band_hz: 'Optional[Sequence[float]]' = None, misfit: 'str' = 'log_rms', reference: 'int' = 0, exclude_hz: 'Optional[Sequence[Sequence[float]]]' = None, covariance: 'str' = 'robust_hc3', n_modes: 'Optional[int]' = None, residual: 'bool' = True, tolerance_m: 'float' = 0.001, sensor_mapping: 'str' = 'surface') -> 'FitResult'",
+    'fit_job': "(job: 'PathLike') -> 'FitResult'",
+    'FitResult': None,
+    'core_inverse': "(freqs_hz: 'Any', e_storage_pa: 'Any', e_loss_factor: 'Any', stack: 'Union[dict, PathLike]', kinematics: 'str' = 'beam', core_formula: 'str' = 'eq41', face_shear: 'str' = 'neglect', bending: 'str' = 'faces') -> 'CoreInverse'",
+    'CoreInverse': None,
     'run': "(job: 'PathLike', out: 'Optional[PathLike]' = None, cache: 'Union[PathLike, None, str]' = 'beside', samples: 'Optional[int]' = None, seed: 'Optional[int]' = None, force: 'bool' = False) -> 'RunResult'",
     'RunResult': None,
     'ModalTable': None,
@@ -78,7 +82,8 @@ def test_results_are_typed_and_still_read_as_dicts():
         pass
     else:
         raise AssertionError("an unknown key must raise KeyError")
-    for cls in (lamdyn.RunResult, lamdyn.ModalTable, lamdyn.MasterCurve):
+    for cls in (lamdyn.RunResult, lamdyn.ModalTable, lamdyn.MasterCurve, lamdyn.EmaResult,
+                lamdyn.Modes, lamdyn.FitResult, lamdyn.CoreInverse):
         assert dataclasses.is_dataclass(cls) and cls.__doc__ and "Attributes:" in cls.__doc__
 
 
