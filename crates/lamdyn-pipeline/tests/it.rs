@@ -1023,4 +1023,26 @@ fn damped_modes_take_the_frf_fit() {
     let html = std::fs::read_to_string(dir.join("report/report.html")).unwrap();
     assert!(html.contains("The core from the FRFs (no poles)"));
     assert!(dir.join("report/figures/frf_fit_1.svg").is_file());
+    // core_modal.csv carries the answer with its band at every mode.
+    let csv = std::fs::read_to_string(dir.join("report/core_modal.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |key: &str| header.iter().position(|h| *h == key).expect(key);
+    let keys = [
+        "g_frf_storage_lo_pa",
+        "g_frf_storage_pa",
+        "g_frf_storage_hi_pa",
+    ];
+    let at = keys.map(col);
+    let route = result.frf.route().expect("the FRF fit");
+    for (line, p) in lines.zip(&result.modal) {
+        let v: Vec<&str> = line.split(',').collect();
+        let [lo, g, hi] = at.map(|k| v[k].parse::<f64>().expect("a number"));
+        let want = route.at(p.freq_hz);
+        assert!(lo < g && g < hi, "{line}");
+        assert_eq!(
+            [lo, g, hi],
+            [want.storage_ci95[0], want.storage_pa, want.storage_ci95[1]]
+        );
+    }
 }

@@ -241,11 +241,11 @@ const FRF: Route = Route {
     g: |row| row.r.frf.route().map(|f| f.modulus(row.p.freq_hz)),
 };
 
-/// The 95 % band of a route's G' and η at a row (`None`: the route has none).
+/// The 95 % band of a route's G' and η at a row (`None` where the route has none).
 type RouteBand = fn(&Row<'_>) -> [Option<Band>; 2];
 
-/// G' and η of `route`, each with the 95 % band `band` gives when it gives one.
-fn route_columns(route: Route, band: Option<RouteBand>) -> Vec<Def> {
+/// G' and η of `route`, each followed by the ends of its 95 % band `band`.
+fn route_columns(route: Route, band: RouteBand) -> Vec<Def> {
     let g = route.g;
     let (n, l, a) = (route.name, route.label, route.about);
     let mut defs = vec![
@@ -260,26 +260,20 @@ fn route_columns(route: Route, band: Option<RouteBand>) -> Vec<Def> {
         .summary(),
     ];
     let bounds = |part: usize, key: &str, unit: &'static str, what: &str| {
-        band.map(|band| {
-            [(0, "lo", "lower"), (1, "hi", "upper")].map(|(end, tag, word)| {
-                let key = key.replacen("{}", tag, 1);
-                let shown = if part == 0 { MPA } else { RATIO };
-                number(
-                    &key,
-                    &key,
-                    unit,
-                    &format!("the {word} end of the 95 % band of {what} by {a}"),
-                    shown,
-                    move |row| band(row)[part].map(|b| b[end]),
-                )
-            })
+        [(0, "lo", "lower"), (1, "hi", "upper")].map(|(end, tag, word)| {
+            let key = key.replacen("{}", tag, 1);
+            let shown = if part == 0 { MPA } else { RATIO };
+            number(
+                &key,
+                &key,
+                unit,
+                &format!("the {word} end of the 95 % band of {what} by {a}"),
+                shown,
+                move |row| band(row)[part].map(|b| b[end]),
+            )
         })
     };
-    defs.extend(
-        bounds(0, &format!("g_{n}_storage_{{}}_pa"), "Pa", "G'")
-            .into_iter()
-            .flatten(),
-    );
+    defs.extend(bounds(0, &format!("g_{n}_storage_{{}}_pa"), "Pa", "G'"));
     defs.push(
         number(
             &format!("g_{n}_loss_factor"),
@@ -291,11 +285,7 @@ fn route_columns(route: Route, band: Option<RouteBand>) -> Vec<Def> {
         )
         .summary(),
     );
-    defs.extend(
-        bounds(1, &format!("g_{n}_loss_factor_{{}}"), "", "eta")
-            .into_iter()
-            .flatten(),
-    );
+    defs.extend(bounds(1, &format!("g_{n}_loss_factor_{{}}"), "", "eta"));
     defs
 }
 
@@ -308,6 +298,18 @@ fn paper_band(row: &Row<'_>) -> [Option<Band>; 2] {
 fn exact_band(row: &Row<'_>) -> [Option<Band>; 2] {
     let b = modal_bands(row.r, row.p);
     [b.exact_storage, b.exact_loss_factor]
+}
+
+/// The FRF fit's band: its law's, widened by the mesh correction's uncertainty
+/// ([`crate::frf_route::FrfRoute::at`]).
+fn frf_band(row: &Row<'_>) -> [Option<Band>; 2] {
+    match row.r.frf.route() {
+        Some(route) => {
+            let at = route.at(row.p.freq_hz);
+            [Some(at.storage_ci95), Some(at.loss_factor_ci95)]
+        }
+        None => [None, None],
+    }
 }
 
 /// The layered route's band ([`LayeredColumns`]).
@@ -501,9 +503,9 @@ fn error_columns(route: Route) -> [Def; 2] {
 /// bands, the layered route's detail, then the truth and the errors, then the FRF fit.
 fn definitions(groups: Groups) -> Vec<Def> {
     let mut defs = laminate_columns();
-    defs.extend(route_columns(PAPER, Some(paper_band)));
-    defs.extend(route_columns(EXACT, Some(exact_band)));
-    defs.extend(route_columns(LAYERED, Some(layered_band)));
+    defs.extend(route_columns(PAPER, paper_band));
+    defs.extend(route_columns(EXACT, exact_band));
+    defs.extend(route_columns(LAYERED, layered_band));
     defs.extend(layered_detail_columns());
     if groups.truth {
         defs.extend(truth_columns());
@@ -512,7 +514,7 @@ fn definitions(groups: Groups) -> Vec<Def> {
         }
     }
     if groups.frf {
-        defs.extend(route_columns(FRF, None));
+        defs.extend(route_columns(FRF, frf_band));
         if groups.truth {
             defs.extend(error_columns(FRF));
         }
