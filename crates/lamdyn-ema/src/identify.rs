@@ -479,27 +479,47 @@ fn lone_modes_at_second_peaks(
         .collect()
 }
 
-/// The curves an identification fits: the lines (Hz), the curves at unit scale, their
-/// quantity and the band (Hz).
-type BandCurves<'a> = (
-    &'a [f64],
-    &'a [&'a [Complex64]],
-    lamdyn_frf::Quantity,
-    [f64; 2],
-);
+/// The curves an identification fits.
+#[derive(Clone, Copy)]
+struct BandCurves<'a> {
+    /// The lines, Hz.
+    freqs_hz: &'a [f64],
+    /// The curves at unit scale.
+    curves: &'a [&'a [Complex64]],
+    quantity: lamdyn_frf::Quantity,
+    /// The band, Hz.
+    band_hz: [f64; 2],
+}
+
+impl<'a> BandCurves<'a> {
+    /// The curves at the lines `lines`, for the modes' contributions.
+    fn on_lines(&self, lines: &'a [usize]) -> Measured<'a> {
+        Measured {
+            freqs_hz: self.freqs_hz,
+            curves: self.curves,
+            lines,
+        }
+    }
+}
 
 /// The modal model of the selected poles by `s.estimator` (the diagram's poles when
 /// `s.refine_iterations` is 0; the check needs `context`, without it the refined poles are
 /// taken), each refined pole that left its column put back ([`keep_poles_in_their_columns`]);
 /// with one warning per pole put back.
 fn fit_selected(
-    (freqs, curves, quantity, band): BandCurves<'_>,
+    data: BandCurves<'_>,
     selected: &[SelectedPole],
     context: Option<&LscfContext>,
     s: &EmaSettings,
     on_stage: &dyn Fn(&str),
     timings: &mut EmaTimings,
 ) -> Result<SelectedFit, EmaError> {
+    let BandCurves {
+        freqs_hz: freqs,
+        curves,
+        quantity,
+        band_hz: band,
+    } = data;
     let mut clock = Instant::now();
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
     let n = poles.len();
@@ -907,7 +927,7 @@ fn line_spacing(freqs: &[f64], lines: &[usize]) -> f64 {
 /// The poles' standard deviations ([`pole_deviations`]) when the settings refine them, else
 /// none.
 fn deviations_of(
-    (freqs, curves, quantity, band): BandCurves<'_>,
+    data: BandCurves<'_>,
     poles: &[Complex64],
     s: &EmaSettings,
     on_stage: &dyn Fn(&str),
@@ -916,7 +936,13 @@ fn deviations_of(
         return Ok(None);
     }
     on_stage("the poles' standard deviations");
-    pole_deviations(freqs, curves, quantity, poles, band, s.refine_lines)
+    let BandCurves {
+        freqs_hz,
+        curves,
+        quantity,
+        band_hz,
+    } = data;
+    pole_deviations(freqs_hz, curves, quantity, poles, band_hz, s.refine_lines)
 }
 
 /// Identifies the modes of `set` (module docs).
@@ -963,8 +989,13 @@ pub fn identify_with(
         return Err(no_stable_pole(band, s.orders.1));
     }
     timings.selection = lap(&mut clock);
+    let data = BandCurves {
+        freqs_hz: freqs,
+        curves: &curves,
+        quantity: set.quantity(),
+        band_hz: band,
+    };
     let fit_poles = |selected: &[SelectedPole], timings: &mut EmaTimings| {
-        let data = (freqs, curves.as_slice(), set.quantity(), band);
         fit_selected(data, selected, context.as_ref(), s, on_stage, timings)
     };
     let mut fitted = fit_poles(&selected, &mut timings)?;
@@ -983,16 +1014,10 @@ pub fn identify_with(
         .copied()
         .filter(|&k| freqs[k] > 0.0)
         .collect();
-    let measured = Measured {
-        freqs_hz: freqs,
-        curves: &curves,
-        lines: &positive,
-    };
     let scaled_fit = fitted.fit.scaled(1.0 / scale);
-    let contributions = contributions(&scaled_fit, measured);
+    let contributions = contributions(&scaled_fit, data.on_lines(&positive));
     warnings.extend(roving_hammer_note(set));
     timings.modes = lap(&mut clock);
-    let data = (freqs, curves.as_slice(), set.quantity(), band);
     let deviations = deviations_of(data, &scaled_fit.poles, s, on_stage)?;
     timings.deviations = lap(&mut clock);
     let sources = ModeSources {

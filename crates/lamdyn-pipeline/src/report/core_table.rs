@@ -7,6 +7,8 @@ use super::{LayeredColumns, loss, modal_bands, rel_err, storage};
 use crate::ChainResult;
 use crate::chain::CorePoint;
 use crate::uncertainty::Band;
+use crate::uncertainty::Bands;
+use lamdyn_fit::frf_fit::FrfLawPoint;
 use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
 use num_complex::Complex64;
 
@@ -118,12 +120,6 @@ impl CoreTable {
         }
         out
     }
-
-    /// The values of the column `key`, one per row; `None` for a key the table lacks.
-    pub fn column(&self, key: &str) -> Option<Vec<&CoreValue>> {
-        let k = self.columns.iter().position(|c| c.key == key)?;
-        Some(self.rows.iter().map(|r| &r[k]).collect())
-    }
 }
 
 /// Shown in MPa with 3 digits.
@@ -151,10 +147,30 @@ struct Def {
     value: Box<dyn Fn(&Row<'_>) -> CoreValue>,
 }
 
-/// What a row's values are read from.
+/// What a row's values are read from: the run, its modal point, and what is derived from the
+/// point once for all the columns (the Monte Carlo's bands, the layered route's columns, the
+/// FRF fit's G* and band).
 struct Row<'a> {
     r: &'a ChainResult,
     p: &'a CorePoint,
+    bands: Bands,
+    layered: LayeredColumns,
+    frf: Option<(Complex64, FrfLawPoint)>,
+}
+
+impl<'a> Row<'a> {
+    fn of(r: &'a ChainResult, p: &'a CorePoint) -> Self {
+        Self {
+            r,
+            p,
+            bands: modal_bands(r, p),
+            layered: LayeredColumns::of(p),
+            frf: r
+                .frf
+                .route()
+                .map(|route| (route.modulus(p.freq_hz), route.at(p.freq_hz))),
+        }
+    }
 }
 
 /// A numeric column.
@@ -238,7 +254,7 @@ const FRF: Route = Route {
     initial: "f",
     label: "frf",
     about: "the core's law fitted to the measured FRFs through the layered model",
-    g: |row| row.r.frf.route().map(|f| f.modulus(row.p.freq_hz)),
+    g: |row| row.frf.map(|(g, _)| g),
 };
 
 /// The 95 % band of a route's G' and η at a row (`None` where the route has none).
@@ -291,31 +307,25 @@ fn route_columns(route: Route, band: RouteBand) -> Vec<Def> {
 
 /// The paper's and the exact inverse's bands: the Monte Carlo's.
 fn paper_band(row: &Row<'_>) -> [Option<Band>; 2] {
-    let b = modal_bands(row.r, row.p);
-    [b.paper_storage, b.paper_loss_factor]
+    [row.bands.paper_storage, row.bands.paper_loss_factor]
 }
 
 fn exact_band(row: &Row<'_>) -> [Option<Band>; 2] {
-    let b = modal_bands(row.r, row.p);
-    [b.exact_storage, b.exact_loss_factor]
+    [row.bands.exact_storage, row.bands.exact_loss_factor]
 }
 
 /// The FRF fit's band: its law's, widened by the mesh correction's uncertainty
 /// ([`crate::frf_route::FrfRoute::at`]).
 fn frf_band(row: &Row<'_>) -> [Option<Band>; 2] {
-    match row.r.frf.route() {
-        Some(route) => {
-            let at = route.at(row.p.freq_hz);
-            [Some(at.storage_ci95), Some(at.loss_factor_ci95)]
-        }
-        None => [None, None],
-    }
+    [
+        row.frf.map(|(_, f)| f.storage_ci95),
+        row.frf.map(|(_, f)| f.loss_factor_ci95),
+    ]
 }
 
 /// The layered route's band ([`LayeredColumns`]).
 fn layered_band(row: &Row<'_>) -> [Option<Band>; 2] {
-    let lb = LayeredColumns::of(row.p);
-    [lb.storage, lb.loss]
+    [row.layered.storage, row.layered.loss]
 }
 
 /// The columns of the effective modulus and the paper's validity.
@@ -382,8 +392,7 @@ fn laminate_columns() -> Vec<Def> {
 
 /// The layered route's convergence and band columns.
 fn layered_detail_columns() -> Vec<Def> {
-    let lc =
-        |f: fn(&LayeredColumns) -> Option<f64>| move |row: &Row<'_>| f(&LayeredColumns::of(row.p));
+    let lc = |f: fn(&LayeredColumns) -> Option<f64>| move |row: &Row<'_>| f(&row.layered);
     let ratio = |key: &str, about: &str, f: fn(&LayeredColumns) -> Option<f64>| {
         number(key, key, "", about, RATIO, lc(f))
     };
@@ -439,7 +448,7 @@ fn layered_detail_columns() -> Vec<Def> {
         text(
             "layered_band_main_source",
             "the largest source of the layered band, of G' and of eta",
-            |row| LayeredColumns::of(row.p).dominant,
+            |row| row.layered.dominant.clone(),
         ),
     ]
 }
@@ -534,7 +543,7 @@ pub fn core_table_with(r: &ChainResult, groups: Groups) -> CoreTable {
         .modal
         .iter()
         .map(|p| {
-            let row = Row { r, p };
+            let row = Row::of(r, p);
             defs.iter().map(|d| (d.value)(&row)).collect()
         })
         .collect();

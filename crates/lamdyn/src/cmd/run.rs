@@ -63,20 +63,18 @@ pub(crate) fn write_report(result: &ChainResult, dir: &OutputDir, spinner: &Spin
 /// at each modal frequency (errors when the truth is known).
 pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
     let table = core_table(r);
-    let shown: Vec<usize> = (0..table.columns.len())
-        .filter(|&k| table.columns[k].in_summary && table.columns[k].shown.is_some())
-        .collect();
-    let columns = shown
+    // The summary's columns: those marked for it, each with how a terminal shows it.
+    let (shown, columns): (Vec<usize>, Vec<Column>) = table
+        .columns
         .iter()
-        .filter_map(|&k| {
-            let c = &table.columns[k];
+        .enumerate()
+        .filter(|(_, c)| c.in_summary)
+        .filter_map(|(k, c)| {
             let s = c.shown?;
-            Some(
-                Column::new(c.key.clone(), c.label.clone(), s.unit, Fmt::Fixed(s.digits))
-                    .scaled(s.scale),
-            )
+            let column = Column::new(c.key.clone(), c.label.clone(), s.unit, Fmt::Fixed(s.digits));
+            Some((k, column.scaled(s.scale)))
         })
-        .collect();
+        .unzip();
     let frf = r.frf.route();
     let mut rep = Report::new("run", columns);
     rep.input("job", r.job_path.display().to_string());
