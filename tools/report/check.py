@@ -36,7 +36,9 @@ FLAGS = [
     "--disable-component-update",
     "--disable-sync",
     "--no-first-run",
+    "--disable-dev-shm-usage",
 ]
+CRASH_TRIES = 3
 
 PROBE = """<script>
 window.addEventListener('load', () => {
@@ -64,14 +66,28 @@ def browser():
 
 
 def chromium(exe, width, height, *args):
-    profile = tempfile.mkdtemp(prefix="lamdyn-chromium-")
-    try:
-        return subprocess.run(
-            [exe, *FLAGS, f"--user-data-dir={profile}", f"--window-size={width},{height}", *args],
-            capture_output=True, text=True, timeout=120, check=True,
-        ).stdout
-    finally:
-        shutil.rmtree(profile, ignore_errors=True)
+    """Chromium's stdout for one headless run. A browser that dies by a signal (a crash of
+    the browser, not a fault of the page) is started again, up to CRASH_TRIES times, on a
+    fresh profile; any other failure, or the last crash, exits naming the command and the
+    end of Chromium's stderr."""
+    command = [exe, *FLAGS, f"--window-size={width},{height}", *args]
+    for attempt in range(1, CRASH_TRIES + 1):
+        profile = tempfile.mkdtemp(prefix="lamdyn-chromium-")
+        try:
+            done = subprocess.run(
+                [*command, f"--user-data-dir={profile}"], capture_output=True, text=True, timeout=120
+            )
+        finally:
+            shutil.rmtree(profile, ignore_errors=True)
+        if done.returncode == 0:
+            return done.stdout
+        crashed = done.returncode < 0
+        if crashed and attempt < CRASH_TRIES:
+            print(f"check.py: chromium died by signal {-done.returncode} (try {attempt}), starting it again", file=sys.stderr)
+            continue
+        tail = "\n".join(done.stderr.strip().splitlines()[-15:])
+        why = f"died by signal {-done.returncode}" if crashed else f"exited {done.returncode}"
+        sys.exit(f"check.py: chromium {why} after {attempt} tries: {' '.join(command)}\n{tail}")
 
 
 def measure(exe, report, width, height):
