@@ -23,8 +23,13 @@
 //! constant moduli of a grid in (G', η) evaluated on a thinned set of lines, each taken
 //! through [`FrfLaw::closest_to`]; the lowest minimum wins.
 //!
-//! **Bands.** C = s² τ (JᵀJ)⁺ at the minimum (Laplace approximation), s² = S/(N − p) the
-//! residuals' scale (the misfit's real noise, not the assumed one) and τ = 1 + 2 Σ_k ρ_k the
+//! **Bands.** C = τ A⁺ (Jᵀ V J) A⁺ at the minimum, A = JᵀJ (Laplace approximation with the
+//! heteroscedasticity-consistent middle term [White 1980]): V holds each residual's variance
+//! taken from the residuals of its own curve at the neighbouring lines, so the misfit's real
+//! noise, not the assumed one, sets the bands also where it does not follow the weights (a
+//! noise floor that is constant in absolute terms against weights relative to the curve's
+//! level: peaks then weigh with less noise than the weights say, the lines between them with
+//! more); with V = s² I, s² = S/(N − p), it is s² A⁺. τ = 1 + 2 Σ_k ρ_k is the
 //! variance inflation of residuals correlated along frequency (ρ_k their pooled lag-k
 //! autocorrelation, summed to its first non-positive value [Box & Jenkins 1976, §2.1.5 —
 //! Bartlett's formula for the variance of a mean]): a structured residual (a model error, a
@@ -878,7 +883,13 @@ impl Problem<'_> {
         let s2 = (self.data_noise_scale(&run) / data_scale).powi(2).max(1.0);
         let inflation = self.inflation(&run.residuals);
         let n_law = self.n_law();
-        let covariance = Mat::from_fn(n_law, n_law, |a, b| s2 * inflation * inv[(a, b)]);
+        // C = τ A⁻¹ (Jᵀ V J) A⁻¹ with each data row's own variance (module docs).
+        let information = self.local_noise_information(&run.residuals, &run.jacobian);
+        let sandwich = &inv * &information * &inv;
+        let whole = Mat::from_fn(inv.nrows(), inv.ncols(), |a, b| {
+            inflation * sandwich[(a, b)]
+        });
+        let covariance = Mat::from_fn(n_law, n_law, |a, b| whole[(a, b)]);
         let u = run.x[..n_law].to_vec();
         let natural = self.law.natural(&u);
         let parameters = natural
@@ -909,7 +920,7 @@ impl Problem<'_> {
                         input: prior.input,
                         change: input_change(prior.input, run.x[k]).0,
                         delta: run.x[k],
-                        sd: (s2 * inflation * inv[(k, k)]).max(0.0).sqrt(),
+                        sd: whole[(k, k)].max(0.0).sqrt(),
                         prior_sd: prior.sd,
                     }
                 })
@@ -933,6 +944,39 @@ impl Problem<'_> {
             sibling_failed: None,
             u,
         })
+    }
+
+    /// Jᵀ V J: the information's middle term with each data row's variance v taken from the
+    /// residuals themselves, the mean of the squared residuals of its curve (sensor,
+    /// reference, both parts) over the lines within ±[`LOCAL_NOISE_LINES`]; the priors' rows
+    /// keep variance 1. With A = JᵀJ, A⁻¹ (JᵀVJ) A⁻¹ is the covariance of a least-squares
+    /// estimate whose noise varies across lines and channels in a way its weights did not
+    /// foresee [White 1980; Huber 1967]: the misfit's real noise, line by line.
+    fn local_noise_information(&self, residuals: &[f64], jacobian: &Mat<f64>) -> Mat<f64> {
+        let d = &self.data;
+        let per_line = 2 * d.n_references * d.n_sensors;
+        let n_l = d.n_lines();
+        let mut variance = vec![1.0; jacobian.nrows()];
+        for curve in 0..per_line / 2 {
+            let sq: Vec<f64> = (0..n_l)
+                .map(|l| {
+                    let at = l * per_line + 2 * curve;
+                    0.5 * (residuals[at].powi(2) + residuals[at + 1].powi(2))
+                })
+                .collect();
+            for l in 0..n_l {
+                let window =
+                    &sq[l.saturating_sub(LOCAL_NOISE_LINES)..(l + LOCAL_NOISE_LINES + 1).min(n_l)];
+                let v = window.iter().sum::<f64>() / window.len() as f64;
+                let at = l * per_line + 2 * curve;
+                variance[at] = v;
+                variance[at + 1] = v;
+            }
+        }
+        let weighted = Mat::from_fn(jacobian.nrows(), jacobian.ncols(), |i, k| {
+            variance[i] * jacobian[(i, k)]
+        });
+        jacobian.transpose() * weighted
     }
 
     fn weighted_data_norm(&self) -> f64 {
@@ -1037,6 +1081,10 @@ const SETTLED_LAW_CHANGE: f64 = 1e-3;
 /// Passes of the noise scale's fixed point at most (each a Levenberg–Marquardt run from the
 /// previous answer; noisy data settle in two).
 const MAX_SCALE_PASSES: usize = 6;
+
+/// Lines either side of a line whose residuals give its local noise variance
+/// ([`Problem::local_noise_information`]).
+const LOCAL_NOISE_LINES: usize = 4;
 
 /// G'/G_a of the start grid, 1/16 … 16 in steps of two.
 const GRID_STORAGE_RATIOS: [f64; 9] = [0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
