@@ -59,6 +59,16 @@ impl FrfLaw {
         }
     }
 
+    /// The step of the relaxation grid in ln f (`None` for a law without a grid).
+    pub fn grid_step_ln(&self) -> Option<f64> {
+        match self {
+            Self::GeneralizedMaxwell { taus } if taus.len() > 1 => {
+                Some((taus[1] / taus[0]).ln().abs())
+            }
+            _ => None,
+        }
+    }
+
     /// The law's name as in job files.
     pub fn name(&self) -> &'static str {
         match self {

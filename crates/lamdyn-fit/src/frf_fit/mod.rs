@@ -23,24 +23,24 @@
 //! constant moduli of a grid in (G', η) evaluated on a thinned set of lines, each taken
 //! through [`FrfLaw::closest_to`]; the lowest minimum wins.
 //!
-//! **Bands.** C = τ A⁺ (Jᵀ V J) A⁺ at the minimum, A = JᵀJ (Laplace approximation with the
-//! heteroscedasticity-consistent middle term [White 1980]): V holds each residual's variance
-//! taken from the residuals of its own curve at the neighbouring lines, so the misfit's real
-//! noise, not the assumed one, sets the bands also where it does not follow the weights (a
-//! noise floor that is constant in absolute terms against weights relative to the curve's
-//! level: peaks then weigh with less noise than the weights say, the lines between them with
-//! more); with V = s² I, s² = S/(N − p), it is s² A⁺. τ = 1 + 2 Σ_k ρ_k is the
-//! variance inflation of residuals correlated along frequency (ρ_k their pooled lag-k
-//! autocorrelation, summed to its first non-positive value [Box & Jenkins 1976, §2.1.5 —
-//! Bartlett's formula for the variance of a mean]): a structured residual (a model error, a
-//! missed mode) leaves fewer independent lines than it counts, and the bands widen with it. A
-//! relative discretization error (the mesh ladder's estimate) is added to the bands of ln G'
-//! and ln η in quadrature, and so is the grid's own error: a generalized Maxwell law is fitted
-//! again on its relaxation times moved by half a step, from the first law's curve, and the two
-//! laws' difference counts as two draws of it ([`FrfFit::grid_spread`]): a true law between
-//! what one grid follows ripples about each placement in its own way, a bias of the law's form
-//! that no noise model sees. A law parameter whose 95 % interval spans more than a decade either
-//! side is reported as not determined by the data.
+//! **Bands.** C = A⁺ B A⁺ at the minimum, A = JᵀJ (Laplace approximation), with the middle
+//! term B from the residuals themselves: the line scores g_l = J_lᵀ r_l (every channel of a
+//! line together) in a Bartlett window over neighbouring lines [Newey & West 1987], plus the
+//! priors' rows (`Problem::line_score_information`). It is the misfit's real noise, not the
+//! assumed one: where the noise does not follow the weights (a sensor's constant floor
+//! against weights relative to the curve's level), where the channels share an error at a
+//! line (a law or model error seen by every sensor), and where the residual is correlated
+//! along frequency (a structured residual leaves fewer independent lines than it counts).
+//! With white noise of one scale s it is s² A⁺. A relative discretization error (the mesh
+//! ladder's estimate) is added to the bands of ln G' and ln η in quadrature, and so is the
+//! grid's own error: a generalized Maxwell law is fitted again on its relaxation times moved
+//! by half a step, from the first law's curve, and the two laws' widest difference within
+//! half a grid step counts as two draws of the grid's error
+//! ([`FrfFit::grid_spread`]): a true law between what one grid follows ripples about each
+//! placement in its own way, a bias of the law's form that no noise model sees, and its
+//! amplitude, not its value where the two placements happen to cross, is what it can be. A
+//! law parameter whose 95 % interval spans more than a decade either side is reported as not
+//! determined by the data.
 
 mod data;
 mod law;
@@ -236,7 +236,10 @@ pub struct FrfFit {
     pub covariance: Mat<f64>,
     /// The residuals' scale s.
     pub noise_scale: f64,
-    /// The variance inflation τ for residuals correlated along frequency.
+    /// The variance inflation τ = 1 + 2 Σ_k ρ_k for residuals correlated along frequency (ρ_k
+    /// their pooled lag-k autocorrelation, summed to its first non-positive value [Box & Jenkins
+    /// 1976, §2.1.5]): the effective residual count N/τ of [`compare_laws`] (the bands take the
+    /// correlation through their line scores, module docs).
     pub inflation: f64,
     /// The misfit S at the start and at the end.
     pub cost: [f64; 2],
@@ -314,16 +317,23 @@ impl FrfFit {
     }
 
     /// The grid's part of the bands at ω: the sd of ln G' and ln η over the two grid placements,
-    /// |ln a − ln b|/√2 (two draws of the grid's error; zeros without a [`FrfFit::sibling`]).
+    /// the widest |ln a − ln b|/√2 within half a grid step of ω (two draws of the grid's error,
+    /// an oscillation with the grid's period whose amplitude counts, not its value at ω where
+    /// the placements may cross; zeros without a [`FrfFit::sibling`]).
     pub fn grid_spread(&self, omega: f64) -> [f64; 2] {
         let Some((law, u)) = &self.sibling else {
             return [0.0, 0.0];
         };
-        let (a, b) = (self.law.modulus(&self.u, omega), law.modulus(u, omega));
-        [
-            (a.re / b.re).ln().abs() / std::f64::consts::SQRT_2,
-            ((a.im / a.re) / (b.im / b.re)).ln().abs() / std::f64::consts::SQRT_2,
-        ]
+        let half_step = 0.5 * self.law.grid_step_ln().unwrap_or(0.0);
+        let n = GRID_SPREAD_POINTS as i32;
+        let mut widest = [0.0f64; 2];
+        for k in -n..=n {
+            let w = omega * (half_step * f64::from(k) / f64::from(n)).exp();
+            let (a, b) = (self.law.modulus(&self.u, w), law.modulus(u, w));
+            widest[0] = widest[0].max((a.re / b.re).ln().abs());
+            widest[1] = widest[1].max(((a.im / a.re) / (b.im / b.re)).ln().abs());
+        }
+        widest.map(|v| v / std::f64::consts::SQRT_2)
     }
 
     /// One line: how the fit went.
@@ -418,9 +428,15 @@ pub fn fit_core_to_frfs(
         && let Some(shifted) = fit.law.shifted_half_step()
     {
         let curve = |w: f64| fit.modulus(w / (2.0 * std::f64::consts::PI));
+        // The sibling starts from a law that already follows the data but on another grid, so
+        // its terms may need to move far: it gets SIBLING_ITERATIONS times the budget.
         let alone = FrfFitSettings {
             starts: 0,
             grid_spread: false,
+            lm: LmSettings {
+                max_iterations: SIBLING_ITERATIONS * settings.lm.max_iterations,
+                ..settings.lm
+            },
             ..settings.clone()
         };
         match fit_core_to_frfs(
@@ -883,12 +899,9 @@ impl Problem<'_> {
         let s2 = (self.data_noise_scale(&run) / data_scale).powi(2).max(1.0);
         let inflation = self.inflation(&run.residuals);
         let n_law = self.n_law();
-        // C = τ A⁻¹ (Jᵀ V J) A⁻¹ with each data row's own variance (module docs).
-        let information = self.local_noise_information(&run.residuals, &run.jacobian);
-        let sandwich = &inv * &information * &inv;
-        let whole = Mat::from_fn(inv.nrows(), inv.ncols(), |a, b| {
-            inflation * sandwich[(a, b)]
-        });
+        // C = A⁺ (Σ scores' products) A⁺ (module docs); τ is kept for the law comparison.
+        let information = self.line_score_information(&run.residuals, &run.jacobian);
+        let whole = &inv * &information * &inv;
         let covariance = Mat::from_fn(n_law, n_law, |a, b| whole[(a, b)]);
         let u = run.x[..n_law].to_vec();
         let natural = self.law.natural(&u);
@@ -946,37 +959,53 @@ impl Problem<'_> {
         })
     }
 
-    /// Jᵀ V J: the information's middle term with each data row's variance v taken from the
-    /// residuals themselves, the mean of the squared residuals of its curve (sensor,
-    /// reference, both parts) over the lines within ±[`LOCAL_NOISE_LINES`]; the priors' rows
-    /// keep variance 1. With A = JᵀJ, A⁻¹ (JᵀVJ) A⁻¹ is the covariance of a least-squares
-    /// estimate whose noise varies across lines and channels in a way its weights did not
-    /// foresee [White 1980; Huber 1967]: the misfit's real noise, line by line.
-    fn local_noise_information(&self, residuals: &[f64], jacobian: &Mat<f64>) -> Mat<f64> {
+    /// The middle term of the covariance's sandwich: the line scores g_l = Σ_(rows of line l)
+    /// J_row r_row (every sensor and reference of a line together, so what the channels share,
+    /// a law or model error, counts once per line and not once per channel) in a Bartlett
+    /// window over L lines [Newey & West 1987], L = ⌊4 (n/100)^(2/9)⌋ for n lines [Newey &
+    /// West 1994], times n/(n − p), plus the priors' rows JᵀJ:
+    ///
+    ///   B = n/(n − p) Σ_(|k| ≤ L) (1 − |k|/(L + 1)) Σ_l g_l g_(l+k)ᵀ + J_priorᵀ J_prior.
+    fn line_score_information(&self, residuals: &[f64], jacobian: &Mat<f64>) -> Mat<f64> {
         let d = &self.data;
         let per_line = 2 * d.n_references * d.n_sensors;
         let n_l = d.n_lines();
-        let mut variance = vec![1.0; jacobian.nrows()];
-        for curve in 0..per_line / 2 {
-            let sq: Vec<f64> = (0..n_l)
-                .map(|l| {
-                    let at = l * per_line + 2 * curve;
-                    0.5 * (residuals[at].powi(2) + residuals[at + 1].powi(2))
-                })
-                .collect();
-            for l in 0..n_l {
-                let window =
-                    &sq[l.saturating_sub(LOCAL_NOISE_LINES)..(l + LOCAL_NOISE_LINES + 1).min(n_l)];
-                let v = window.iter().sum::<f64>() / window.len() as f64;
-                let at = l * per_line + 2 * curve;
-                variance[at] = v;
-                variance[at + 1] = v;
+        let p = jacobian.ncols();
+        let scores: Vec<Vec<f64>> = (0..n_l)
+            .map(|l| {
+                (0..p)
+                    .map(|k| {
+                        (l * per_line..(l + 1) * per_line)
+                            .map(|i| jacobian[(i, k)] * residuals[i])
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect();
+        let lags = newey_west_lags(n_l);
+        let mut meat = Mat::<f64>::zeros(p, p);
+        for lag in 0..=lags.min(n_l.saturating_sub(1)) {
+            let w = 1.0 - lag as f64 / (lags + 1) as f64;
+            for l in 0..n_l - lag {
+                let (x, y) = (&scores[l], &scores[l + lag]);
+                for a in 0..p {
+                    for b in 0..p {
+                        meat[(a, b)] += w * x[a] * y[b];
+                        if lag > 0 {
+                            meat[(b, a)] += w * x[a] * y[b];
+                        }
+                    }
+                }
             }
         }
-        let weighted = Mat::from_fn(jacobian.nrows(), jacobian.ncols(), |i, k| {
-            variance[i] * jacobian[(i, k)]
-        });
-        jacobian.transpose() * weighted
+        let small_sample = n_l as f64 / n_l.saturating_sub(p).max(1) as f64;
+        let n = d.n_residuals();
+        Mat::from_fn(p, p, |a, b| {
+            small_sample * meat[(a, b)]
+                + (n..jacobian.nrows())
+                    .map(|row| jacobian[(row, a)] * jacobian[(row, b)])
+                    .sum::<f64>()
+        })
     }
 
     fn weighted_data_norm(&self) -> f64 {
@@ -1082,9 +1111,18 @@ const SETTLED_LAW_CHANGE: f64 = 1e-3;
 /// previous answer; noisy data settle in two).
 const MAX_SCALE_PASSES: usize = 6;
 
-/// Lines either side of a line whose residuals give its local noise variance
-/// ([`Problem::local_noise_information`]).
-const LOCAL_NOISE_LINES: usize = 4;
+/// The grid-moved sibling's iteration budget, in multiples of the fit's own.
+const SIBLING_ITERATIONS: usize = 3;
+
+/// Points either side of a frequency at which [`FrfFit::grid_spread`] looks for the two grid
+/// placements' widest difference within half a grid step.
+const GRID_SPREAD_POINTS: usize = 4;
+
+/// Newey and West's automatic lag for a Bartlett window over `n` lines, ⌊4 (n/100)^(2/9)⌋
+/// [Newey & West 1994] (3 for 66 lines, 5 for 300 or 400).
+fn newey_west_lags(n: usize) -> usize {
+    (4.0 * (n as f64 / 100.0).powf(2.0 / 9.0)).floor() as usize
+}
 
 /// G'/G_a of the start grid, 1/16 … 16 in steps of two.
 const GRID_STORAGE_RATIOS: [f64; 9] = [0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
