@@ -184,16 +184,23 @@ fn noisy_accelerance(
     .unwrap()
 }
 
-/// The misfit S/s² + Σ (δ_k/sd_k)² of the law `core`, the inputs `deltas` and the gain `gain`
-/// to `data` on the fit's weights and noise scale: beside the fit's own, it says how far the
-/// fitted minimum is from the truth's (the χ² the law's form or a wrong basin costs).
+/// The misfit S/s² + Σ (δ_k/sd_k)² + (ln g/s_g)² of the law `core`, the inputs `deltas` and the
+/// gain `gain` to `data` on the fit's weights (`settings`) and noise scale: beside the fit's
+/// own, it says how far the fitted minimum is from the truth's (the χ² the law's form or a
+/// wrong basin costs).
 fn misfit_at(
-    (model, data, fit): (&ObservedModel, &FrfSet, &FrfFit),
+    (model, data, fit, settings): (&ObservedModel, &FrfSet, &FrfFit, &FrfFitSettings),
     core: &dyn Fn(f64) -> Complex64,
-    (deltas, priors): (&[f64], &[InputPrior]),
+    deltas: &[f64],
     gain: f64,
 ) -> f64 {
-    let band = lamdyn_fit::frf_fit::BandData::from_set(data, fit.band_hz, 40.0, 1).unwrap();
+    let band = lamdyn_fit::frf_fit::BandData::from_set(
+        data,
+        settings.band_hz,
+        settings.dynamic_range_db,
+        1,
+    )
+    .unwrap();
     let mut s = 0.0;
     for (l, &w) in band.omegas.iter().enumerate() {
         let h = model
@@ -207,10 +214,10 @@ fn misfit_at(
     }
     let prior: f64 = deltas
         .iter()
-        .zip(priors)
+        .zip(&settings.inputs)
         .map(|(d, p)| (d / p.sd).powi(2))
         .sum();
-    s / fit.noise_scale.powi(2) + prior + (gain.ln() / 0.1).powi(2)
+    s / fit.noise_scale.powi(2) + prior + (gain.ln() / settings.gain_prior_sd).powi(2)
 }
 
 /// Coverage of the law's 95 % band over 20 seeds on the damped glass plate (modal damping
@@ -303,12 +310,9 @@ fn bands_cover_the_truth_over_twenty_seeds() {
             fit_core_to_frfs(&model, &data, law.clone(), g_ref, Some(&start), &settings).unwrap();
         let fitted_law = |w: f64| fit.modulus(w / (2.0 * PI));
         let fitted_inputs: Vec<f64> = fit.inputs.iter().map(|i| i.delta).collect();
-        let gap = misfit_at(
-            (&model, &data, &fit),
-            &fitted_law,
-            (&fitted_inputs, &priors),
-            fit.gains[0],
-        ) - misfit_at((&model, &data, &fit), &core, (&truth_inputs, &priors), 1.0);
+        let problem = (&model, &data, &fit, &settings);
+        let gap = misfit_at(problem, &fitted_law, &fitted_inputs, fit.gains[0])
+            - misfit_at(problem, &core, &truth_inputs, 1.0);
         let before = covered;
         for &f in &probe {
             let t = core(2.0 * PI * f);

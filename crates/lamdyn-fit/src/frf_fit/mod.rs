@@ -971,41 +971,23 @@ impl Problem<'_> {
         let per_line = 2 * d.n_references * d.n_sensors;
         let n_l = d.n_lines();
         let p = jacobian.ncols();
-        let scores: Vec<Vec<f64>> = (0..n_l)
-            .map(|l| {
-                (0..p)
-                    .map(|k| {
-                        (l * per_line..(l + 1) * per_line)
-                            .map(|i| jacobian[(i, k)] * residuals[i])
-                            .sum()
-                    })
-                    .collect()
-            })
-            .collect();
-        let lags = newey_west_lags(n_l);
-        let mut meat = Mat::<f64>::zeros(p, p);
-        for lag in 0..=lags.min(n_l.saturating_sub(1)) {
+        let scores = Mat::from_fn(n_l, p, |l, k| {
+            (l * per_line..(l + 1) * per_line)
+                .map(|i| jacobian[(i, k)] * residuals[i])
+                .sum::<f64>()
+        });
+        let lags = newey_west_lags(n_l).min(n_l.saturating_sub(1));
+        let mut meat = scores.transpose() * &scores;
+        for lag in 1..=lags {
             let w = 1.0 - lag as f64 / (lags + 1) as f64;
-            for l in 0..n_l - lag {
-                let (x, y) = (&scores[l], &scores[l + lag]);
-                for a in 0..p {
-                    for b in 0..p {
-                        meat[(a, b)] += w * x[a] * y[b];
-                        if lag > 0 {
-                            meat[(b, a)] += w * x[a] * y[b];
-                        }
-                    }
-                }
-            }
+            let (early, late) = (scores.subrows(0, n_l - lag), scores.subrows(lag, n_l - lag));
+            let c = early.transpose() * late;
+            meat += Mat::from_fn(p, p, |a, b| w * (c[(a, b)] + c[(b, a)]));
         }
         let small_sample = n_l as f64 / n_l.saturating_sub(p).max(1) as f64;
         let n = d.n_residuals();
-        Mat::from_fn(p, p, |a, b| {
-            small_sample * meat[(a, b)]
-                + (n..jacobian.nrows())
-                    .map(|row| jacobian[(row, a)] * jacobian[(row, b)])
-                    .sum::<f64>()
-        })
+        let priors = jacobian.subrows(n, jacobian.nrows() - n);
+        Mat::from_fn(p, p, |a, b| small_sample * meat[(a, b)]) + priors.transpose() * priors
     }
 
     fn weighted_data_norm(&self) -> f64 {
