@@ -948,8 +948,8 @@ fn deviations_of(
 /// Identifies the modes of `set` (module docs).
 ///
 /// # Errors
-/// [`EmaError::Invalid`] for bad bands (beyond the data's lines) or orders ([`lscf`]), no physical pole, or a
-/// driving-point index out of range.
+/// [`EmaError::Invalid`] for bad bands (beyond the data's lines) or orders ([`lscf`]), no physical
+/// pole, or a driving-point index out of range.
 pub fn identify(set: &FrfSet, s: &EmaSettings) -> Result<EmaResult, EmaError> {
     identify_with(set, s, &|_| {})
 }

@@ -121,10 +121,10 @@ pub struct CmifPeak {
 /// Local maxima of the first CMIF curve whose topographic prominence, as a ratio, is at least
 /// `prominence`: for a peak σ_k the base on each side is the lowest value between it and the
 /// nearest higher point on that side (or the band's end), and the peak is kept when
-/// σ_k ≥ prominence · max(base_left, base_right) — the definition of `scipy.signal.peak_prominences`
-/// taken on log σ. A ripple on a resonance's flank has a base just below it and is dropped,
-/// however many local maxima noise puts there; a resonance's own base is the trough to the
-/// next higher peak. A plateau counts once, at its first line.
+/// σ_k ≥ prominence · max(base_left, base_right) — the definition of
+/// `scipy.signal.peak_prominences` taken on log σ. A ripple on a resonance's flank has a base just
+/// below it and is dropped, however many local maxima noise puts there; a resonance's own base is
+/// the trough to the next higher peak. A plateau counts once, at its first line.
 pub fn cmif_peaks(freqs_hz: &[f64], first: &[f64], prominence: f64) -> Vec<CmifPeak> {
     let n = first.len();
     let left = bases(first.iter().copied());

@@ -38,9 +38,9 @@
 //! it got, or as soon as the tolerance is seen to be out of reach within those caps: before
 //! any solve when the finest allowed mesh leaves the free edges unresolved, and from the third
 //! level on when an error shrunk at the element's nominal order (the most it can give) down to
-//! the finest allowed mesh still misses it ([`Reach`]). Tolerances below [`MIN_TOLERANCE`] are refused: the eigenvalues themselves are
-//! resolved to about 1e-10 relative (the Lanczos Ritz tolerance), and the differences between
-//! levels lose further digits.
+//! the finest allowed mesh still misses it ([`Reach`]). Tolerances below [`MIN_TOLERANCE`] are
+//! refused: the eigenvalues themselves are resolved to about 1e-10 relative (the Lanczos Ritz
+//! tolerance), and the differences between levels lose further digits.
 
 use crate::assembly::{Assembly, NodeSpring};
 use crate::eigen::{ModalParams, Progress, solve_modes};

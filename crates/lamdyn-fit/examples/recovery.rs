@@ -9,9 +9,9 @@
 //! RECOVERY_MESH=mitc4 runs either on 24 × 24 MITC4 instead of the case's default mesh.
 //! `one` prints a single fit in detail (per_mode fits the per-mode law to eq. 7 data; set
 //! RECOVERY_RESIDUALS=1 to list the lines with large residuals); `study` prints the markdown
-//! table of docs/fit.md: for each truth law, misfit and covariance estimator, over seeds 1..=seeds, how many true
-//! parameters fall inside the 95 % intervals, at how many seeds the true parameter vector lies
-//! inside the joint 95 % confidence region (d² ≤ χ²₄(0.95)), the largest
+//! table of docs/fit.md: for each truth law, misfit and covariance estimator, over seeds 1..=seeds,
+//! how many true parameters fall inside the 95 % intervals, at how many seeds the true parameter
+//! vector lies inside the joint 95 % confidence region (d² ≤ χ²₄(0.95)), the largest
 //! |z| = |estimate − truth|/σ, and the largest errors of E' and η at the measured peaks.
 
 use lamdyn_fit::fit::{Covariance, FitResult, FitSettings, LawKind, fit};

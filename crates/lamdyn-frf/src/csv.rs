@@ -5,9 +5,10 @@
 //!
 //! **FRF file**: a line `# quantity = accelerance` (or `receptance`, `mobility`) before the
 //! header — required: a file without it is refused, since reading accelerance as receptance
-//! gives loss factors wrong by orders of magnitude without any other sign —, then a header `f_hz,R@F:re,R@F:im,...` with one pair of columns per response `R`
-//! and reference `F` named in the channels file, then one line per frequency (Hz, increasing).
-//! Every response × reference pair must appear once.
+//! gives loss factors wrong by orders of magnitude without any other sign —, then a header
+//! `f_hz,R@F:re,R@F:im,...` with one pair of columns per response `R` and reference `F` named in
+//! the channels file, then one line per frequency (Hz, increasing). Every response × reference pair
+//! must appear once.
 //!
 //! **Time file** (one per hammer hit): a line `# quantity = accelerance` (what the responses
 //! are: `receptance` = displacement in m, `mobility` = velocity in m/s, `accelerance` =

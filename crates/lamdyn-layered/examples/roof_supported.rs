@@ -1,7 +1,7 @@
 //! The paper's roof on four supports near its corners (vertical stiffness K_Z N/m each,
-//! horizontal a fifth of it, dashpots C_Z N s/m): `roof_supported N K_Z C_Z [GRADING [PATCH]]`, PATCH the side of a square contact patch (m). Prints each
-//! mode below 80 Hz at the demo's core law (its complex fixed point) and how strongly it
-//! feels the core, d ln f / d ln G'.
+//! horizontal a fifth of it, dashpots C_Z N s/m): `roof_supported N K_Z C_Z [GRADING [PATCH]]`,
+//! PATCH the side of a square contact patch (m). Prints each mode below 80 Hz at the demo's core
+//! law (its complex fixed point) and how strongly it feels the core, d ln f / d ln G'.
 
 #[path = "common/roof.rs"]
 mod roof;

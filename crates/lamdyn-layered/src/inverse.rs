@@ -14,10 +14,10 @@
 //!
 //!   s_{k+1} = s_k − r_k (s_k − s_{k−1}) / (r_k − r_{k−1}),  r = λ_near(s) − λ_meas,
 //!
-//! (steps cut to half the modulus), with λ_near the eigenvalue of the matched mode. Because the modulus is solved at each mode's own
-//! frequency, any frequency dependence of G* is allowed. The basis holds real modes at three
-//! core moduli (G_a/4, G_a, 4 G_a) with their core sensitivities, so it spans the range the
-//! iteration moves in.
+//! (steps cut to half the modulus), with λ_near the eigenvalue of the matched mode. Because the
+//! modulus is solved at each mode's own frequency, any frequency dependence of G* is allowed. The
+//! basis holds real modes at three core moduli (G_a/4, G_a, 4 G_a) with their core sensitivities,
+//! so it spans the range the iteration moves in.
 
 use crate::error::LayeredError;
 use crate::hex20::Elastic;

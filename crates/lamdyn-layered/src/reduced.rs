@@ -18,10 +18,11 @@
 //! static response to the dashpots' forces on each mode (K_j − σM)⁻¹ C_s φ (the real modes
 //! alone left out how those forces deform the plate: 3.1e-4 in λ on damped patches,
 //! `inverse::tests::reduced_bases_hold_the_supports_dashpots`); the whole is made
-//! M-orthonormal (numerically dependent columns are dropped) [Plouin & Balmès 1999, "Steel/viscoelastic/steel
-//! sandwich shells: computational methods and experimental validations", IMAC XVII; Balmès 1996
-//! for the multi-model reduction]. Then u ≈ V (Vᵀ Z(ω) V)⁻¹ Vᵀ f: one small dense complex solve
-//! per line. The direct route factors the sparse complex Z(ω) (faer's sparse LU) per line.
+//! M-orthonormal (numerically dependent columns are dropped) [Plouin & Balmès 1999,
+//! "Steel/viscoelastic/steel sandwich shells: computational methods and experimental validations",
+//! IMAC XVII; Balmès 1996 for the multi-model reduction]. Then u ≈ V (Vᵀ Z(ω) V)⁻¹ Vᵀ f: one small
+//! dense complex solve per line. The direct route factors the sparse complex Z(ω) (faer's sparse
+//! LU) per line.
 
 use crate::error::LayeredError;
 use crate::sensitivity::{

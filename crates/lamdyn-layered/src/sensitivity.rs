@@ -196,8 +196,8 @@ fn pencil(
 }
 
 /// Complex eigenvalues of the reduced pencil (e(K_e + ε dK_e) + s(K_c + ε dK_c) + K_s +
-/// ε dK_s + iω(C_s + ε dC_s)) x = λ (I + ε dM) x, e = 1 + iη_e, increasing real part (ε = 0 or `d` = None: the
-/// nominal model, Vᵀ M V = I; `supports` None: a free part).
+/// ε dK_s + iω(C_s + ε dC_s)) x = λ (I + ε dM) x, e = 1 + iη_e, increasing real part (ε = 0 or `d`
+/// = None: the nominal model, Vᵀ M V = I; `supports` None: a free part).
 pub fn pencil_eigenvalues(
     k_elastic: &Mat<f64>,
     k_core: &Mat<f64>,

@@ -3,8 +3,8 @@
 //!
 //! Each layer has its own material; K = Σ_l a_l K_l and M = Σ_l b_l M_l, so a layer's stiffness
 //! can later be scaled by a frequency-dependent modulus (the core) and each layer's stiffness
-//! and mass by its own factor (a face modulus, a density: [`crate::sensitivity`]). Free-free models have six zero
-//! eigenvalues; a negative shift σ keeps K − σM positive definite.
+//! and mass by its own factor (a face modulus, a density: [`crate::sensitivity`]). Free-free models
+//! have six zero eigenvalues; a negative shift σ keeps K − σM positive definite.
 
 use crate::error::LayeredError;
 use crate::hex20::{Elastic, matrices};

@@ -110,26 +110,27 @@ fn explain(band: &lamdyn_pipeline::band::LayeredBand, freq_hz: f64, err: [f64; 2
     let s: Vec<String> = band
         .sources
         .iter()
-        .map(|(n, v)| format!("{n} {:.2}/{:.2} %", 100.0 * v[0], 100.0 * v[1]))
+        .map(|(n, v)| format!("{n} {:.2}/{:.2} %", 100.0 * v.storage, 100.0 * v.loss))
         .collect();
     println!("  {freq_hz:.0} Hz sources: {}", s.join(", "));
     let shift: [f64; 2] = [0, 1].map(|c| {
         band.inputs
             .iter()
-            .map(|i| i.effect[c] * drawn.delta(i.input.name()))
+            .map(|i| i.effect.to_array()[c] * drawn.delta(i.input.name()))
             .sum::<f64>()
     });
     // The second order as the joint fit models it: one curvature along the combined shift.
-    let effects: Vec<[f64; 2]> = band.inputs.iter().map(|i| i.effect).collect();
+    let effects: Vec<[f64; 2]> = band.inputs.iter().map(|i| i.effect.to_array()).collect();
+    let second_order: Vec<[f64; 2]> = band.second_order.iter().map(|s| s.to_array()).collect();
     let sds: Vec<f64> = band.inputs.iter().map(|i| i.rel_sd).collect();
-    let kappa = lamdyn_fit::joint::shared_curvature(&effects, &band.second_order, &sds);
+    let kappa = lamdyn_fit::joint::shared_curvature(&effects, &second_order, &sds);
     let second: [f64; 2] = [0, 1].map(|c| {
         let u: f64 = band
             .inputs
             .iter()
-            .zip(&band.second_order)
+            .zip(&second_order)
             .filter(|(_, s)| **s != [0.0, 0.0])
-            .map(|(i, _)| i.effect[c] * drawn.delta(i.input.name()))
+            .map(|(i, _)| i.effect.to_array()[c] * drawn.delta(i.input.name()))
             .sum();
         0.5 * kappa[c] * u * u
     });
@@ -284,8 +285,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 explain(band, p.freq_hz, err, &drawn);
             }
             for c in 0..2 {
-                in_mode[c] += usize::from(err[c].abs() <= band.half_width[c]);
-                half_mode[c].push(band.half_width[c]);
+                let half_width = band.half_width.to_array()[c];
+                in_mode[c] += usize::from(err[c].abs() <= half_width);
+                half_mode[c].push(half_width);
             }
             let mut mark = String::new();
             if let Some(l) = law.and_then(|l| l.at(p.freq_hz)) {
@@ -311,8 +313,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 p.freq_hz,
                 100.0 * err[0],
                 100.0 * err[1],
-                100.0 * band.half_width[0],
-                100.0 * band.half_width[1]
+                100.0 * band.half_width.storage,
+                100.0 * band.half_width.loss
             );
         }
         println!("{line}");

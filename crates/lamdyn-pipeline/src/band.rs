@@ -11,9 +11,54 @@ use lamdyn_layered::sensitivity::Input;
 use num_complex::Complex64;
 use serde::Serialize;
 
-/// G' and η of a complex modulus G* = G'(1 + iη), or a pair of quantities of them (relative
-/// standard deviations, half-widths of ln G' and ln η), in that order.
-pub type StorageAndLoss = [f64; 2];
+/// A quantity of G' and the same quantity of η, for a complex modulus G* = G'(1 + iη): relative
+/// standard deviations, half-widths of ln G' and ln η, or derivatives of ln G' and ln η.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StorageAndLoss {
+    /// Of the storage modulus G'.
+    pub storage: f64,
+    /// Of the loss factor η.
+    pub loss: f64,
+}
+
+/// Which of the two parts of a [`StorageAndLoss`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModulusPart {
+    /// The storage modulus G'.
+    Storage,
+    /// The loss factor η.
+    Loss,
+}
+
+impl StorageAndLoss {
+    /// Of G' `storage` and of η `loss`.
+    pub const fn new(storage: f64, loss: f64) -> Self {
+        Self { storage, loss }
+    }
+
+    /// From `[G', η]`.
+    pub const fn from_array([storage, loss]: [f64; 2]) -> Self {
+        Self { storage, loss }
+    }
+
+    /// As `[G', η]`.
+    pub const fn to_array(self) -> [f64; 2] {
+        [self.storage, self.loss]
+    }
+
+    /// The `part`.
+    pub const fn part(self, part: ModulusPart) -> f64 {
+        match part {
+            ModulusPart::Storage => self.storage,
+            ModulusPart::Loss => self.loss,
+        }
+    }
+
+    /// `f` applied to each part.
+    pub fn map(self, f: impl Fn(f64) -> f64) -> Self {
+        Self::new(f(self.storage), f(self.loss))
+    }
+}
 
 /// Where a band's width comes from. The label is what tables, JSON and the report print; the
 /// remedy says what would narrow it. Both are exhaustive matches, so a new source cannot lack
@@ -232,17 +277,16 @@ impl LayeredBand {
         self
     }
 
-    /// The source with the largest standard deviation of G' (`part` 0) or η (1); `None`
-    /// without a source.
-    pub fn dominant(&self, part: usize) -> Option<BandSource> {
+    /// The source with the largest standard deviation of `part`; `None` without a source.
+    pub fn dominant(&self, part: ModulusPart) -> Option<BandSource> {
         self.sources
             .iter()
-            .max_by(|a, b| a.1[part].total_cmp(&b.1[part]))
+            .max_by(|a, b| a.1.part(part).total_cmp(&b.1.part(part)))
             .map(|s| s.0)
     }
 
     /// The label of [`Self::dominant`], "-" without a source.
-    pub fn dominant_label(&self, part: usize) -> &'static str {
+    pub fn dominant_label(&self, part: ModulusPart) -> &'static str {
         self.dominant(part).map_or("-", BandSource::label)
     }
 }
@@ -250,7 +294,17 @@ impl LayeredBand {
 /// The 95 % half-widths of ln G' and ln η of independent `sources` (relative standard
 /// deviations): 1.96 √(Σ σ²) per part ([`LayeredBand::half_width`]).
 pub fn half_width(sources: &[(BandSource, StorageAndLoss)]) -> StorageAndLoss {
-    [0, 1].map(|k| 1.96 * sources.iter().map(|s| s.1[k].powi(2)).sum::<f64>().sqrt())
+    let quadrature = |part| {
+        1.96 * sources
+            .iter()
+            .map(|s| s.1.part(part).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    StorageAndLoss::new(
+        quadrature(ModulusPart::Storage),
+        quadrature(ModulusPart::Loss),
+    )
 }
 
 #[cfg(test)]
@@ -300,11 +354,11 @@ mod tests {
     #[test]
     fn sources_add_in_quadrature() {
         let sources = [
-            (BandSource::EmaPole, [0.03, 0.0]),
-            (BandSource::Discretization, [0.04, 0.01]),
+            (BandSource::EmaPole, StorageAndLoss::new(0.03, 0.0)),
+            (BandSource::Discretization, StorageAndLoss::new(0.04, 0.01)),
         ];
         let h = half_width(&sources);
-        assert!((h[0] - 1.96 * 0.05).abs() < 1e-15);
-        assert!((h[1] - 1.96 * 0.01).abs() < 1e-15);
+        assert!((h.storage - 1.96 * 0.05).abs() < 1e-15);
+        assert!((h.loss - 1.96 * 0.01).abs() < 1e-15);
     }
 }

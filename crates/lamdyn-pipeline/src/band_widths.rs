@@ -13,8 +13,8 @@
 //! A half-width h is that of ln x: the band is [x e^−h, x e^h], and h ≈ the relative half-width
 //! when small.
 
-use crate::band::LayeredBand;
 pub use crate::band::what_would_narrow;
+use crate::band::{LayeredBand, ModulusPart};
 use crate::chain::CorePoint;
 use lamdyn_fit::joint::CoreLawFit;
 use serde::Serialize;
@@ -82,8 +82,11 @@ pub fn band_widths(modal: &[CorePoint], law: Option<&CoreLawFit>) -> Option<Band
     let undetermined: Vec<UndeterminedMode> = bands
         .iter()
         .filter_map(|(f, b)| {
-            let dominant = [b.dominant_label(0), b.dominant_label(1)];
-            undetermined(*f, b.half_width, dominant)
+            let dominant = [
+                b.dominant_label(ModulusPart::Storage),
+                b.dominant_label(ModulusPart::Loss),
+            ];
+            undetermined(*f, b.half_width.to_array(), dominant)
         })
         .collect();
     let determined: Vec<(f64, &LayeredBand)> = bands
@@ -91,7 +94,10 @@ pub fn band_widths(modal: &[CorePoint], law: Option<&CoreLawFit>) -> Option<Band
         .filter(|(f, _)| !undetermined.iter().any(|u| u.freq_hz == *f))
         .copied()
         .collect();
-    let halves: Vec<[f64; 2]> = determined.iter().map(|(_, b)| b.half_width).collect();
+    let halves: Vec<[f64; 2]> = determined
+        .iter()
+        .map(|(_, b)| b.half_width.to_array())
+        .collect();
     let modes_median = median_pair(&halves);
     let law_median = law.and_then(|l| {
         let curve: Vec<[f64; 2]> = l.curve(CURVE_POINTS).iter().map(half_widths).collect();
@@ -174,16 +180,20 @@ fn widest_of_law(law: &CoreLawFit) -> Vec<WidestBand> {
 
 /// Per part, the widest of the per-mode bands that determine the core.
 fn widest_of_modes(determined: &[(f64, &LayeredBand)]) -> Vec<WidestBand> {
-    (0..2)
-        .filter_map(|c| {
-            let (f, b) = determined
-                .iter()
-                .max_by(|a, b| a.1.half_width[c].total_cmp(&b.1.half_width[c]))?;
-            let source = b.dominant_label(c).to_string();
+    [ModulusPart::Storage, ModulusPart::Loss]
+        .into_iter()
+        .enumerate()
+        .filter_map(|(c, part)| {
+            let (f, b) = determined.iter().max_by(|a, b| {
+                a.1.half_width
+                    .part(part)
+                    .total_cmp(&b.1.half_width.part(part))
+            })?;
+            let source = b.dominant_label(part).to_string();
             Some(WidestBand {
                 part: PARTS[c],
                 freq_hz: *f,
-                half_width: b.half_width[c],
+                half_width: b.half_width.part(part),
                 advice: what_would_narrow(&source),
                 source,
             })

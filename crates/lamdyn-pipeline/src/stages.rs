@@ -922,9 +922,9 @@ fn run_fit(job: &Job, model: &ModalModel, set: &FrfSet) -> Result<(FitResult, Fi
 }
 
 /// The modal frequencies, Hz, increasing: the fit's RMS peaks (paper Table 3) and every EMA
-/// mode that no peak claims (every EMA mode without a fit). A peak claims the EMA mode nearest it within 2 %; a mode left
-/// unclaimed (weakly excited, one of a close pair, or a support's bounce that the free shell
-/// model lacks) still has a pole, and the layered inverse needs nothing else.
+/// mode that no peak claims (every EMA mode without a fit). A peak claims the EMA mode nearest it
+/// within 2 %; a mode left unclaimed (weakly excited, one of a close pair, or a support's bounce
+/// that the free shell model lacks) still has a pole, and the layered inverse needs nothing else.
 pub fn modal_frequencies(r: Option<&FitResult>, ema: &EmaResult) -> Vec<f64> {
     let peaks: Vec<f64> = r
         .map_or(&[][..], |r| &r.peaks)
@@ -1213,7 +1213,7 @@ fn falling_layered_storage(modal: &[CorePoint]) -> Vec<String> {
         .filter_map(|p| {
             let g = p.layered_g()?;
             let band = p.layered_band.as_ref()?.as_ref().ok()?;
-            Some((p.freq_hz, g.re, band.half_width[0]))
+            Some((p.freq_hz, g.re, band.half_width.storage))
         })
         .filter(|(_, g, h)| *g > 0.0 && h.is_finite())
         .collect();
@@ -1309,7 +1309,7 @@ mod tests {
             p.layered = Some(Ok(Complex64::new(g, 0.5 * g)));
             p.layered_band = Some(Ok(crate::band::LayeredBand {
                 sources: Vec::new(),
-                half_width: [h, h],
+                half_width: crate::band::StorageAndLoss::new(h, h),
                 inputs: Vec::new(),
                 second_order: Vec::new(),
                 inputs_at: Vec::new(),

@@ -80,7 +80,7 @@ fn layered_recovers_the_truth(
         );
         let band = p.layered_band.as_ref().expect("a band").as_ref().unwrap();
         assert!(
-            eg.ln_1p().abs() < band.half_width[0] && ee.ln_1p().abs() < band.half_width[1],
+            eg.ln_1p().abs() < band.half_width.storage && ee.ln_1p().abs() < band.half_width.loss,
             "truth outside the band at {:.2} Hz: {eg:+.3} / {ee:+.3} against {:?}",
             p.freq_hz,
             band.half_width
@@ -246,7 +246,7 @@ fn report_has_every_figure_and_the_layered_route_recovers_the_core() {
         ] {
             assert!(names.contains(&n), "{names:?}");
         }
-        let dominant = band.dominant_label(0);
+        let dominant = band.dominant_label(lamdyn_pipeline::band::ModulusPart::Storage);
         assert!(
             dominant.starts_with("face") || dominant.starts_with("inputs beyond"),
             "{band:?}"

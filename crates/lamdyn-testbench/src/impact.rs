@@ -8,9 +8,10 @@
 //! the outward normal n; channels are named `S<row>.<col>:t1|t2|n`.
 //!
 //! **FRFs.** Accelerance A = −ω² dᵀ u with u the receptance to a unit force at the hammer
-//! node (along −n, or along a given direction such as the paper's global −Z, "1Z−") (from [`ReducedModel::response`]), for each sensor axis d, at every line of the band
-//! (0 Hz excluded: a free model has no static response). The core scale is
-//! s(ω) = G*(ω)/G_a for the law's modulus G*(ω) and the assembled core shear modulus G_a.
+//! node (along −n, or along a given direction such as the paper's global −Z, "1Z−") (from
+//! [`ReducedModel::response`]), for each sensor axis d, at every line of the band (0 Hz excluded: a
+//! free model has no static response). The core scale is s(ω) = G*(ω)/G_a for the law's modulus
+//! G*(ω) and the assembled core shear modulus G_a.
 //!
 //! **Noise.** Complex Gaussian noise `snr_db` below each curve's RMS (seeded, reproducible).
 //!

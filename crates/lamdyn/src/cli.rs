@@ -610,7 +610,8 @@ impl OutputArgs {
 /// A frequency grid in Hz: a list, or min/max/step.
 #[derive(Debug, Args, Clone)]
 pub struct GridArgs {
-    /// Frequencies in Hz, comma-separated and increasing (overrides --f-min-hz/--f-max-hz/--f-step-hz).
+    /// Frequencies in Hz, comma-separated and increasing (overrides
+    /// --f-min-hz/--f-max-hz/--f-step-hz).
     #[arg(long, value_delimiter = ',', value_parser = finite, allow_hyphen_values = true, value_name = "HZ,..")]
     pub freq_hz: Option<Vec<f64>>,
     /// Lowest frequency of the grid, Hz.
@@ -742,8 +743,9 @@ pub struct E756Args {
     #[arg(long, value_name = "FILE")]
     pub beam: PathBuf,
     /// Measured resonances (CSV). uniform: mode,f_hz,loss_factor; oberst:
-    /// mode,f_base_hz,f_composite_hz,loss_factor; sandwich: mode,f_base_hz,f_sandwich_hz,loss_factor.
-    /// A half_power_bandwidth_hz column may replace loss_factor.
+    /// mode,f_base_hz,f_composite_hz,loss_factor; sandwich:
+    /// mode,f_base_hz,f_sandwich_hz,loss_factor. A half_power_bandwidth_hz column may replace
+    /// loss_factor.
     #[arg(long, value_name = "FILE", required_unless_present = "forward")]
     pub data: Option<PathBuf>,
     /// Oberst only: solve the standard's quadratic with the complex frequency ratio (exact)

@@ -6,11 +6,12 @@
 //! z(x, y) = −x²/(2R_x) − y²/(2R_y),
 //!
 //! with exact unit normals n ∝ (x/R_x, y/R_y, 1) as directors; an infinite radius is flat in that
-//! direction, a negative one curves the other way (R_x, R_y < 0: a bowl; signs apart: a saddle). Nodes are numbered row by row (x fastest), elements likewise, counter-clockwise
-//! seen from +z. Optional grading clusters nodes towards the free edges, where a Mindlin plate
-//! has a boundary layer of width about t/√(12k) (method-notes §5); edge layers resolve it
-//! better: `edge_layers` elements at each edge whose widths grow geometrically from
-//! `edge_layer_m` to the interior's uniform size ([`axis_coordinates`]).
+//! direction, a negative one curves the other way (R_x, R_y < 0: a bowl; signs apart: a saddle).
+//! Nodes are numbered row by row (x fastest), elements likewise, counter-clockwise seen from +z.
+//! Optional grading clusters nodes towards the free edges, where a Mindlin plate has a boundary
+//! layer of width about t/√(12k) (method-notes §5); edge layers resolve it better: `edge_layers`
+//! elements at each edge whose widths grow geometrically from `edge_layer_m` to the interior's
+//! uniform size ([`axis_coordinates`]).
 //!
 //! With `element = "mitc9"` each element gets mid-side nodes at the midpoints of its edges in
 //! plan and a centre node (lifted onto the dome with their exact normals): the elements stay

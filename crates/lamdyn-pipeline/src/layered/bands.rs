@@ -18,7 +18,7 @@
 
 use super::pole_scatter::PoleScatter;
 use super::setup::input_rel_sd;
-use crate::band::{BandSource, CoarsePole, InputEffect, LayeredBand, half_width};
+use crate::band::{BandSource, CoarsePole, InputEffect, LayeredBand, StorageAndLoss, half_width};
 use crate::job::UncertaintyOptions;
 use lamdyn_layered::LayeredError;
 use lamdyn_layered::convergence::ConvergedMode;
@@ -28,8 +28,8 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 
 /// Each input's prior and the coarsest model moved by ±1 sd of each input with a prior below
-/// `wide_prior` ([`LawTuning::wide_prior`](super::tuning::LawTuning::wide_prior)), built once for every mode's band ([`band`], [`second_order`]): neither
-/// depends on the mode.
+/// `wide_prior` ([`LawTuning::wide_prior`](super::tuning::LawTuning::wide_prior)), built once for
+/// every mode's band ([`band`], [`second_order`]): neither depends on the mode.
 pub struct MovedBySd {
     /// Per input: its prior's relative sd ([`input_rel_sd`]) and the models at +1 sd and
     /// −1 sd (none for a wide or zero prior, or a move that failed).
@@ -107,7 +107,7 @@ pub fn band(
         .map(|e| InputEffect {
             input: e.input,
             rel_sd: moved.rel_sd(e.input),
-            effect: log_parts(e.dg_dln, g0),
+            effect: StorageAndLoss::from_array(log_parts(e.dg_dln, g0)),
         })
         .collect();
     let inputs_at = sens
@@ -119,7 +119,7 @@ pub fn band(
             _ => 0.0,
         })
         .collect();
-    let mut sources: Vec<(BandSource, [f64; 2])> = inputs
+    let mut sources: Vec<(BandSource, StorageAndLoss)> = inputs
         .iter()
         .map(|i| {
             let sd = i.rel_sd;
@@ -137,7 +137,7 @@ pub fn band(
             sens.dg_for_eigenvalue(to_model * Complex64::new(0.0, 2.0 * target.re * sd_zeta)),
             g0,
         );
-        [from_f[0].hypot(from_zeta[0]), from_f[1].hypot(from_zeta[1])]
+        StorageAndLoss::new(from_f[0].hypot(from_zeta[0]), from_f[1].hypot(from_zeta[1]))
     };
     if let Some(sd) = scatter.noise {
         sources.push((BandSource::EmaPole, pole_source(sd)));
@@ -151,17 +151,26 @@ pub fn band(
         let dg = sens.dg_for_eigenvalue(at - l);
         sources.push((
             BandSource::ThroughThickness,
-            log_parts(dg, g0).map(f64::abs),
+            StorageAndLoss::from_array(log_parts(dg, g0).map(f64::abs)),
         ));
     }
     let curvature = second_order(moved, &sens, &inputs, at, g0);
-    let second_order: Vec<[f64; 2]> = curvature.iter().map(|c| c.second).collect();
+    let second_order: Vec<StorageAndLoss> = curvature
+        .iter()
+        .map(|c| StorageAndLoss::from_array(c.second))
+        .collect();
     let [modelled, beyond] = second_order_sd(&inputs, &curvature);
-    sources.push((BandSource::InputsBeyondFirstOrder, modelled));
-    sources.push((BandSource::InputsBeyondSecondOrder, beyond));
+    sources.push((
+        BandSource::InputsBeyondFirstOrder,
+        StorageAndLoss::from_array(modelled),
+    ));
+    sources.push((
+        BandSource::InputsBeyondSecondOrder,
+        StorageAndLoss::from_array(beyond),
+    ));
     sources.push((
         BandSource::Discretization,
-        [mode.storage_band / 1.96, mode.loss_band / 1.96],
+        StorageAndLoss::new(mode.storage_band / 1.96, mode.loss_band / 1.96),
     ));
     Ok(LayeredBand {
         half_width: half_width(&sources),
@@ -222,7 +231,7 @@ fn second_order(
         .iter()
         .zip(inputs)
         .map(|(e, i)| {
-            let (sd, first) = (i.rel_sd, i.effect);
+            let (sd, first) = (i.rel_sd, i.effect.to_array());
             let Some([up, down]) = moved.of(e.input) else {
                 return InputCurvature::default();
             };
@@ -264,7 +273,7 @@ struct InputCurvature {
 ///   move by tens of per cent per sd) so weighs less in the law, instead of pulling the
 ///   shared inputs by a slope that holds only near nominal.
 fn second_order_sd(inputs: &[InputEffect], curvature: &[InputCurvature]) -> [[f64; 2]; 2] {
-    let effects: Vec<[f64; 2]> = inputs.iter().map(|i| i.effect).collect();
+    let effects: Vec<[f64; 2]> = inputs.iter().map(|i| i.effect.to_array()).collect();
     let sds: Vec<f64> = inputs.iter().map(|i| i.rel_sd).collect();
     let second: Vec<[f64; 2]> = curvature.iter().map(|c| c.second).collect();
     let kappa = lamdyn_fit::joint::shared_curvature(&effects, &second, &sds);

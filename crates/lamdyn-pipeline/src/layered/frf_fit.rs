@@ -1,6 +1,6 @@
 //! The layered stage's FRF fit: the core's law fitted to the measured FRFs through the layered
-//! model on the ladder's finest level up to [`FRF_MAX_DOFS`] ([`lamdyn_fit::frf_fit`]), the inputs under the job's
-//! priors, then corrected for the mesh by the ladder ([`crate::frf_route`]).
+//! model on the ladder's finest level up to [`FRF_MAX_DOFS`] ([`lamdyn_fit::frf_fit`]), the inputs
+//! under the job's priors, then corrected for the mesh by the ladder ([`crate::frf_route`]).
 //!
 //! The model is that level of the ladder read at every response channel and driven at
 //! every reference by the surface's shape functions ([`ObservedModel::build`]), on a basis of

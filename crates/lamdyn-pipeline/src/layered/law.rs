@@ -370,8 +370,8 @@ pub(super) fn mode_points(
             freq_hz: p.freq_hz,
             found_at_hz: band.found_at_hz,
             core_shear_pa: band.found_pa,
-            effects: band.inputs.iter().map(|i| i.effect).collect(),
-            second_order: band.second_order.clone(),
+            effects: band.inputs.iter().map(|i| i.effect.to_array()).collect(),
+            second_order: band.second_order.iter().map(|s| s.to_array()).collect(),
             // The inputs, to second order, are the fit's parameters, not the point's noise.
             // The hits' jackknife stays in the mode's own band only: the hits' noise moves
             // every mode's pole at once, and on the damped sandwich (face data known, five
@@ -391,7 +391,7 @@ pub(super) fn mode_points(
                     )
                 })
                 .filter(|s| weights == Weights::Law || s.0 != BandSource::InputsBeyondSecondOrder)
-                .map(|(s, sd)| (s.label().to_string(), *sd))
+                .map(|(s, sd)| (s.label().to_string(), sd.to_array()))
                 .collect(),
         });
     }
@@ -424,11 +424,11 @@ pub const SHARED_REMAINDER: [BandSource; 2] = [
 /// Splits each point's "inputs beyond second order" b_k (G', η) into a part of its own noise,
 /// √(1 − ρ) b_k, and a part all modes share, √ρ b_k times one term per quantity under a unit
 /// prior (two more "inputs" of the joint fit: [`SHARED_REMAINDER`]), with ρ =
-/// `shared` ([`LawTuning::remainder_shared`]); the variance per mode stays b_k². The remainder is a function of the
-/// inputs every mode shares, so taken as independent noise it averaged down over the modes
-/// while the modes' errors moved together: on the demo roof with the faces drawn from their
-/// priors (`chain_coverage`, 20 seeds) the law's η band held the truth at 85 % of the pairs,
-/// the law 2.8–4.3 % low in η at every mode of two seeds and 13–25 % high at three; split
+/// `shared` ([`LawTuning::remainder_shared`]); the variance per mode stays b_k². The remainder is a
+/// function of the inputs every mode shares, so taken as independent noise it averaged down over
+/// the modes while the modes' errors moved together: on the demo roof with the faces drawn from
+/// their priors (`chain_coverage`, 20 seeds) the law's η band held the truth at 85 % of the
+/// pairs, the law 2.8–4.3 % low in η at every mode of two seeds and 13–25 % high at three; split
 /// like this, at 94.7 % (G': 97.9 → 100 %). Its sign differs between modes in G' (seed 9:
 /// −15 … +5 %), so it is not all shared either.
 pub(super) fn share_the_remainder(

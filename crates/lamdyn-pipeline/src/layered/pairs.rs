@@ -5,6 +5,7 @@
 use super::pair_fit::{fit_pair, overlapping_pairs};
 use super::setup::ModeTarget;
 use super::tuning::PairFitTuning;
+use crate::band::StorageAndLoss;
 use crate::text;
 use lamdyn_layered::convergence::{Converged, correction};
 use lamdyn_layered::inverse::LayeredInverse;
@@ -18,10 +19,10 @@ pub struct PairBand {
     /// taken.
     pub eigenvalue: Complex64,
     /// The fit's standard deviations of ln G' and ln η.
-    pub fit_sd: [f64; 2],
+    pub fit_sd: StorageAndLoss,
     /// The spread of ln G' and ln η over the fitted band's width, if more than one fit
     /// succeeded.
-    pub lines_sd: Option<[f64; 2]>,
+    pub lines_sd: Option<StorageAndLoss>,
 }
 
 /// The pairs' results: per target (as `targets`), its pair's band where it is one of a pair
@@ -79,8 +80,8 @@ pub fn fit_overlapping_pairs(
                     }
                     bands[k] = Some(PairBand {
                         eigenvalue: fit.targets[i],
-                        fit_sd: fit.rel_sd,
-                        lines_sd: fit.band_choice_sd,
+                        fit_sd: StorageAndLoss::from_array(fit.rel_sd),
+                        lines_sd: fit.band_choice_sd.map(StorageAndLoss::from_array),
                     });
                 }
                 lines.push(text::pair_fitted(

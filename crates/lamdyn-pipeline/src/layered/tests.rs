@@ -254,10 +254,11 @@ fn coverage(
                 ];
                 let mut o = Observed::default();
                 for c in 0..2 {
-                    o.inside[0][c] = (truth_log[c] - per_mode[c]).abs() <= b.half_width[c];
+                    let half_width = b.half_width.to_array()[c];
+                    o.inside[0][c] = (truth_log[c] - per_mode[c]).abs() <= half_width;
                     let lo_hi = joint_band[c];
                     o.inside[1][c] = lo_hi[0] <= truth_log[c] && truth_log[c] <= lo_hi[1];
-                    o.half_width[0][c] = b.half_width[c];
+                    o.half_width[0][c] = half_width;
                     o.half_width[1][c] = 0.5 * (lo_hi[1] - lo_hi[0]);
                 }
                 o
@@ -865,7 +866,8 @@ fn through_thickness_is_the_inverse_on_two_elements_per_layer() {
             .iter()
             .find(|s| s.0 == BandSource::ThroughThickness)
             .unwrap()
-            .1;
+            .1
+            .to_array();
         let whole = log_parts(g2.core_shear_pa - g1.core_shear_pa, g1.core_shear_pa);
         for c in 0..2 {
             assert!(
@@ -908,8 +910,8 @@ fn bands_cover_the_truth_on_supports_known_within_a_tolerance() {
     // Measured: the joint band at 90.9 % (G') and 94.8 % (eta), median half-widths 3.4 % and
     // 7.6 % (on one stream for all seeds: 100 % and 97.5 %, 2.5 % and 5.5 %; 92.4 %, 1.9 %
     // and 3.7 % before the remainder beyond second order was partly shared,
-    // `share_the_remainder`). Before the fit was re-linearised at the inputs it finds ([`fit_law`]) it held
-    // the truth at only 67 % and 77 %: the modes pin the shared support stiffness to about
+    // `share_the_remainder`). Before the fit was re-linearised at the inputs it finds ([`fit_law`])
+    // it held the truth at only 67 % and 77 %: the modes pin the shared support stiffness to about
     // ±1 %, through sensitivities taken at the nominal supports, which a 20 % draw leaves
     // far behind.
     assert!(

@@ -8,6 +8,7 @@
 
 use super::{BLUE, ORANGE, PURPLE, loss, modal_bands, storage, truth_series};
 use crate::ChainResult;
+use crate::band::ModulusPart;
 use crate::frf_route::FrfRoute;
 use lamdyn_fit::joint::{CoreLawFit, LawPoint};
 use lamdyn_report::chart::{Axis, Chart, Mark, Series};
@@ -72,10 +73,14 @@ impl<'a> Source<'a> {
                 let g = if layered { p.layered_g() } else { p.exact_g() }?;
                 let (sb, lb) = if layered {
                     let h = p.layered_band.as_ref().and_then(|b| b.as_ref().ok());
-                    let band = |k: usize, v: f64| {
-                        h.map(|h| [v * (-h.half_width[k]).exp(), v * h.half_width[k].exp()])
+                    let band = |k: ModulusPart, v: f64| {
+                        let h = h.map(|h| h.half_width.part(k));
+                        h.map(|h| [v * (-h).exp(), v * h.exp()])
                     };
-                    (band(0, g.re), band(1, g.im / g.re))
+                    (
+                        band(ModulusPart::Storage, g.re),
+                        band(ModulusPart::Loss, g.im / g.re),
+                    )
                 } else {
                     let b = modal_bands(r, p);
                     (b.exact_storage, b.exact_loss_factor)

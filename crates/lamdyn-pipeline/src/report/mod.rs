@@ -16,6 +16,7 @@ mod frf;
 
 use super::uncertainty::{Band, Bands};
 use super::{ChainResult, CorePoint};
+use crate::band::{ModulusPart, StorageAndLoss};
 use crate::err;
 use crate::error::Result;
 use lamdyn_fit::fit::FitResult;
@@ -565,7 +566,8 @@ struct LayeredColumns {
     storage: Option<Band>,
     loss: Option<Band>,
     discretization_half_width: Option<[f64; 2]>,
-    /// 1.96 times the band's source [`BandSource::ThroughThickness`](crate::band::BandSource::ThroughThickness).
+    /// 1.96 times the band's source
+    /// [`BandSource::ThroughThickness`](crate::band::BandSource::ThroughThickness).
     through_thickness_half_width: Option<[f64; 2]>,
     dominant: Option<String>,
     freq_error: Option<f64>,
@@ -581,7 +583,7 @@ impl LayeredColumns {
         let full = p.layered_band.as_ref().and_then(|b| b.as_ref().ok());
         let half = full
             .map(|b| b.half_width)
-            .or(c.map(|c| [c.storage_band, c.loss_band]));
+            .or(c.map(|c| StorageAndLoss::new(c.storage_band, c.loss_band)));
         let band = |v: Option<f64>, rel: Option<f64>| match (v, rel) {
             // Log-normal: G' and η are positive, and a band of tens of per cent is not
             // symmetric about them (the same as v(1 ± r) for small r).
@@ -589,17 +591,24 @@ impl LayeredColumns {
             _ => None,
         };
         Self {
-            storage: band(storage(g), half.map(|h| h[0])),
-            loss: band(loss(g), half.map(|h| h[1])),
+            storage: band(storage(g), half.map(|h| h.storage)),
+            loss: band(loss(g), half.map(|h| h.loss)),
             discretization_half_width: c.map(|c| [c.storage_band, c.loss_band]),
             through_thickness_half_width: full.and_then(|b| {
                 let s = b
                     .sources
                     .iter()
                     .find(|s| s.0 == crate::band::BandSource::ThroughThickness)?;
-                Some(s.1.map(|v| 1.96 * v))
+                Some(s.1.map(|v| 1.96 * v).to_array())
             }),
-            dominant: full.map(|b| format!("{}; {}", b.dominant_label(0), b.dominant_label(1))),
+            dominant: full.map(|b| {
+                let label = |part| b.dominant_label(part);
+                format!(
+                    "{}; {}",
+                    label(ModulusPart::Storage),
+                    label(ModulusPart::Loss)
+                )
+            }),
             freq_error: c.map(|c| c.freq_error),
             loss_error: c.map(|c| c.loss_error),
             residual: c.map(|c| c.residual_freq_error),

@@ -9,7 +9,8 @@ use lamdyn_testbench::description::{Bench, Description};
 use std::f64::consts::PI;
 
 /// A free laminated-glass plate, 1.2 × 0.9 m, glass 3 mm / acoustic-PVB-like core 0.76 mm /
-/// glass 3 mm, `grid` triaxial sensors and one hammer; the core a Prony series with G' 1.6–6 MPa and η 0.9–1.3 over 20–200 Hz.
+/// glass 3 mm, `grid` triaxial sensors and one hammer; the core a Prony series with G' 1.6–6 MPa
+/// and η 0.9–1.3 over 20–200 Hz.
 pub fn glass_plate(
     elements: [usize; 2],
     grading: f64,
