@@ -1045,4 +1045,35 @@ fn damped_modes_take_the_frf_fit() {
             [want.storage_ci95[0], want.storage_pa, want.storage_ci95[1]]
         );
     }
+    // core_frf_law.csv: the answer's law and band over the fitted band; result.json has it too.
+    let law = std::fs::read_to_string(dir.join("report/core_frf_law.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = law
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 60);
+    let [lo_hz, hi_hz] = route.fit.band_hz;
+    assert!((rows[0][0] / lo_hz - 1.0).abs() < 1e-12 && (rows[59][0] / hi_hz - 1.0).abs() < 1e-12);
+    for row in &rows {
+        let want = route.at(row[0]);
+        assert_eq!(
+            row[1..],
+            [
+                want.storage_pa,
+                want.storage_ci95[0],
+                want.storage_ci95[1],
+                want.loss_factor,
+                want.loss_factor_ci95[0],
+                want.loss_factor_ci95[1]
+            ]
+        );
+        assert!(row[2] < row[1] && row[1] < row[3] && row[5] < row[4] && row[4] < row[6]);
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report/result.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["frf_fit"]["the_answer"], true);
+    assert_eq!(json["frf_fit"]["law"], route.fit.law.name());
+    assert_eq!(json["frf_fit"]["curve"].as_array().unwrap().len(), 60);
 }

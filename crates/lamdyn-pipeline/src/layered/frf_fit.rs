@@ -180,12 +180,13 @@ pub fn fit_to_frfs(
                     ratios[1],
                     inputs.join(", ")
                 ),
-                fit: once.fit,
-                why,
                 correction: DiscretizationCorrection::from_ladder(
                     input.modal,
-                    setup.start[0] as f64 / level[0] as f64,
+                    input.levels.iter().position(|l| l.0 == level).unwrap_or(0),
+                    !once.fit.inputs.is_empty(),
                 ),
+                fit: once.fit,
+                why,
                 curves,
                 times_s: times,
                 laws,

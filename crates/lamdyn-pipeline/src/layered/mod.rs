@@ -193,7 +193,7 @@ fn record_modes(modal: &mut [CorePoint], targets: &[ModeTarget], out: &Converged
             .and_then(physical);
         let p = &mut modal[t.point];
         p.layered = Some(m.as_ref().map(|m| m.core_shear_pa).map_err(Clone::clone));
-        p.layered_convergence = m.ok().copied();
+        p.layered_convergence = m.ok().cloned();
     }
 }
 

@@ -792,7 +792,9 @@ fn a_pair_fit_to_the_frfs_recovers_the_core_its_poles_miss() {
         let est = model.invert(t, g_true).unwrap();
         ConvergedMode::exact(est.core_shear_pa, est.core_shear_pa, est.rank)
     });
-    let off = modes.map(|m| (m.core_shear_pa / g_true - 1.0).norm());
+    let off = modes
+        .clone()
+        .map(|m| (m.core_shear_pa / g_true - 1.0).norm());
     assert!(
         off.iter().all(|&o| o > 3e-3),
         "the given poles miss: {off:?}"

@@ -267,8 +267,14 @@ fn judgement(r: &ChainResult, points: &[Point]) -> String {
         .band_widths()
         .and_then(|b| b.widest.into_iter().find(|w| w.half_width > WIDE))
     {
+        // With the FRF fit as the answer, the bands' sources are the pole route's beside it.
+        let whose = if r.frf.answer().is_some() {
+            "Beside it, the pole route's widest band"
+        } else {
+            "The widest band"
+        };
         s.push(format!(
-            "The widest band ({} ±{:.0} % at {:.1} Hz) comes mainly from the {}; what would narrow it: {}.",
+            "{whose} ({} ±{:.0} % at {:.1} Hz) comes mainly from the {}; what would narrow it: {}.",
             w.part,
             100.0 * w.half_width,
             w.freq_hz,

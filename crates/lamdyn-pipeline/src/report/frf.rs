@@ -8,8 +8,10 @@ use crate::error::Result;
 use crate::frf_route::{FrfCurve, FrfRoute};
 use lamdyn_report::HtmlReport;
 use lamdyn_report::chart::{Axis, Chart, Mark, Series};
+use std::fmt::Write as _;
 
-/// The section (nothing when the layered route is off).
+/// The section (nothing when the layered route is off), and the FRF route's law in
+/// core_frf_law.csv.
 ///
 /// # Errors
 /// A figure that cannot be rendered.
@@ -26,6 +28,7 @@ pub(super) fn section(
     let Some(route) = r.frf.route() else {
         return Ok(());
     };
+    files.push(("core_frf_law.csv".into(), law_csv(route).into_bytes()));
     let (header, rows) = law_table(r, route);
     html.table(
         "The core's law fitted to the FRFs (corrected for the mesh, 95 % band) beside the pole route's law, at each modal frequency.",
@@ -130,4 +133,74 @@ fn curve_chart(c: &FrfCurve, unit: &str) -> Chart {
         residual,
     ));
     chart
+}
+
+/// Lines of core_frf_law.csv over the fitted band.
+const LAW_LINES: usize = 60;
+
+/// `core_frf_law.csv`: the FRF route's law (corrected for the mesh) and its 95 % band on
+/// [`LAW_LINES`] lines evenly spaced in ln f over the fitted band.
+fn law_csv(route: &FrfRoute) -> String {
+    let mut csv = String::from(
+        "f_hz,storage_pa,storage_lo_pa,storage_hi_pa,loss_factor,loss_factor_lo,loss_factor_hi\n",
+    );
+    for p in route.curve(LAW_LINES) {
+        let _ = writeln!(
+            csv,
+            "{},{:e},{:e},{:e},{},{},{}",
+            p.f_hz,
+            p.storage_pa,
+            p.storage_ci95[0],
+            p.storage_ci95[1],
+            p.loss_factor,
+            p.loss_factor_ci95[0],
+            p.loss_factor_ci95[1]
+        );
+    }
+    csv
+}
+
+/// The FRF route in result.json: whether it is the answer and why, the law, its parameters
+/// with their 95 % intervals (null: not determined), the model, the mesh correction and the
+/// law's curve (as core_frf_law.csv); `null` when it did not run.
+pub(super) fn json(r: &ChainResult) -> serde_json::Value {
+    let Some(route) = r.frf.route() else {
+        return serde_json::Value::Null;
+    };
+    let parameters: Vec<serde_json::Value> = route
+        .fit
+        .parameters
+        .iter()
+        .map(|p| serde_json::json!({"name": p.name, "value": p.value, "ci95": p.ci95}))
+        .collect();
+    let curve: Vec<serde_json::Value> = route
+        .curve(LAW_LINES)
+        .iter()
+        .map(|p| {
+            serde_json::json!({
+                "f_hz": p.f_hz,
+                "storage_pa": p.storage_pa,
+                "storage_ci95_pa": p.storage_ci95,
+                "loss_factor": p.loss_factor,
+                "loss_factor_ci95": p.loss_factor_ci95,
+            })
+        })
+        .collect();
+    let [applied, own] = route.correction.storage_ranges();
+    serde_json::json!({
+        "the_answer": route.is_the_answer(),
+        "why": route.why.iter().map(ToString::to_string).collect::<Vec<_>>(),
+        "law": route.fit.law.name(),
+        "parameters": parameters,
+        "band_hz": route.fit.band_hz,
+        "relative_rms": route.fit.relative_rms,
+        "model": route.model_line,
+        "mesh_correction": {
+            "modes": route.correction.modes.len(),
+            "storage_applied": applied,
+            "storage_level_error": own,
+            "rel_sd": route.correction.rel_sd,
+        },
+        "curve": curve,
+    })
 }

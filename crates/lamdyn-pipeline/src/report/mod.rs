@@ -578,7 +578,7 @@ struct LayeredColumns {
 
 impl LayeredColumns {
     fn of(p: &CorePoint) -> Self {
-        let c = p.layered_convergence;
+        let c = p.layered_convergence.as_ref();
         let g = p.layered_g();
         let full = p.layered_band.as_ref().and_then(|b| b.as_ref().ok());
         let half = full
@@ -1162,8 +1162,8 @@ fn uncertainty_and_run_section(html: &mut HtmlReport, r: &ChainResult) {
     );
 }
 
-/// `result.json`: the run's inputs, the paper's fit, the core's law, the modes, the
-/// uncertainty, the band widths, the warnings and the stage times.
+/// `result.json`: the run's inputs, the paper's fit, the core's law, the FRF route, the modes,
+/// the uncertainty, the band widths, the warnings and the stage times.
 fn result_json(
     r: &ChainResult,
     band_widths: Option<crate::band_widths::BandWidths>,
@@ -1175,6 +1175,7 @@ fn result_json(
         "fit": r.fit,
         "paper_route_error": r.paper_route_error,
         "core_law": r.core_law.as_ref().map(|l| l.as_ref().map_err(ToString::to_string)),
+        "frf_fit": frf::json(r),
         "ema_modes": r.ema.modes.iter().map(|m| serde_json::json!({"freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "mpc": m.mpc})).collect::<Vec<_>>(),
         "uncertainty": r.uncertainty,
         "band_widths": band_widths,
