@@ -98,11 +98,12 @@ pub struct ConvergedMode {
     /// Rank of the mode among the elastic ones (0: the lowest; [`LayeredEstimate::rank`]).
     pub rank: usize,
     /// Per level of the ladder (coarsest first), ln(G*/G*_k): how far the G* that level alone
-    /// finds for the target lies from `core_shear_pa`, to first order ([`level_corrections`]);
-    /// empty where it could not be taken.
+    /// finds for the target lies from `core_shear_pa`, to first order from that level's
+    /// eigenvalue λ_k at G*: −ln(target/λ_k)/S; empty where it could not be taken.
     pub level_corrections: Vec<Complex64>,
     /// S = ∂ln λ/∂ln G* of the mode at `core_shear_pa` on the coarsest level (how strongly its
-    /// eigenvalue feels the core; [`level_corrections`]); NaN where it could not be taken.
+    /// eigenvalue feels the core), by a step of 1e-4 in ln G' (λ is analytic in G*, so the one
+    /// real step gives the complex S); NaN where it could not be taken.
     pub sensitivity: Complex64,
 }
 
@@ -135,6 +136,9 @@ impl ConvergedMode {
 pub struct Converged {
     /// Per target: the mode, or why it failed.
     pub modes: Vec<Result<ConvergedMode, LayeredError>>,
+    /// Per target that missed the tolerance on the last level, the ladder's estimate there
+    /// (its levels' errors still correct a model on one of them); `None` for the others.
+    pub beyond_tolerance: Vec<Option<ConvergedMode>>,
     /// In-plane elements of each level, coarsest first.
     pub meshes: Vec<[usize; 2]>,
     /// Dofs of each level.
@@ -350,6 +354,7 @@ pub fn converge_keeping_levels(
         if worst <= settings.tolerance {
             return Ok((
                 Converged {
+                    beyond_tolerance: vec![None; modes.len()],
                     modes,
                     meshes,
                     dofs,
@@ -371,10 +376,20 @@ pub fn converge_keeping_levels(
             } else {
                 "raise inverse.tolerance or the number of levels".to_string()
             };
+            let beyond_tolerance = modes
+                .iter()
+                .map(|m| {
+                    m.as_ref()
+                        .ok()
+                        .filter(|m| m.residual_freq_error > settings.tolerance)
+                        .cloned()
+                })
+                .collect();
             let modes = out_of_tolerance(modes, settings, &meshes, &dofs, &remedy);
             return Ok((
                 Converged {
                     modes,
+                    beyond_tolerance,
                     meshes,
                     dofs,
                 },
@@ -714,6 +729,15 @@ mod tests {
             )
         };
         let out = run(&strict).unwrap();
+        // What a mode beyond the tolerance reached stays as its estimate.
+        for e in &out.beyond_tolerance[..2] {
+            let e = e.as_ref().expect("an estimate beyond the tolerance");
+            assert!(
+                e.residual_freq_error > 1e-12 && e.level_corrections.len() == 3,
+                "{e:?}"
+            );
+        }
+        assert!(out.beyond_tolerance[2].is_none());
         for m in &out.modes[..2] {
             let e = m.as_ref().unwrap_err();
             let text = e.to_string();
@@ -729,6 +753,7 @@ mod tests {
         };
         let out = run(&loose).unwrap();
         assert_eq!(out.meshes, vec![[3, 3], [4, 4], [5, 5]]);
+        assert!(out.beyond_tolerance.iter().all(Option::is_none));
         for (m, &target) in out.modes[..2].iter().zip(&targets) {
             let m = m.as_ref().unwrap();
             assert!(m.residual_freq_error <= 1e-2 && m.freq_error > 0.0, "{m:?}");

@@ -34,6 +34,9 @@ pub struct CorePoint {
     pub layered: Option<Result<Complex64, NoLayered>>,
     /// The layered inverse's convergence over its mesh ladder (with a layered result).
     pub layered_convergence: Option<ConvergedMode>,
+    /// The ladder's estimate where the mode missed its tolerance (`layered` is then that
+    /// error): its levels' errors still correct the FRF route's model ([`crate::frf_route`]).
+    pub ladder_estimate: Option<ConvergedMode>,
     /// The layered result's 95 % band and what makes it, or why it has none (with a layered
     /// result).
     pub layered_band: Option<Result<LayeredBand, LayeredError>>,

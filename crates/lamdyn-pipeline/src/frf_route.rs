@@ -134,7 +134,8 @@ pub fn reasons(modes: &[Mode], set_aside: &[Mode], modal: &[CorePoint]) -> Vec<W
 }
 
 /// The mesh ladder's correction of the FRF fit's model (one of the ladder's levels): at each
-/// mode the ladder converged, c = G*_converged / G*_level, by which the G* that level alone
+/// mode the ladder converged (or estimated, where it missed its tolerance on its last level:
+/// [`CorePoint::ladder_estimate`]), c = G*_converged / G*_level, by which the G* that level alone
 /// finds for the mode's pole misses the converged one (to first order:
 /// [`lamdyn_layered::convergence::ConvergedMode::level_corrections`]).
 ///
@@ -197,7 +198,11 @@ impl DiscretizationCorrection {
         // The largest d ln η / d arg G* over the modes, for the scatter's η part.
         let mut eta_factor = 0.0f64;
         for p in modal {
-            let Some(c) = &p.layered_convergence else {
+            let Some(c) = p
+                .layered_convergence
+                .as_ref()
+                .or(p.ladder_estimate.as_ref())
+            else {
                 continue;
             };
             let Some(&ln) = c.level_corrections.get(level) else {
@@ -562,6 +567,7 @@ pub(crate) mod tests {
             exact: Err(NoSandwichInverse::NotASandwich),
             layered: None,
             layered_convergence: None,
+            ladder_estimate: None,
             layered_band: None,
         }
     }
@@ -649,6 +655,14 @@ pub(crate) mod tests {
         assert!((mid - expected).abs() < 1e-12, "{mid}");
         let own = 0.25 * 0.5 * (1.04f64.ln() + 1.01f64.ln());
         assert!((corr.rel_sd[0] - own).abs() < 1e-12, "{:?}", corr.rel_sd);
+        // A mode the ladder did not converge within its tolerance corrects by its estimate.
+        let mut missed = point(10.0, 1.04);
+        missed.ladder_estimate = missed.layered_convergence.take();
+        let estimated = DiscretizationCorrection::from_ladder(&[missed], 0, false);
+        assert!(
+            (estimated.factor(10.0).re - 1.04).abs() < 1e-12,
+            "{estimated:?}"
+        );
         // With the inputs fitted: half the line, and half its widest |ln c| in the sd.
         let taken =
             DiscretizationCorrection::from_ladder(&[point(10.0, 1.04), point(40.0, 1.01)], 0, true);

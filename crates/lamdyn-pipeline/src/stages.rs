@@ -494,10 +494,13 @@ fn frf_fit_stage(
         start: law.and_then(|l| l.as_ref().ok()),
         modal,
         levels,
+        // The poles set aside as smears over clusters still mark resonances in the FRFs the
+        // fit must resolve: their half-widths thin the lines too.
         half_widths_hz: data
             .ema
             .modes
             .iter()
+            .chain(&data.ema.set_aside)
             .map(|m| m.damping_ratio * m.freq_hz)
             .collect(),
     };
@@ -515,13 +518,14 @@ fn frf_fit_stage(
 }
 
 /// The FRF fit's band: the EMA's (the job's, else the fit's, else the data's), from half the
-/// lowest identified mode at least (a free part's rigid-body modes make the model singular at
-/// 0 Hz).
+/// lowest identified pole (smears set aside included) at least (a free part's rigid-body modes
+/// make the model singular at 0 Hz).
 fn frf_band(job: &Job, ema: &EmaResult) -> [f64; 2] {
     let [lo, hi] = ema_band(job).unwrap_or(ema.band_hz);
     let lowest = ema
         .modes
         .iter()
+        .chain(&ema.set_aside)
         .map(|m| m.freq_hz)
         .fold(f64::INFINITY, f64::min);
     let floor = if lowest.is_finite() {
@@ -995,6 +999,7 @@ fn core_point(
         exact: sandwich_inverse(stack, e, |s, e| exact_inverse(s, w, e, options.kinematics)),
         layered: None,
         layered_convergence: None,
+        ladder_estimate: None,
         layered_band: None,
     }
 }
@@ -1296,6 +1301,7 @@ mod tests {
             exact: Err(NoSandwichInverse::NotASandwich),
             layered: Some(Ok(g)),
             layered_convergence: Some(ConvergedMode::exact(g, g, rank)),
+            ladder_estimate: None,
             layered_band: None,
         }
     }

@@ -161,7 +161,7 @@ pub fn fit_to_frfs(
             };
             let thinned = if step > 1 {
                 format!(
-                    "; every {step}th line ({LINES_PER_HALF_WIDTH} per half-power half-width of the narrowest mode)"
+                    "; one line in {step} ({LINES_PER_HALF_WIDTH} per half-power half-width of the narrowest pole)"
                 )
             } else {
                 String::new()

@@ -186,7 +186,8 @@ pub fn run(
 /// Each target's converged mode into its modal point: its G* where it is passive, else why
 /// not.
 fn record_modes(modal: &mut [CorePoint], targets: &[ModeTarget], out: &Converged) {
-    for (t, m) in targets.iter().zip(&out.modes) {
+    for ((t, m), estimate) in targets.iter().zip(&out.modes).zip(&out.beyond_tolerance) {
+        modal[t.point].ladder_estimate = estimate.clone();
         let m = m
             .as_ref()
             .map_err(|e| NoLayered::Ladder(e.to_string()))

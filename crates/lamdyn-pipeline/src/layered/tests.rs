@@ -226,6 +226,7 @@ fn coverage(
                 exact: Err(crate::chain::NoSandwichInverse::NotASandwich),
                 layered: Some(Ok(est.core_shear_pa)),
                 layered_convergence: Some(mode),
+                ladder_estimate: None,
                 layered_band: Some(Ok(b)),
             });
         }
