@@ -39,8 +39,8 @@
 //! ([`FrfFit::grid_spread`]): a true law between what one grid follows ripples about each
 //! placement in its own way, a bias of the law's form that no noise model sees, and its
 //! amplitude, not its value where the two placements happen to cross, is what it can be. A
-//! law parameter whose 95 % interval spans more than a decade either side is reported as not
-//! determined by the data.
+//! law parameter whose 95 % interval spans more than a decade either side, or that the data do
+//! not see at all (a relaxation weight driven to zero), is reported as not determined.
 
 mod data;
 mod law;
@@ -905,12 +905,13 @@ impl Problem<'_> {
         let covariance = Mat::from_fn(n_law, n_law, |a, b| whole[(a, b)]);
         let u = run.x[..n_law].to_vec();
         let natural = self.law.natural(&u);
+        let most = (0..n_law).map(|k| jtj[(k, k)]).fold(0.0, f64::max);
         let parameters = natural
             .iter()
             .enumerate()
             .map(|(k, &value)| {
                 let sd = covariance[(k, k)].max(0.0).sqrt();
-                let determined = 1.96 * sd <= 10f64.ln();
+                let determined = determined(sd, jtj[(k, k)], most);
                 FrfParameter {
                     name: names[k].clone(),
                     value,
@@ -1112,6 +1113,14 @@ const GRID_STORAGE_RATIOS: [f64; 9] = [0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 
 const GRID_LOSS_FACTORS: [f64; 6] = [0.05, 0.15, 0.3, 0.6, 1.0, 1.5];
 
 /// The 95 % interval of natural parameter `k` from the sd of its unconstrained u_k.
+/// Whether the data determine a law parameter: its 95 % interval within a decade either side
+/// (1.96 sd ≤ ln 10), and its own information JᵀJ_kk above 1e-12 of the law's largest. A
+/// parameter the data do not see (a relaxation weight driven to zero: its Jacobian column
+/// vanishes) falls in the pseudo-inverse's null space, whose zero variance is no interval.
+fn determined(sd: f64, information: f64, most_information: f64) -> bool {
+    1.96 * sd <= 10f64.ln() && information > 1e-12 * most_information
+}
+
 fn natural_interval(law: &FrfLaw, u: &[f64], k: usize, sd: f64) -> [f64; 2] {
     let at = |delta: f64| {
         let mut v = u.to_vec();

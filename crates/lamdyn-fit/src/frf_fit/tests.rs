@@ -425,3 +425,13 @@ fn bands_hold_noise_that_does_not_follow_the_weights() {
         "{ratios:.2?}"
     );
 }
+
+/// A parameter is determined by a narrow interval and information of its own: a weight driven
+/// to zero has none, and the pseudo-inverse's zero variance for it is no interval.
+#[test]
+fn a_parameter_the_data_do_not_see_is_not_determined() {
+    assert!(determined(0.1, 1.0, 1.0));
+    assert!(!determined(1.2, 1.0, 1.0));
+    assert!(!determined(0.0, 0.0, 1.0));
+    assert!(!determined(0.0, 1e-14, 1.0));
+}
