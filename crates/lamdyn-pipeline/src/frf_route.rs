@@ -155,9 +155,8 @@ pub fn reasons(modes: &[Mode], set_aside: &[Mode], modal: &[CorePoint]) -> Vec<W
 /// level's error: a face modulus 0.1 % lower softens every mode as a finer mesh does, and moves
 /// a stiff-core laminate's G' by several per cent. How much they take depends on the data's
 /// weights, so half the line is applied and half of its largest |ln c| over the modes is its
-/// standard deviation (the truth anywhere between none and all taken up). Measured on the
-/// in-band foam roof (docs/fit.md): the 28 × 28 level's own correction +0.3 … +5.2 % per mode,
-/// its weighted line about +3 %, the fit uncorrected within 1 % of the truth.
+/// standard deviation (the truth anywhere between none and all taken up; measured in
+/// docs/fit.md, "The mesh correction on the foam roof").
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct DiscretizationCorrection {
     /// (f in Hz, c) at each converged mode, increasing f.
