@@ -1,5 +1,5 @@
 //! The FRF route's answer ([`FrfRoute`]): the core's law fitted to the measured FRFs through
-//! the layered model ([`lamdyn_fit::frf_fit`]), corrected for the mesh by the ladder
+//! the layered model ([`lamdyn_fit::frf_fit`]) on the converged scale of the mesh ladder
 //! ([`DiscretizationCorrection`]); when the run takes it as the answer and why ([`WhyFrfFit`],
 //! [`reasons`]). A leaf: the layered stage fills it, the report and the CLI read it.
 //!
@@ -151,12 +151,12 @@ pub fn reasons(modes: &[Mode], set_aside: &[Mode], modal: &[CorePoint]) -> Vec<W
 /// weighted mean over the modes, and the modes' robust scatter about the line (1.4826 × their
 /// weighted median absolute residual), in quadrature.
 ///
-/// Where the fit also fits the model's inputs under their priors, they take up part of the
-/// level's error: a face modulus 0.1 % lower softens every mode as a finer mesh does, and moves
-/// a stiff-core laminate's G' by several per cent. How much they take depends on the data's
-/// weights, so half the line is applied and half of its largest |ln c| over the modes is its
-/// standard deviation (the truth anywhere between none and all taken up; measured in
-/// docs/fit.md, "The mesh correction on the foam roof").
+/// The fit runs on the converged scale: at each line the level's model takes G*(f)/c(f), c on
+/// the line, so the law fitted is the converged model's, and the inputs fitted beside it under
+/// their priors see a model without the level's error (applied after the fit, a face modulus
+/// 0.1 % lower that softens every mode as a finer mesh does would have taken up part of it,
+/// and moved a stiff-core laminate's G' by several per cent; docs/fit.md, "The mesh correction
+/// on the foam roof").
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct DiscretizationCorrection {
     /// (f in Hz, c) at each converged mode, increasing f.
@@ -171,10 +171,6 @@ pub struct DiscretizationCorrection {
 /// Fraction of the correction |ln c| taken as its uncertainty between modes (module docs of
 /// [`DiscretizationCorrection`]).
 const INTERPOLATION_SHARE: f64 = 0.25;
-
-/// The share of the level's error taken as taken up by the fitted inputs, and its standard
-/// deviation as a share of the largest |ln c| ([`DiscretizationCorrection`]).
-const INPUTS_TAKE_UP: f64 = 0.5;
 
 /// One mode's correction of a level ([`DiscretizationCorrection`]).
 struct ModeCorrection {
@@ -191,8 +187,8 @@ struct ModeCorrection {
 impl DiscretizationCorrection {
     /// The correction of the ladder's level `level` (0: the coarsest) from the ladder's modes
     /// among `modal` (none converged, or none with that level's correction: no correction, and
-    /// `modes` is empty), for a fit with `inputs_fitted` (half the line: type docs).
-    pub fn from_ladder(modal: &[CorePoint], level: usize, inputs_fitted: bool) -> Self {
+    /// `modes` is empty).
+    pub fn from_ladder(modal: &[CorePoint], level: usize) -> Self {
         let mut points: Vec<ModeCorrection> = Vec::new();
         // The largest d ln η / d arg G* over the modes, for the scatter's η part.
         let mut eta_factor = 0.0f64;
@@ -233,17 +229,7 @@ impl DiscretizationCorrection {
             weighted_theil_sen(&pts)
         };
         let (re, im) = (part(|c| c.re), part(|c| c.im));
-        let full = [Complex64::new(re.0, im.0), Complex64::new(re.1, im.1)];
-        let share = if inputs_fitted { INPUTS_TAKE_UP } else { 0.0 };
-        let line = full.map(|c| c * (1.0 - share));
-        let widest = |pick: fn(Complex64) -> f64| {
-            let on_line = |x: f64| pick(full[0] + full[1] * x).abs();
-            points.iter().map(|p| on_line(p.x)).fold(0.0, f64::max)
-        };
-        let taken_up = [
-            share * widest(|c| c.re),
-            share * widest(|c| c.im) * eta_factor,
-        ];
+        let line = [Complex64::new(re.0, im.0), Complex64::new(re.1, im.1)];
         // The modes' robust scatter about the line, in ln G' and ln η (as above).
         let scatter = |pick: fn(Complex64) -> f64, (a, b): (f64, f64)| {
             let mut r: Vec<[f64; 2]> = points
@@ -258,10 +244,7 @@ impl DiscretizationCorrection {
         let rel_sd = if points.is_empty() {
             [0.0; 2]
         } else {
-            [
-                own(0).hypot(s_re).hypot(taken_up[0]),
-                own(1).hypot(s_im * eta_factor).hypot(taken_up[1]),
-            ]
+            [own(0).hypot(s_re), own(1).hypot(s_im * eta_factor)]
         };
         Self {
             modes: points.iter().map(|p| (p.x.exp(), p.y.exp())).collect(),
@@ -270,7 +253,7 @@ impl DiscretizationCorrection {
         }
     }
 
-    /// Over the modes, the smallest and largest change of G' the correction applies (Re c − 1
+    /// Over the modes, the smallest and largest change of G' the fit's model takes (Re c − 1
     /// on the line), and the same of the modes' own c.
     pub fn storage_ranges(&self) -> [[f64; 2]; 2] {
         let range = |v: &mut dyn Iterator<Item = f64>| {
@@ -352,7 +335,8 @@ pub struct FrfCurve {
 /// The FRF route's answer.
 #[derive(Debug, Clone)]
 pub struct FrfRoute {
-    /// The fit on one of the ladder's levels (`model_line` names it; its law uncorrected).
+    /// The fit on one of the ladder's levels (`model_line` names it), its law on the converged
+    /// scale.
     pub fit: FrfFit,
     /// Why it is the answer (empty: the pole route is, and this is beside it).
     pub why: Vec<WhyFrfFit>,
@@ -422,39 +406,43 @@ impl LawsCompared {
 }
 
 impl FrfRoute {
-    /// The corrected law's G*(f), Pa.
+    /// The law's G*(f), Pa: the fit's, on the converged scale ([`DiscretizationCorrection`]).
     pub fn modulus(&self, f_hz: f64) -> Complex64 {
-        self.fit.modulus(f_hz) * self.correction.factor(f_hz)
+        self.fit.modulus(f_hz)
     }
 
-    /// The corrected law and its 95 % band at `f_hz`: the fit's band (its covariance, the
-    /// inputs' priors) widened by the correction's uncertainty in quadrature.
+    /// The law and its 95 % band at `f_hz`: the fit's band (its covariance, the inputs'
+    /// priors) widened in quadrature by the mesh correction's uncertainty and by the law's
+    /// difference to the law with the inputs held, as one standard deviation
+    /// ([`FrfFit::inputs_held_step`]). The data pin the inputs to a fraction of their priors (the
+    /// faces' modulus to 0.1 % on the foam roof's 243 channels), so a model error the level's
+    /// correction leaves moves them by more than their own band, and a stiff core's G' by ten
+    /// to twenty times that (docs/fit.md, "The mesh correction on the foam roof").
     pub fn at(&self, f_hz: f64) -> FrfLawPoint {
         let p = self.fit.at(f_hz);
-        let g = self.modulus(f_hz);
-        let eta = g.im / g.re;
-        let widen = |ci: [f64; 2], value: f64, sd_extra: f64, new: f64| {
-            let sd = (ci[1] / value).ln().max(0.0) / 1.96;
-            let sd = sd.hypot(sd_extra);
-            [new * (-1.96 * sd).exp(), new * (1.96 * sd).exp()]
+        let widen = |ci: [f64; 2], value: f64, sd_extra: f64| {
+            let sd = ((ci[1] / value).ln().max(0.0) / 1.96).hypot(sd_extra);
+            [value * (-1.96 * sd).exp(), value * (1.96 * sd).exp()]
         };
+        let [held_storage, held_loss] = self
+            .inputs_held_change(f_hz)
+            .map_or([0.0; 2], |d| [d[0].ln_1p().abs(), d[1].ln_1p().abs()]);
+        let [sd_storage, sd_loss] = [
+            self.correction.rel_sd[0].hypot(held_storage),
+            self.correction.rel_sd[1].hypot(held_loss),
+        ];
         FrfLawPoint {
-            f_hz,
-            storage_pa: g.re,
-            loss_factor: eta,
-            storage_ci95: widen(
-                p.storage_ci95,
-                p.storage_pa,
-                self.correction.rel_sd[0],
-                g.re,
-            ),
-            loss_factor_ci95: widen(
-                p.loss_factor_ci95,
-                p.loss_factor,
-                self.correction.rel_sd[1],
-                eta,
-            ),
+            storage_ci95: widen(p.storage_ci95, p.storage_pa, sd_storage),
+            loss_factor_ci95: widen(p.loss_factor_ci95, p.loss_factor, sd_loss),
+            ..p
         }
+    }
+
+    /// The law with the inputs held against the law, at `f_hz`: (G'_held/G' − 1, η_held/η − 1);
+    /// `None` without inputs fitted.
+    pub fn inputs_held_change(&self, f_hz: f64) -> Option<[f64; 2]> {
+        let (g, h) = (self.fit.modulus(f_hz), self.fit.modulus_inputs_held(f_hz)?);
+        Some([h.re / g.re - 1.0, (h.im / h.re) / (g.im / g.re) - 1.0])
     }
 
     /// [`Self::at`] on `n` (at least 2) lines evenly spaced in ln f over the fitted band.
@@ -524,7 +512,7 @@ impl FrfOutcome {
                 } else {
                     let [applied, own] = r.correction.storage_ranges();
                     format!(
-                        "corrected for the mesh by the ladder at {} mode(s): G' by {:+.2} … {:+.2} % (the level's own error at each mode {:+.2} … {:+.2} %)",
+                        "corrected for the mesh by the ladder at {} mode(s): the level's model takes G*/c, c − 1 in G' {:+.2} … {:+.2} % (the level's own error at each mode {:+.2} … {:+.2} %)",
                         r.correction.modes.len(),
                         100.0 * applied[0],
                         100.0 * applied[1],
@@ -533,10 +521,11 @@ impl FrfOutcome {
                     )
                 };
                 format!(
-                    "{role}; {}{}; model {}; {correction}; basis {:.1} s, fit {:.1} s",
+                    "{role}; {}{}; model {}{}; {correction}; basis {:.1} s, fit {:.1} s",
                     r.fit.describe(),
                     r.laws.describe(),
                     r.model_line,
+                    inputs_found(r),
                     r.times_s[0],
                     r.times_s[1]
                 )
@@ -548,6 +537,47 @@ impl FrfOutcome {
     pub fn answer(&self) -> Option<&FrfRoute> {
         self.route().filter(|r| r.is_the_answer())
     }
+}
+
+/// "; inputs found: face modulus +0.06 % (sd 0.98 %, prior 1.00 %), ...; with them held, G'
+/// −0.2 … +1.0 %, η ..." for the inputs the fit moved beside the law (empty without).
+fn inputs_found(route: &FrfRoute) -> String {
+    let found: Vec<String> = route
+        .fit
+        .inputs
+        .iter()
+        .map(|i| {
+            format!(
+                "{} {:+.2} % (sd {:.2} %, prior {:.2} %)",
+                i.input.name(),
+                100.0 * i.change,
+                100.0 * i.sd,
+                100.0 * i.prior_sd
+            )
+        })
+        .collect();
+    if found.is_empty() {
+        return String::new();
+    }
+    let [lo, hi] = route.fit.band_hz.map(f64::ln);
+    let mut range = [[f64::INFINITY, f64::NEG_INFINITY]; 2];
+    for k in 0..=20 {
+        let f = (lo + (hi - lo) * f64::from(k) / 20.0).exp();
+        for (r, d) in range
+            .iter_mut()
+            .zip(route.inputs_held_change(f).unwrap_or([0.0; 2]))
+        {
+            *r = [r[0].min(d), r[1].max(d)];
+        }
+    }
+    let held = format!(
+        "; with them held the law moves G' {:+.2} … {:+.2} %, η {:+.2} … {:+.2} % (in its band as one sd)",
+        100.0 * range[0][0],
+        100.0 * range[0][1],
+        100.0 * range[1][0],
+        100.0 * range[1][1]
+    );
+    format!("; inputs found: {}{held}", found.join(", "))
 }
 
 #[cfg(test)]
@@ -642,11 +672,8 @@ pub(crate) mod tests {
                 ..at(freq_hz)
             }
         };
-        let corr = DiscretizationCorrection::from_ladder(
-            &[point(10.0, 1.04), point(40.0, 1.01)],
-            0,
-            false,
-        );
+        let corr =
+            DiscretizationCorrection::from_ladder(&[point(10.0, 1.04), point(40.0, 1.01)], 0);
         assert!((corr.factor(5.0).re - 1.04).abs() < 1e-12);
         assert!((corr.factor(80.0).re - 1.01).abs() < 1e-12);
         let mid = corr.factor(20.0).re;
@@ -657,17 +684,11 @@ pub(crate) mod tests {
         // A mode the ladder did not converge within its tolerance corrects by its estimate.
         let mut missed = point(10.0, 1.04);
         missed.ladder_estimate = missed.layered_convergence.take();
-        let estimated = DiscretizationCorrection::from_ladder(&[missed], 0, false);
+        let estimated = DiscretizationCorrection::from_ladder(&[missed], 0);
         assert!(
             (estimated.factor(10.0).re - 1.04).abs() < 1e-12,
             "{estimated:?}"
         );
-        // With the inputs fitted: half the line, and half its widest |ln c| in the sd.
-        let taken =
-            DiscretizationCorrection::from_ladder(&[point(10.0, 1.04), point(40.0, 1.01)], 0, true);
-        assert!((taken.factor(5.0).re.ln() - 0.5 * 1.04f64.ln()).abs() < 1e-12);
-        let want = own.hypot(0.5 * 1.04f64.ln());
-        assert!((taken.rel_sd[0] - want).abs() < 1e-12, "{:?}", taken.rel_sd);
         // Modes weigh by |S|²: two that barely feel the core (S = 0.2) and want 10 % do not
         // move the line of two that feel it fully and want 2 %.
         let weighted = |freq_hz: f64, ln_c: f64, s: f64| {
@@ -685,7 +706,6 @@ pub(crate) mod tests {
                 weighted(40.0, 0.1, 0.2),
             ],
             0,
-            false,
         );
         assert!(
             (heavy.factor(35.0).re.ln() - 0.02).abs() < 1e-12,
@@ -698,10 +718,10 @@ pub(crate) mod tests {
             c.level_corrections.push(Complex64::new(0.01, 0.002));
             c.storage_band = 0.003;
         }
-        let one = DiscretizationCorrection::from_ladder(std::slice::from_ref(&finer), 1, false);
+        let one = DiscretizationCorrection::from_ladder(std::slice::from_ref(&finer), 1);
         assert!((one.factor(10.0).ln() - Complex64::new(0.01, 0.002)).norm() < 1e-12);
         assert!((one.rel_sd[0] - (0.003f64 / 1.96).hypot(0.0025)).abs() < 1e-12);
-        let beyond = DiscretizationCorrection::from_ladder(&[finer], 2, false);
+        let beyond = DiscretizationCorrection::from_ladder(&[finer], 2);
         assert!(beyond.modes.is_empty());
         assert_eq!(beyond.factor(10.0), Complex64::new(1.0, 0.0));
         // Three modes on a line and one off it: the line holds the three, the outlier widens
@@ -714,12 +734,11 @@ pub(crate) mod tests {
                 point(30.0, 0.93),
             ],
             0,
-            false,
         );
         let on_line = |f: f64| 1.04f64.ln() * (1.0 - (f / 10.0).ln() / 4f64.ln());
         assert!((bent.factor(20.0).re.ln() - on_line(20.0)).abs() < 0.002);
         assert!(bent.rel_sd[0] > corr.rel_sd[0]);
-        let none = DiscretizationCorrection::from_ladder(&[at(10.0)], 0, false);
+        let none = DiscretizationCorrection::from_ladder(&[at(10.0)], 0);
         assert_eq!(none.factor(10.0), Complex64::new(1.0, 0.0));
     }
 }

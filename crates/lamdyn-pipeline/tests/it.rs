@@ -1076,4 +1076,7 @@ fn damped_modes_take_the_frf_fit() {
     assert_eq!(json["frf_fit"]["the_answer"], true);
     assert_eq!(json["frf_fit"]["law"], route.fit.law.name());
     assert_eq!(json["frf_fit"]["curve"].as_array().unwrap().len(), 60);
+    let inputs = json["frf_fit"]["inputs"].as_array().unwrap();
+    assert!(!inputs.is_empty() && inputs.len() == route.fit.inputs.len());
+    assert!(route.fit.inputs_held_step.is_some());
 }

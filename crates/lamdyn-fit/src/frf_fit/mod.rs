@@ -40,7 +40,9 @@
 //! placement in its own way, a bias of the law's form that no noise model sees, and its
 //! amplitude, not its value where the two placements happen to cross, is what it can be. A
 //! law parameter whose 95 % interval spans more than a decade either side, or that the data do
-//! not see at all (a relaxation weight driven to zero), is reported as not determined.
+//! not see at all (a relaxation weight driven to zero), is reported as not determined. Where
+//! inputs are fitted, the law's step with them held at the model's values is kept to first
+//! order ([`FrfFit::inputs_held_step`]) for the caller's model-error term.
 
 mod data;
 mod law;
@@ -276,12 +278,30 @@ pub struct FrfFit {
     pub sibling: Option<(FrfLaw, Vec<f64>)>,
     /// Why the sibling could not be fitted (the bands then lack the grid's part).
     pub sibling_failed: Option<String>,
+    /// The step Δu of the law's unconstrained parameters with the inputs held at the values the
+    /// model was built with (δ = 0) and the law and gains refitted, to first order from the
+    /// answer (`Problem::law_step_with_inputs_held`); `None` without inputs fitted. Where the
+    /// data pin the inputs far below their priors, a model error they take up moves them, and
+    /// the law with them: the difference is what that take-up can be.
+    pub inputs_held_step: Option<Vec<f64>>,
 }
 
 impl FrfFit {
     /// G*(f), Pa.
     pub fn modulus(&self, f_hz: f64) -> Complex64 {
         self.law.modulus(&self.u, 2.0 * std::f64::consts::PI * f_hz)
+    }
+
+    /// G*(f) with the inputs held, Pa, to first order: G* + ∇_u G* · Δu
+    /// ([`Self::inputs_held_step`]; linear in G*, since a relaxation weight's ln g along a
+    /// direction the data barely see may take a step no exponential survives); `None` without
+    /// inputs.
+    pub fn modulus_inputs_held(&self, f_hz: f64) -> Option<Complex64> {
+        let step = self.inputs_held_step.as_ref()?;
+        let w = 2.0 * std::f64::consts::PI * f_hz;
+        let grad = self.law.gradient(&self.u, w);
+        let moved: Complex64 = grad.iter().zip(step).map(|(g, d)| g * d).sum();
+        Some(self.law.modulus(&self.u, w) + moved)
     }
 
     /// The law and its 95 % band at `f_hz` (module docs).
@@ -956,8 +976,33 @@ impl Problem<'_> {
             discretization_rel: settings.discretization_rel,
             sibling: None,
             sibling_failed: None,
+            inputs_held_step: self.law_step_with_inputs_held(&run),
             u,
         })
+    }
+
+    /// The law's step Δu with the inputs held at δ = 0 and the law and gains (f) free, to first
+    /// order from the answer x̂: r ≈ r̂ + J_f Δf − J_δ δ̂ is least at Δf = (J_fᵀJ_f)⁺ J_fᵀ J_δ δ̂,
+    /// since J_fᵀ r̂ = 0 at the minimum (J_f vanishes on the inputs' prior rows). `None` without
+    /// inputs or where the pseudo-inverse fails.
+    fn law_step_with_inputs_held(&self, run: &LmOutcome) -> Option<Vec<f64>> {
+        if self.inputs.is_empty() {
+            return None;
+        }
+        let j = &run.jacobian;
+        let (n_law, n_inputs) = (self.n_law(), self.n_inputs());
+        let free: Vec<usize> = (0..n_law)
+            .chain(self.first_gain()..self.n_params())
+            .collect();
+        let j_free = Mat::from_fn(j.nrows(), free.len(), |r, k| j[(r, free[k])]);
+        let moved = Mat::from_fn(j.nrows(), 1, |r, _| {
+            (0..n_inputs)
+                .map(|k| j[(r, n_law + k)] * run.x[n_law + k])
+                .sum::<f64>()
+        });
+        let (inv, _) = pseudo_inverse(&(j_free.transpose() * &j_free), CONTEXT).ok()?;
+        let step = inv * (j_free.transpose() * moved);
+        Some((0..n_law).map(|k| step[(k, 0)]).collect())
     }
 
     /// The middle term of the covariance's sandwich: the line scores g_l = Σ_(rows of line l)

@@ -1,6 +1,7 @@
 //! The layered stage's FRF fit: the core's law fitted to the measured FRFs through the layered
 //! model on the ladder's finest level up to [`FRF_MAX_DOFS`] ([`lamdyn_fit::frf_fit`]), the inputs
-//! under the job's priors, then corrected for the mesh by the ladder ([`crate::frf_route`]).
+//! under the job's priors, on the converged scale: the level's model takes the law corrected by
+//! the ladder's mesh correction ([`crate::frf_route::DiscretizationCorrection`]).
 //!
 //! The model is that level of the ladder read at every response channel and driven at
 //! every reference by the surface's shape functions ([`ObservedModel::build`]), on a basis of
@@ -15,12 +16,13 @@ use crate::chain::CorePoint;
 use crate::error::{Context, Result};
 use crate::frf_route::{DiscretizationCorrection, FrfCurve, FrfRoute, LawsCompared, WhyFrfFit};
 use crate::job::CoreLawChoice;
+use lamdyn_fit::FitError;
 use lamdyn_fit::frf_fit::{
-    FrfFit, FrfFitSettings, FrfLaw, InputPrior, compare_laws, fit_core_to_frfs,
+    CoreFrfModel, FrfFit, FrfFitSettings, FrfLaw, InputPrior, compare_laws, fit_core_to_frfs,
 };
 use lamdyn_fit::joint::CoreLawFit;
 use lamdyn_frf::{Channel, FrfSet};
-use lamdyn_layered::frf::{FrfBasis, MeasuredPoint, ObservedModel};
+use lamdyn_layered::frf::{FrfBasis, LineReceptance, MeasuredPoint, ObservedModel};
 use lamdyn_layered::inverse::BASIS_COVER;
 use lamdyn_layered::sensitivity::Input;
 use num_complex::Complex64;
@@ -115,6 +117,8 @@ pub fn fit_to_frfs(
     spinner: &dyn Reporter,
 ) -> Result<FrfRoute> {
     let level = fit_level(setup, input.levels)?;
+    let level_index = input.levels.iter().position(|l| l.0 == level).unwrap_or(0);
+    let correction = DiscretizationCorrection::from_ladder(input.modal, level_index);
     let (mut g_ref, mut ratios) = basis_moduli(setup, input);
     let f = input.set.freqs_hz();
     let spacing = if f.len() > 1 { f[1] - f[0] } else { 0.0 };
@@ -140,20 +144,20 @@ pub fn fit_to_frfs(
         let once = fit_once(
             setup,
             input,
-            level,
+            (level, &correction),
             (g_ref, &ratios),
             start.as_deref(),
             spinner,
         )?;
         times = [times[0] + once.times_s[0], times[1] + once.times_s[1]];
-        let [lo, hi] = storage_range(&once.fit);
+        let [lo, hi] = storage_range(&once.fit, &correction);
         let held = lo >= 0.8 * ratios[0] * g_ref && hi <= 1.25 * ratios[1] * g_ref;
         if held || round == MAX_RECENTRES {
             let (fit, laws, other_s) = other_law(setup.core_law, &once, input.set, spinner);
             times[1] += other_s;
             let once = FitOnce { fit, ..once };
             let curves = shown_curves(&once.model, &once.fit, full)?;
-            let inputs: Vec<&str> = once.model.inputs().iter().map(|i| i.name()).collect();
+            let inputs: Vec<&str> = once.model.model.inputs().iter().map(|i| i.name()).collect();
             let recentred = if round > 0 {
                 format!(", built again about the fitted law {round} time(s)")
             } else {
@@ -175,16 +179,12 @@ pub fn fit_to_frfs(
                 model_line: format!(
                     "C3D20 {} ({} basis vectors at G_ref {g_ref:.4e} Pa x [{:.2}, {:.2}]{recentred}{outside}){thinned}, inputs under their priors: {}",
                     setup.plate.plan.level_label(level),
-                    once.model.basis_size(),
+                    once.model.model.basis_size(),
                     ratios[0],
                     ratios[1],
                     inputs.join(", ")
                 ),
-                correction: DiscretizationCorrection::from_ladder(
-                    input.modal,
-                    input.levels.iter().position(|l| l.0 == level).unwrap_or(0),
-                    !once.fit.inputs.is_empty(),
-                ),
+                correction,
                 fit: once.fit,
                 why,
                 curves,
@@ -234,12 +234,56 @@ fn fit_level(setup: &LayeredSetup, levels: &[([usize; 2], usize)]) -> Result<[us
     Ok(setup.start)
 }
 
+/// The level's model on the converged scale ([`DiscretizationCorrection`]): the law's G*(f)
+/// enters the level's stiffness as G*(f)/c(f), so the law fitted is the converged model's and
+/// the inputs fitted beside it see no mesh error to take up.
+struct OnConvergedScale {
+    model: ObservedModel,
+    correction: DiscretizationCorrection,
+}
+
+impl CoreFrfModel for OnConvergedScale {
+    fn n_sensors(&self) -> usize {
+        self.model.n_sensors()
+    }
+    fn n_references(&self) -> usize {
+        self.model.n_references()
+    }
+    fn receptance(&self, omega: f64, core_scale: Complex64) -> Result<LineReceptance, FitError> {
+        self.receptance_with_inputs(omega, core_scale, &[])
+    }
+    fn inputs(&self) -> Vec<Input> {
+        self.model.inputs()
+    }
+    /// H at the level's scale s/c and ∂H/∂s = ∂H/∂(s/c) / c.
+    fn receptance_with_inputs(
+        &self,
+        omega: f64,
+        core_scale: Complex64,
+        deltas: &[f64],
+    ) -> Result<LineReceptance, FitError> {
+        let to_level = 1.0 / self.correction.factor(omega / (2.0 * PI));
+        let s = core_scale * to_level;
+        let mut rec = if deltas.is_empty() {
+            CoreFrfModel::receptance(&self.model, omega, s)?
+        } else {
+            CoreFrfModel::receptance_with_inputs(&self.model, omega, s, deltas)?
+        };
+        for j in 0..rec.dh_ds.ncols() {
+            for i in 0..rec.dh_ds.nrows() {
+                rec.dh_ds[(i, j)] *= to_level;
+            }
+        }
+        Ok(rec)
+    }
+}
+
 /// Times the basis is built again about the fitted law ([`fit_to_frfs`]).
 pub const MAX_RECENTRES: usize = 2;
 
 /// One basis and one fit.
 struct FitOnce {
-    model: ObservedModel,
+    model: OnConvergedScale,
     fit: FrfFit,
     /// The fit's settings (its band, the inputs' priors).
     settings: FrfFitSettings,
@@ -347,7 +391,7 @@ fn other_law(
 fn fit_once(
     setup: &LayeredSetup,
     input: &FrfFitInput,
-    level: [usize; 2],
+    (level, correction): ([usize; 2], &DiscretizationCorrection),
     (g_ref, ratios): (f64, &[f64]),
     start: Option<&(dyn Fn(f64) -> Complex64 + Sync)>,
     spinner: &dyn Reporter,
@@ -362,6 +406,10 @@ fn fit_once(
     let inputs: Vec<Input> = priors.iter().map(|p| p.input).collect();
     let t = Instant::now();
     let (model, held_hz) = observed_model(setup, input, level, g_ref, (&basis, &inputs), spinner)?;
+    let model = OnConvergedScale {
+        model,
+        correction: correction.clone(),
+    };
     let build_s = t.elapsed().as_secs_f64();
     let band_hz = [input.band_hz[0], input.band_hz[1].min(held_hz)];
     if band_hz[1] <= band_hz[0] {
@@ -377,7 +425,7 @@ fn fit_once(
     spinner.stage(&format!(
         "FRF fit: {} on {} basis vectors over {:.1}-{:.1} Hz",
         law.name(),
-        model.basis_size(),
+        model.model.basis_size(),
         band_hz[0],
         band_hz[1]
     ));
@@ -468,11 +516,13 @@ fn observed_model(
     Ok((model, held_hz))
 }
 
-/// The fitted law's lowest and highest G' over its band's ends and 20 points between (Pa).
-fn storage_range(fit: &FrfFit) -> [f64; 2] {
+/// The lowest and highest G' the level's model takes from the fitted law (G*/c, c the mesh
+/// correction) over its band's ends and 20 points between (Pa).
+fn storage_range(fit: &FrfFit, correction: &DiscretizationCorrection) -> [f64; 2] {
     let [a, b] = fit.band_hz;
     (0..=20)
-        .map(|k| fit.modulus(a * (b / a).powf(k as f64 / 20.0)).re)
+        .map(|k| a * (b / a).powf(k as f64 / 20.0))
+        .map(|f| (fit.modulus(f) / correction.factor(f)).re)
         .fold([f64::INFINITY, 0.0f64], |r, g| [r[0].min(g), r[1].max(g)])
 }
 
@@ -537,7 +587,7 @@ fn input_priors(setup: &LayeredSetup) -> Vec<InputPrior> {
 
 /// The measured and model FRFs over the band at the [`SHOWN_CURVES`] responses of largest RMS
 /// in the band, each at its strongest reference.
-fn shown_curves(model: &ObservedModel, fit: &FrfFit, set: &FrfSet) -> Result<Vec<FrfCurve>> {
+fn shown_curves(model: &OnConvergedScale, fit: &FrfFit, set: &FrfSet) -> Result<Vec<FrfCurve>> {
     let freqs = set.freqs_hz();
     let lines: Vec<usize> = (0..freqs.len())
         .filter(|&l| freqs[l] >= fit.band_hz[0] && freqs[l] <= fit.band_hz[1])
@@ -574,6 +624,7 @@ fn shown_curves(model: &ObservedModel, fit: &FrfFit, set: &FrfSet) -> Result<Vec
         let s = fit.modulus(freqs[l]) / fit.assembled_modulus_pa;
         let rec = model
             .receptance_with_inputs(w, s, &deltas)
+            .map_err(crate::PipelineError::from)
             .context("the FRF fit's model at its answer")?;
         let q = set.quantity().from_receptance(w);
         for (k, &(c, r)) in shown.iter().enumerate() {

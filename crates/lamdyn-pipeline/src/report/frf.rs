@@ -161,7 +161,9 @@ fn law_csv(route: &FrfRoute) -> String {
 }
 
 /// The FRF route in result.json: whether it is the answer and why, the law, its parameters
-/// with their 95 % intervals (null: not determined), the model, the mesh correction and the
+/// with their 95 % intervals (null: not determined), the inputs it fitted beside the law
+/// (relative change, its standard deviation after the fit and before), the model, the mesh
+/// correction and the
 /// law's curve (as core_frf_law.csv); `null` when it did not run.
 pub(super) fn json(r: &ChainResult) -> serde_json::Value {
     let Some(route) = r.frf.route() else {
@@ -186,12 +188,26 @@ pub(super) fn json(r: &ChainResult) -> serde_json::Value {
             })
         })
         .collect();
+    let inputs: Vec<serde_json::Value> = route
+        .fit
+        .inputs
+        .iter()
+        .map(|i| {
+            serde_json::json!({
+                "name": i.input.name(),
+                "change": i.change,
+                "sd": i.sd,
+                "prior_sd": i.prior_sd,
+            })
+        })
+        .collect();
     let [applied, own] = route.correction.storage_ranges();
     serde_json::json!({
         "the_answer": route.is_the_answer(),
         "why": route.why.iter().map(ToString::to_string).collect::<Vec<_>>(),
         "law": route.fit.law.name(),
         "parameters": parameters,
+        "inputs": inputs,
         "band_hz": route.fit.band_hz,
         "relative_rms": route.fit.relative_rms,
         "model": route.model_line,
