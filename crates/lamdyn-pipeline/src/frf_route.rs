@@ -424,9 +424,12 @@ impl FrfRoute {
             let sd = ((ci[1] / value).ln().max(0.0) / 1.96).hypot(sd_extra);
             [value * (-1.96 * sd).exp(), value * (1.96 * sd).exp()]
         };
+        // |Δ| as the relative sd; a first-order move that cannot be read (η of a G' through
+        // zero) counts as a factor e.
+        let relative = |d: f64| if d.is_finite() { d.abs() } else { 1.0 };
         let [held_storage, held_loss] = self
             .inputs_held_change(f_hz)
-            .map_or([0.0; 2], |d| [d[0].ln_1p().abs(), d[1].ln_1p().abs()]);
+            .map_or([0.0; 2], |d| d.map(relative));
         let [sd_storage, sd_loss] = [
             self.correction.rel_sd[0].hypot(held_storage),
             self.correction.rel_sd[1].hypot(held_loss),
