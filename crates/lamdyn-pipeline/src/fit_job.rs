@@ -11,7 +11,7 @@ use crate::error::{Context, Result};
 use crate::io::{CsvTable, read_toml};
 use crate::job::{Measurement, ModelSource, base_of, default_misfit, default_prominence, relative};
 use crate::measurement::read_measurement_section;
-use crate::{Reporter, err};
+use crate::{AsProgress, Reporter, err};
 use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::{ModalParams, solve_modes};
 use lamdyn_fem::model::ModelSpec;
@@ -225,7 +225,7 @@ pub fn modal_model(
     let channels = || format!("channels of {source}");
     let resp = probes_with(&mesh, set.responses(), tolerance_m, mapping).with_context(channels)?;
     let refs = probes_with(&mesh, set.references(), tolerance_m, mapping).with_context(channels)?;
-    let sol = solve_modes(&asm, &ModalParams::lowest(modes), progress)?;
+    let sol = solve_modes(&asm, &ModalParams::lowest(modes), &AsProgress(progress))?;
     progress.stage("projecting modes and residual terms");
     let term = if residual {
         ResidualTerm::Static
@@ -314,7 +314,7 @@ pub fn with_discretization_error(
         &spec.material,
         &springs,
         n_est,
-        progress,
+        &AsProgress(progress),
     )?;
     let largest = errors.iter().fold(0.0f64, |a, d| a.max(d.abs()));
     errors.resize(n_all, largest);

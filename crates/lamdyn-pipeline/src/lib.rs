@@ -41,7 +41,8 @@
 //! - [`demo`]: the virtual roof's simulated test and the chain on it.
 //! - [`cache`]: the slow results (modal model, EMA, layered model) keyed by their inputs and
 //!   checked on every read.
-//! - [`Progress`]: what a caller hears of long work (a spinner, log lines, nothing: [`Silent`]).
+//! - [`Reporter`]: what a caller hears of long work (a spinner, log lines, nothing:
+//!   [`Silent`]); the eigensolvers hear it through [`AsProgress`].
 //!
 //! Errors are [`PipelineError`]s: each layer says what failed, the causes are its source chain
 //! ([`error::chain_text`] joins them into one line).
@@ -81,12 +82,34 @@ pub use error::{PipelineError, Result};
 pub struct ArchitectureDoc;
 pub use chain::{CorePoint, NoLayered, StageTime, Truth};
 pub use job::Job;
-pub use lamdyn_fem::eigen::{Progress, Silent};
 pub use output::OutputDir;
 pub use result::ChainResult;
 pub use stages::{RunOptions, check_job_path, run_job, same_bits_on_any_thread_count};
 
-/// Progress that may be reported from worker threads (the Monte Carlo runs on rayon).
-pub trait Reporter: Progress + Sync {}
+/// Progress of a run, reported as it goes; it may be reported from worker threads (the ladder's
+/// levels and the Monte Carlo run on rayon). Both methods default to doing nothing.
+pub trait Reporter: Sync {
+    /// A stage or step starts ("stage 'layered inverse'", "FRF fit: ...", "Lanczos").
+    fn stage(&self, _name: &str) {}
+    /// An eigensolver has `converged` of `wanted` modes.
+    fn converged(&self, _converged: usize, _wanted: usize) {}
+}
 
-impl<T: Progress + Sync + ?Sized> Reporter for T {}
+/// No progress output.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Reporter for Silent {}
+
+/// A [`Reporter`] as the eigensolvers' progress ([`lamdyn_fem::eigen::Progress`]), for the
+/// stages and commands that call one.
+pub struct AsProgress<'a>(pub &'a dyn Reporter);
+
+impl lamdyn_fem::eigen::Progress for AsProgress<'_> {
+    fn stage(&self, name: &str) {
+        self.0.stage(name);
+    }
+    fn converged(&self, converged: usize, wanted: usize) {
+        self.0.converged(converged, wanted);
+    }
+}

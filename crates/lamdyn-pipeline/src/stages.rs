@@ -12,7 +12,7 @@ use crate::frf_route::{self, FrfOutcome, WhyFrfFit};
 use crate::job::{Job, KinematicsChoice, ModelFile, relative};
 use crate::measurement::{Measured, read_measurement};
 use crate::result::ChainResult;
-use crate::{PipelineError, Reporter};
+use crate::{AsProgress, PipelineError, Reporter};
 use crate::{bail, err};
 use crate::{job, layered, text, uncertainty};
 use lamdyn_ema::identify::{EmaResult, EmaSettings, identify_with};
@@ -789,7 +789,7 @@ fn build_model(
     let refs = probes_with(&mesh, set.references(), tol, mapping).context(
         "the reference channels do not lie on the model (measurement.channels vs model)",
     )?;
-    let sol = solve_modes(&asm, &ModalParams::lowest(modes), spinner)?;
+    let sol = solve_modes(&asm, &ModalParams::lowest(modes), &AsProgress(spinner))?;
     let residual = if job.model.residual {
         ResidualTerm::Static
     } else {

@@ -14,8 +14,8 @@ use lamdyn_material::laminate::{
     paper_inverse,
 };
 use lamdyn_material::sandwich::exact_inverse;
-use lamdyn_pipeline::Silent;
 use lamdyn_pipeline::fit_job::{load_fit_job, modal_model};
+use lamdyn_pipeline::{AsProgress, Silent};
 use num_complex::Complex64;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray3};
 use pyo3::prelude::*;
@@ -60,7 +60,7 @@ fn modes<'py>(py: Python<'py>, model: &str, base_dir: PathBuf) -> PyResult<Modes
             }
             params = params.with_shift(Shift::BelowHz(f));
         }
-        let sol = solve_modes(&asm, &params, &Silent).map_err(py_err)?;
+        let sol = solve_modes(&asm, &params, &AsProgress(&Silent)).map_err(py_err)?;
         Ok((mesh, sol))
     })?;
     #[derive(Serialize)]

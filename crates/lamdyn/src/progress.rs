@@ -16,7 +16,7 @@
 //! matched) at most every [`PLAIN_INTERVAL`]. `LAMDYN_PROGRESS=off`
 //! silences both forms, `=lines` forces plain lines, `=spinner` forces the spinner.
 
-use lamdyn_fem::eigen::Progress;
+use lamdyn_pipeline::Reporter;
 use std::io::IsTerminal;
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
@@ -191,7 +191,7 @@ impl Drop for Spinner {
     }
 }
 
-impl Progress for Spinner {
+impl Reporter for Spinner {
     fn stage(&self, name: &str) {
         self.message(name);
     }

@@ -15,6 +15,7 @@ use lamdyn_fem::mesh::Mesh;
 use lamdyn_fem::mesh::structured::RectangleSpec;
 use lamdyn_fem::model::{MeshSpec, ModelSpec, SolverSpec};
 use lamdyn_fem::output::{mac, vtu_text};
+use lamdyn_pipeline::AsProgress;
 use lamdyn_pipeline::io::read_toml;
 use lamdyn_pipeline::output::{check_file_target, write_file};
 use serde::{Deserialize, Serialize};
@@ -140,7 +141,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
     let asm = Assembly::new(&mesh, &spec.material, &springs)
         .with_context(|| format!("invalid model {source}"))?;
     let progress = Spinner::new();
-    let sol = solve_modes(&asm, &params, &progress)?;
+    let sol = solve_modes(&asm, &params, &AsProgress(&progress))?;
     progress.finish();
 
     let report = build_report(&source, &mesh, &spec, &asm, &sol, compare.as_ref())?;
@@ -182,7 +183,7 @@ fn converge(
         &spec.material,
         springs,
         &params,
-        &progress,
+        &AsProgress(&progress),
     )
     .with_context(|| format!("--converge on {source}"))?;
     progress.finish();

@@ -6,7 +6,7 @@ use crate::cli::RunArgs;
 use crate::progress::Spinner;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result};
-use lamdyn_fem::eigen::Progress;
+use lamdyn_pipeline::Reporter;
 use lamdyn_pipeline::job::{Job, base_of};
 use lamdyn_pipeline::output::OutputDir;
 use lamdyn_pipeline::report::core_table::core_table;
