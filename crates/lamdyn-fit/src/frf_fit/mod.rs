@@ -976,32 +976,32 @@ impl Problem<'_> {
             discretization_rel: settings.discretization_rel,
             sibling: None,
             sibling_failed: None,
-            inputs_held_step: self.law_step_with_inputs_held(&run),
+            inputs_held_step: self.law_step_with_inputs_held(&jtj, &run.x),
             u,
         })
     }
 
     /// The law's step Δu with the inputs held at δ = 0 and the law and gains (f) free, to first
     /// order from the answer x̂: r ≈ r̂ + J_f Δf − J_δ δ̂ is least at Δf = (J_fᵀJ_f)⁺ J_fᵀ J_δ δ̂,
-    /// since J_fᵀ r̂ = 0 at the minimum (J_f vanishes on the inputs' prior rows). `None` without
-    /// inputs or where the pseudo-inverse fails.
-    fn law_step_with_inputs_held(&self, run: &LmOutcome) -> Option<Vec<f64>> {
+    /// since J_fᵀ r̂ = 0 at the minimum; both products are blocks of the answer's `jtj` = JᵀJ
+    /// (J_f vanishes on the inputs' prior rows). `None` without inputs or where the
+    /// pseudo-inverse fails.
+    fn law_step_with_inputs_held(&self, jtj: &Mat<f64>, x: &[f64]) -> Option<Vec<f64>> {
         if self.inputs.is_empty() {
             return None;
         }
-        let j = &run.jacobian;
         let (n_law, n_inputs) = (self.n_law(), self.n_inputs());
         let free: Vec<usize> = (0..n_law)
             .chain(self.first_gain()..self.n_params())
             .collect();
-        let j_free = Mat::from_fn(j.nrows(), free.len(), |r, k| j[(r, free[k])]);
-        let moved = Mat::from_fn(j.nrows(), 1, |r, _| {
+        let a = Mat::from_fn(free.len(), free.len(), |i, k| jtj[(free[i], free[k])]);
+        let b = Mat::from_fn(free.len(), 1, |i, _| {
             (0..n_inputs)
-                .map(|k| j[(r, n_law + k)] * run.x[n_law + k])
+                .map(|k| jtj[(free[i], n_law + k)] * x[n_law + k])
                 .sum::<f64>()
         });
-        let (inv, _) = pseudo_inverse(&(j_free.transpose() * &j_free), CONTEXT).ok()?;
-        let step = inv * (j_free.transpose() * moved);
+        let (inv, _) = pseudo_inverse(&a, CONTEXT).ok()?;
+        let step = inv * b;
         Some((0..n_law).map(|k| step[(k, 0)]).collect())
     }
 
@@ -1157,7 +1157,6 @@ const GRID_STORAGE_RATIOS: [f64; 9] = [0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 
 /// η of the start grid.
 const GRID_LOSS_FACTORS: [f64; 6] = [0.05, 0.15, 0.3, 0.6, 1.0, 1.5];
 
-/// The 95 % interval of natural parameter `k` from the sd of its unconstrained u_k.
 /// Whether the data determine a law parameter: its 95 % interval within a decade either side
 /// (1.96 sd ≤ ln 10), and its own information JᵀJ_kk above 1e-12 of the law's largest. A
 /// parameter the data do not see (a relaxation weight driven to zero: its Jacobian column
@@ -1166,6 +1165,7 @@ fn determined(sd: f64, information: f64, most_information: f64) -> bool {
     1.96 * sd <= 10f64.ln() && information > 1e-12 * most_information
 }
 
+/// The 95 % interval of natural parameter `k` from the sd of its unconstrained u_k.
 fn natural_interval(law: &FrfLaw, u: &[f64], k: usize, sd: f64) -> [f64; 2] {
     let at = |delta: f64| {
         let mut v = u.to_vec();
