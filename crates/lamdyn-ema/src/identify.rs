@@ -240,7 +240,8 @@ fn unit_scale(curves: &[&[Complex64]], lines: &[usize], band: [f64; 2]) -> Resul
         return Err(invalid(
             "FRFs",
             format!(
-                "every FRF is zero over the band {}-{} Hz: there is nothing to identify (a unit or channel mapping lost on export?)",
+                "every FRF is zero over the band {}-{} Hz: there is nothing to identify (a unit or \
+                 channel mapping lost on export?)",
                 band[0], band[1]
             ),
         ));
@@ -321,7 +322,9 @@ fn keep_poles_in_their_columns(
                 p
             } else {
                 warnings.push(format!(
-                    "the refinement moved the pole at {:.3} Hz (zeta {:.3} %) to {f:.3} Hz (zeta {:.3} %), out of its column in the diagram ({:.3}-{:.3} Hz, zeta {:.3}-{:.3} %): the diagram's pole is kept",
+                    "the refinement moved the pole at {:.3} Hz (zeta {:.3} %) to {f:.3} Hz (zeta \
+                     {:.3} %), out of its column in the diagram ({:.3}-{:.3} Hz, zeta {:.3}-{:.3} \
+                     %): the diagram's pole is kept",
                     col.freq_hz,
                     100.0 * col.damping,
                     100.0 * z,
@@ -384,7 +387,8 @@ fn check_band_in_data(band: [f64; 2], freqs: &[f64]) -> Result<(), EmaError> {
     }
     let mut why = format!("[{lo}, {hi}] Hz reaches beyond the data's lines, {first} to {last} Hz");
     if last < 0.1 * lo || last < 0.01 * hi {
-        why += ": the data end far below the band; is the time column in s (not ms) and the sampling as recorded?";
+        why += ": the data end far below the band; is the time column in s (not ms) and the \
+                sampling as recorded?";
     }
     Err(invalid("band", why))
 }
@@ -444,7 +448,9 @@ fn select_with_cmif(
                 "the second CMIF curve (a close pair)"
             };
             warnings.push(format!(
-                "a peak of {which} had no stable pole: the pole at {:.4} Hz (zeta {:.3} %) is taken from a column of {} poles stable in frequency but not in damping or mode vector",
+                "a peak of {which} had no stable pole: the pole at {:.4} Hz (zeta {:.3} %) is \
+                 taken from a column of {} poles stable in frequency but not in damping or mode \
+                 vector",
                 p.freq_hz,
                 100.0 * p.damping,
                 p.count
@@ -472,7 +478,9 @@ fn lone_modes_at_second_peaks(
         })
         .map(|p| {
             format!(
-                "the CMIF's second curve peaks at {:.4} Hz, where one mode was found: two modes respond together there (a close pair); pick them with --near-hz, or raise the model order",
+                "the CMIF's second curve peaks at {:.4} Hz, where one mode was found: two modes \
+                 respond together there (a close pair); pick them with --near-hz, or raise the \
+                 model order",
                 p.freq_hz
             )
         })
@@ -651,10 +659,16 @@ fn merge_split_modes(
         };
         dropped[if keep_a { r + 1 } else { r }] = true;
         notes.push(format!(
-            "the poles at {fa:.3} Hz and {fb:.3} Hz (zeta {:.2} / {:.2} %) overlap and their shapes agree{}: one mode split in two; the one at {kept_f:.3} Hz ({kept_count} stable poles) is kept and refitted",
+            "the poles at {fa:.3} Hz and {fb:.3} Hz (zeta {:.2} / {:.2} %) overlap and their \
+             shapes agree{}: one mode split in two; the one at {kept_f:.3} Hz ({kept_count} stable \
+             poles) is kept and refitted",
             100.0 * za,
             100.0 * zb,
-            if few_curves { " (fewer than three curves: the shapes cannot tell)" } else { "" },
+            if few_curves {
+                " (fewer than three curves: the shapes cannot tell)"
+            } else {
+                ""
+            },
         ));
     }
     let kept = selected
@@ -901,7 +915,8 @@ fn no_stable_pole(band: [f64; 2], highest: usize) -> EmaError {
     invalid(
         "poles",
         format!(
-            "no stable pole in [{}, {}] Hz up to order {highest}: raise the order or widen the band",
+            "no stable pole in [{}, {}] Hz up to order {highest}: raise the order or widen the \
+             band",
             band[0], band[1]
         ),
     )
@@ -911,9 +926,13 @@ fn no_stable_pole(band: [f64; 2], highest: usize) -> EmaError {
 /// over.
 fn roving_hammer_note(set: &FrfSet) -> Option<String> {
     let nf = set.references().len();
-    (set.responses().len() == 1 && nf > 1).then(|| format!(
-        "one response and {nf} references (a roving-hammer test): the shapes, MPC, MPD and auto-MAC are over the references (by reciprocity, the residues of the response to each hammer point)"
-    ))
+    (set.responses().len() == 1 && nf > 1).then(|| {
+        format!(
+            "one response and {nf} references (a roving-hammer test): the shapes, MPC, MPD and \
+             auto-MAC are over the references (by reciprocity, the residues of the response to each \
+             hammer point)"
+        )
+    })
 }
 
 /// The spacing of the first two of `lines` (Hz), 0 with fewer.

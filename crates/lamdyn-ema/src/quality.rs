@@ -122,13 +122,15 @@ impl std::fmt::Display for QualityFlag {
             ),
             Self::NoResonance { damping_ratio } => write!(
                 f,
-                "zeta {:.0} % is at or above 1/sqrt(2) (70.7 %): its FRF term has no resonance peak, so the pole shapes the curves between modes rather than being a mode",
+                "zeta {:.0} % is at or above 1/sqrt(2) (70.7 %): its FRF term has no resonance \
+                 peak, so the pole shapes the curves between modes rather than being a mode",
                 100.0 * damping_ratio
             ),
             Self::FewStable { count } => write!(f, "only {count} stable poles in its column"),
             Self::LittleContribution { frac_drop } => write!(
                 f,
-                "the regenerated FRFs lose {frac_drop:.1e} of FRAC without it and the CMIF has no peak there"
+                "the regenerated FRFs lose {frac_drop:.1e} of FRAC without it and the CMIF has no \
+                 peak there"
             ),
         }
     }

@@ -83,7 +83,8 @@ pub struct Spectra {
 /// there, whatever the noise.
 pub(crate) fn one_average(what: &str) -> String {
     format!(
-        "one {what} averaged: the coherence is 1 by definition and says nothing of the noise (average several {what}s)"
+        "one {what} averaged: the coherence is 1 by definition and says nothing of the noise \
+         (average several {what}s)"
     )
 }
 
@@ -259,7 +260,8 @@ fn check_settings(s: &SpectraSettings, length: usize) -> Result<(), EmaError> {
         return Err(invalid(
             "settings",
             format!(
-                "rate {} Hz, length {}, force window {} s, trigger {}: rate and window must be positive, length at least 4, trigger in [0, 1)",
+                "rate {} Hz, length {}, force window {} s, trigger {}: rate and window must be \
+                 positive, length at least 4, trigger in [0, 1)",
                 s.rate_hz, length, s.force_window_s, s.trigger
             ),
         ));
@@ -280,7 +282,11 @@ fn check_settings(s: &SpectraSettings, length: usize) -> Result<(), EmaError> {
 fn hit_warnings(hit: &Hit, hn: usize, double_hit_level: f64) -> Vec<String> {
     let mut warnings = Vec::new();
     if double_hit(&hit.force, double_hit_level) {
-        warnings.push(format!("hit {hn}: double hit (the force rises above {:.0} % of its peak after the first impact)", 100.0 * double_hit_level));
+        warnings.push(format!(
+            "hit {hn}: double hit (the force rises above {:.0} % of its peak \
+             after the first impact)",
+            100.0 * double_hit_level
+        ));
     }
     if clipped(&hit.force) {
         warnings.push(format!("hit {hn}: force overload (clipped samples)"));

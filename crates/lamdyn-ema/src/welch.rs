@@ -110,7 +110,8 @@ fn check_records(records: &[Hit], s: &WelchSettings) -> Result<usize, EmaError> 
             return Err(invalid(
                 "time data",
                 format!(
-                    "record {} holds {} samples, record 1 {first}: with each record whole as the segment their lines would differ; give a segment length",
+                    "record {} holds {} samples, record 1 {first}: with each record whole as the \
+                     segment their lines would differ; give a segment length",
                     r + 1,
                     records[r].force.len()
                 ),
@@ -143,7 +144,8 @@ fn check_records(records: &[Hit], s: &WelchSettings) -> Result<usize, EmaError> 
         return Err(invalid(
             "time data",
             format!(
-                "the segment ({segment} samples, {:.4} s) is longer than record {} ({} samples, {:.4} s)",
+                "the segment ({segment} samples, {:.4} s) is longer than record {} ({} samples, \
+                 {:.4} s)",
                 segment as f64 / s.rate_hz,
                 r + 1,
                 rec.force.len(),
@@ -255,7 +257,9 @@ pub fn welch(records: &[Hit], s: &WelchSettings) -> Result<Spectra, EmaError> {
     warnings.extend(weak_force_warning(&sxx, &freqs_hz, band));
     if !ringing.is_empty() {
         warnings.push(format!(
-            "leakage: with the rectangular window {} segment(s) end while the response still rings (record {}, response {} first): use a Hann window, longer segments, or a burst that stops earlier",
+            "leakage: with the rectangular window {} segment(s) end while the response still rings \
+             (record {}, response {} first): use a Hann window, longer segments, or a burst that \
+             stops earlier",
             ringing.len(),
             ringing[0].0,
             ringing[0].1
@@ -295,7 +299,8 @@ fn weak_force_warning(sxx: &[f64], freqs_hz: &[f64], band: [f64; 2]) -> Option<S
         .map(|r| format!("{:.1}-{:.1} Hz", r[0], r[1]))
         .collect();
     Some(format!(
-        "the force has no energy (autospectrum 40 dB below its level in the band) at {}{}: H1 there is noise; excite that band or leave it out",
+        "the force has no energy (autospectrum 40 dB below its level in the band) at {}{}: H1 \
+         there is noise; excite that band or leave it out",
         list.join(", "),
         if weak.len() > 6 { ", ..." } else { "" }
     ))

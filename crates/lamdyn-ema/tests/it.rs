@@ -191,7 +191,8 @@ fn known_poles_are_recovered_at_40_db() {
         let worst_f = r.freq_err.iter().fold(0.0f64, |m, e| m.max(e.abs()));
         let worst_z = r.damping_err.iter().fold(0.0f64, |m, e| m.max(e.abs()));
         eprintln!(
-            "40 dB seed {seed}: max |df/f| {worst_f:.2e}, max |dzeta/zeta| {worst_z:.2e}, min MAC {:.5}, min FRAC {:.5}",
+            "40 dB seed {seed}: max |df/f| {worst_f:.2e}, max |dzeta/zeta| {worst_z:.2e}, min MAC \
+             {:.5}, min FRAC {:.5}",
             r.macs.iter().cloned().fold(1.0, f64::min),
             r.fracs.iter().cloned().fold(1.0, f64::min)
         );
@@ -210,7 +211,8 @@ fn known_poles_are_recovered_at_40_db() {
             .join(" ")
     };
     eprintln!(
-        "20 dB seed 1, stable poles picked near the true frequencies (NaN: none there): df/f {}\n  dzeta/zeta {}\n  MAC {:.4?}",
+        "20 dB seed 1, stable poles picked near the true frequencies (NaN: none there): df/f \
+         {}\n  dzeta/zeta {}\n  MAC {:.4?}",
         e(&r.freq_err),
         e(&r.damping_err),
         r.macs
@@ -613,7 +615,8 @@ fn polymax_separates_a_close_pair() {
             .collect();
         let (f, z) = PLATE_MODES[r];
         eprintln!(
-            "mode {r}: f {:.4} Hz ({:+.1e}), zeta {:.5} ({:+.1e}), participation MAC {:.5}, shape MAC {:.5}",
+            "mode {r}: f {:.4} Hz ({:+.1e}), zeta {:.5} ({:+.1e}), participation MAC {:.5}, shape \
+             MAC {:.5}",
             m.freq_hz,
             (m.freq_hz - f) / f,
             m.damping_ratio,

@@ -159,7 +159,9 @@ fn main() {
         .collect();
     let (reference, order) = richardson(&fine);
     println!(
-        "Dome reference: Richardson extrapolation of MITC9 with 4 edge layers at 24, 36 and 48 elements per side; observed order p = {order:.2} (median over modes); the 48 x 48 mesh differs from it by at most {:.1e}.\n",
+        "Dome reference: Richardson extrapolation of MITC9 with 4 edge layers at 24, 36 and 48 \
+         elements per side; observed order p = {order:.2} (median over modes); the 48 x 48 mesh \
+         differs from it by at most {:.1e}.\n",
         fine[2]
             .1
             .iter()
@@ -190,7 +192,8 @@ fn main() {
         ));
     }
     table(
-        "The paper-sized dome, 0.923 x 0.8632 x 0.00385 m, radii 3 m and 5 m (extrapolated reference, Hz)",
+        "The paper-sized dome, 0.923 x 0.8632 x 0.00385 m, radii 3 m and 5 m (extrapolated \
+         reference, Hz)",
         &reference,
         rows,
     );

@@ -210,8 +210,11 @@ impl Assembly {
             for (i, r) in mats.into_iter().enumerate() {
                 let (ke, me) = r.map_err(|(e, _)| {
                     FemError::InvalidMesh(format!(
-                        "element {e} (nodes {:?}): the Jacobian turns negative through the thickness ({} m): the shell is too thick for its curvature or the element is folded",
-                        mesh.element_nodes(e), material.thickness_m
+                        "element {e} (nodes {:?}): the Jacobian turns negative through the \
+                         thickness ({} m): the shell is too thick for its curvature or the element \
+                         is folded",
+                        mesh.element_nodes(e),
+                        material.thickness_m
                     ))
                 })?;
                 let e = start + i;

@@ -109,7 +109,9 @@ impl ConvergeParams {
                 "tolerance",
                 format!("{:e}", self.tolerance),
                 format!(
-                    "is below what double precision allows: the eigensolver resolves frequencies to about 1e-10 relative and the differences between meshes lose more; use at least {MIN_TOLERANCE:e}"
+                    "is below what double precision allows: the eigensolver resolves frequencies \
+                     to about 1e-10 relative and the differences between meshes lose more; use at \
+                     least {MIN_TOLERANCE:e}"
                 ),
             ));
         }
@@ -262,7 +264,8 @@ pub fn converge_modes(
             field: "tolerance".into(),
             value: format!("{:e}", params.tolerance),
             requirement: format!(
-                "cannot be met within the limits: on the finest mesh they allow ({}x{}, {} dofs; {}) {}",
+                "cannot be met within the limits: on the finest mesh they allow ({}x{}, {} dofs; \
+                 {}) {}",
                 reach.subdivisions,
                 reach.subdivisions,
                 reach.n_dofs,
@@ -315,7 +318,14 @@ pub fn converge_modes(
     };
     let finest = levels.last().map_or(1, |l| l.subdivisions);
     let warnings: Vec<String> = EdgeLayer::unresolved(mesh, material, finest)
-        .map(|edges| format!("free edges unresolved: {}; the estimates cannot see it (up to a few 1e-3 in frequency): use edge layers or a mesh graded towards the edges", edges.describe()))
+        .map(|edges| {
+            format!(
+                "free edges unresolved: {}; the estimates cannot see it (up to a few \
+                 1e-3 in frequency): use edge layers or a mesh graded towards the \
+                 edges",
+                edges.describe()
+            )
+        })
         .into_iter()
         .collect();
     let converged = levels.len() >= 3
@@ -414,7 +424,9 @@ impl Reach {
         (best > OUT_OF_REACH_MARGIN * tolerance).then(|| {
             let needed = m as f64 * (modes[j].error / tolerance).powf(1.0 / nominal);
             format!(
-                "out of reach: mode {}'s error {:.2e} on {m}x{m} would be about {best:.2e} on the finest mesh the limits allow ({}x{}, {} dofs; {}), at the element's nominal order {nominal}; about {}x{} subdivisions would be needed",
+                "out of reach: mode {}'s error {:.2e} on {m}x{m} would be about {best:.2e} on the \
+                 finest mesh the limits allow ({}x{}, {} dofs; {}), at the element's nominal order \
+                 {nominal}; about {}x{} subdivisions would be needed",
                 j + 1,
                 modes[j].error,
                 self.subdivisions,
@@ -495,7 +507,8 @@ impl EdgeLayer {
 
     fn describe(&self) -> String {
         format!(
-            "the outermost elements are up to {:.3} mm wide, against a boundary layer of t/sqrt(10) = {:.3} mm at the free edges",
+            "the outermost elements are up to {:.3} mm wide, against a boundary layer of \
+             t/sqrt(10) = {:.3} mm at the free edges",
             self.edge_m * 1e3,
             self.layer_m * 1e3
         )

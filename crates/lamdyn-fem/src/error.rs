@@ -56,7 +56,8 @@ pub enum FemError {
     },
     /// The eigensolver stopped before all wanted modes converged.
     #[error(
-        "modal solver: {converged} of {wanted} modes converged after {restarts} restarts (largest residual {max_residual:.3e})"
+        "modal solver: {converged} of {wanted} modes converged after {restarts} restarts (largest \
+         residual {max_residual:.3e})"
     )]
     NoConvergence {
         /// Modes converged.
@@ -70,7 +71,8 @@ pub enum FemError {
     },
     /// The Sturm sequence count disagrees with the modes found.
     #[error(
-        "Sturm check: {count} eigenvalues below {cutoff:.6e} rad^2/s^2 but {returned} modes returned; modes were missed"
+        "Sturm check: {count} eigenvalues below {cutoff:.6e} rad^2/s^2 but {returned} modes \
+         returned; modes were missed"
     )]
     SturmMismatch {
         /// Cut-off, rad²/s².

@@ -39,7 +39,8 @@ pub fn check_modal_memory(n_dofs: usize) -> Result<(), FemError> {
             field: "size".into(),
             value: format!("{n_dofs} dofs"),
             requirement: format!(
-                "needs about {:.1} GB for a modal solve, more than the {:.1} GB available: use fewer elements",
+                "needs about {:.1} GB for a modal solve, more than the {:.1} GB available: use \
+                 fewer elements",
                 need / 1e9,
                 have / 1e9
             ),

@@ -175,7 +175,8 @@ impl ModelSpec {
                         field: "element".into(),
                         value: format!("{want:?}").to_lowercase(),
                         requirement: format!(
-                            "'{file}' holds {}-node quadrilaterals ({}); {} needs {}-node ones (Gmsh: Mesh.ElementOrder = {}, Mesh.SecondOrderIncomplete = 0)",
+                            "'{file}' holds {}-node quadrilaterals ({}); {} needs {}-node ones \
+                             (Gmsh: Mesh.ElementOrder = {}, Mesh.SecondOrderIncomplete = 0)",
                             mesh.order().nodes(),
                             mesh.order().name(),
                             want.name(),

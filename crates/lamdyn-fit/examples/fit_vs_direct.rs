@@ -72,12 +72,14 @@ fn main() {
     };
     let per_eval = median((0..3).map(|_| direct_eval()).collect());
     println!(
-        "direct: {} lines, {} dofs, sparse complex LU per line in parallel: {per_eval:.2} s per evaluation\n",
+        "direct: {} lines, {} dofs, sparse complex LU per line in parallel: {per_eval:.2} s per \
+         evaluation\n",
         freqs.len(),
         case.assembly.n_dofs()
     );
     println!(
-        "| fit | modal: whole fit, median of {repeats} | evaluations | direct: one evaluation, median of 3 | direct: extrapolated fit | ratio |"
+        "| fit | modal: whole fit, median of {repeats} | evaluations | direct: one evaluation, \
+         median of 3 | direct: extrapolated fit | ratio |"
     );
     println!("|---|---|---|---|---|---|");
     for (name, law, kind) in [

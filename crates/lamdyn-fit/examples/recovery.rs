@@ -152,7 +152,8 @@ fn one(law: &str, misfit: &str, seed: u64) {
 
 fn study(seeds: u64) {
     println!(
-        "| truth and law | misfit | covariance | inside 95 % CI | seeds inside the joint 95 % region | max abs z | max E' error at peaks | max eta error at peaks | fit time, median |"
+        "| truth and law | misfit | covariance | inside 95 % CI | seeds inside the joint 95 % \
+         region | max abs z | max E' error at peaks | max eta error at peaks | fit time, median |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     for law in ["eq7", "zener"] {
@@ -188,7 +189,8 @@ fn study(seeds: u64) {
             }
             times.sort_by(f64::total_cmp);
             println!(
-                "| {law} | {misfit} | {cov:?} | {inside}/{total} | {joint}/{} | {zmax:.2} | {:.2e} | {:.2e} | {:.3} s |",
+                "| {law} | {misfit} | {cov:?} | {inside}/{total} | {joint}/{} | {zmax:.2} | {:.2e} \
+                 | {:.2e} | {:.3} s |",
                 cases.len(),
                 emax,
                 nmax,

@@ -390,7 +390,10 @@ pub fn check_plausible(result: &mut FitResult, e_ref_pa: f64) -> Result<(), FitE
             return Err(inconsistent(
                 "fit",
                 format!(
-                    "implausible result: E' = {:.3e} Pa at the peak at {:.4} Hz is {ratio:.3e} times the model's E_ref = {e_ref_pa:.4e} Pa; the measured peaks do not belong to this model: check the FRF's frequency unit (Hz), its quantity line and the model's material and size",
+                    "implausible result: E' = {:.3e} Pa at the peak at {:.4} Hz is {ratio:.3e} \
+                     times the model's E_ref = {e_ref_pa:.4e} Pa; the measured peaks do not belong \
+                     to this model: check the FRF's frequency unit (Hz), its quantity line and the \
+                     model's material and size",
                     e.re, p.freq_hz
                 ),
             ));
@@ -399,7 +402,8 @@ pub fn check_plausible(result: &mut FitResult, e_ref_pa: f64) -> Result<(), FitE
             return Err(inconsistent(
                 "fit",
                 format!(
-                    "implausible result: loss factor {eta:.3e} at the peak at {:.4} Hz (above 1: no laminate damps that much); check the FRF's quantity line and the band",
+                    "implausible result: loss factor {eta:.3e} at the peak at {:.4} Hz (above 1: \
+                     no laminate damps that much); check the FRF's quantity line and the band",
                     p.freq_hz
                 ),
             ));
@@ -408,14 +412,16 @@ pub fn check_plausible(result: &mut FitResult, e_ref_pa: f64) -> Result<(), FitE
     }
     if !result.peaks.is_empty() && max_eta < 1e-7 {
         result.warnings.push(format!(
-            "loss factor below 1e-7 at every peak (largest {max_eta:.2e}): the fit found no damping; is the FRF's '# quantity' line right?"
+            "loss factor below 1e-7 at every peak (largest {max_eta:.2e}): the fit found no \
+             damping; is the FRF's '# quantity' line right?"
         ));
     }
     for p in &result.parameters {
         let v = p.value.abs();
         if !(v == 0.0 || (1e-150..=1e150).contains(&v)) {
             result.warnings.push(format!(
-                "parameter {} = {:.3e} is at the edge of the number range: the optimum ran off to a bound and the law is not identified there",
+                "parameter {} = {:.3e} is at the edge of the number range: the optimum ran off to \
+                 a bound and the law is not identified there",
                 p.name, p.value
             ));
         } else if v == 0.0 {

@@ -519,7 +519,8 @@ fn check(points: &[ModePoint], priors: &[InputPrior], law: CoreLaw) -> Result<()
             || offset.norm() > 0.5
         {
             return bad(format!(
-                "mode {} was found at the complex frequency {} Hz: it must lie on or above the real axis, near its {} Hz (a decaying mode's −ip/2π)",
+                "mode {} was found at the complex frequency {} Hz: it must lie on or above the \
+                 real axis, near its {} Hz (a decaying mode's −ip/2π)",
                 k + 1,
                 p.found_at_hz,
                 p.freq_hz
@@ -555,7 +556,8 @@ fn check(points: &[ModePoint], priors: &[InputPrior], law: CoreLaw) -> Result<()
     let p = law.parameter_count(points.len());
     if p > 2 * points.len() {
         return bad(format!(
-            "a {} law has {p} parameters; {} mode(s) give {} values (G' and η each): too few to determine it. Identify more modes or fit per mode",
+            "a {} law has {p} parameters; {} mode(s) give {} values (G' and η each): too few to \
+             determine it. Identify more modes or fit per mode",
             law.name(),
             points.len(),
             2 * points.len()

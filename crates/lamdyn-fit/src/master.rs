@@ -210,7 +210,8 @@ fn check_points(points: &[CorePoint], s: &MasterSettings) -> Result<(), FitError
             .all(|v| v.is_finite() && *v > 0.0);
         if !ok {
             return bad(format!(
-                "point {k} (T = {} K, f = {} Hz, G' = {} Pa, eta = {}) needs positive finite values",
+                "point {k} (T = {} K, f = {} Hz, G' = {} Pa, eta = {}) needs positive finite \
+                 values",
                 p.temperature_k, p.freq_hz, p.storage_pa, p.loss_factor
             ));
         }

@@ -139,7 +139,8 @@ impl MisfitSpec {
                 return Err(inconsistent(
                     "misfit",
                     format!(
-                        "weights[{k}].weight = {} must be positive and finite (use exclude_hz to leave a band out)",
+                        "weights[{k}].weight = {} must be positive and finite (use exclude_hz to \
+                         leave a band out)",
                         w.weight
                     ),
                 ));

@@ -196,7 +196,8 @@ pub fn probes_with(
                     if q.distance_m > tolerance_m {
                         let [x, y, z] = c.point_m;
                         return Err(off(format!(
-                            "point at ({x}, {y}, {z}) m: {:.4e} m from the mid-surface (element {}), beyond the tolerance of {tolerance_m:.4e} m",
+                            "point at ({x}, {y}, {z}) m: {:.4e} m from the mid-surface (element \
+                             {}), beyond the tolerance of {tolerance_m:.4e} m",
                             q.distance_m, q.element
                         )));
                     }

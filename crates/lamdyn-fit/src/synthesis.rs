@@ -87,7 +87,8 @@ impl ModalModel {
             return Err(inconsistent(
                 "modal synthesis",
                 format!(
-                    "the model has {} support springs; K*(w) = s(w) K0 needs a free model: exclude the supports' frequency bands from the misfit instead",
+                    "the model has {} support springs; K*(w) = s(w) K0 needs a free model: exclude \
+                     the supports' frequency bands from the misfit instead",
                     asm.springs.len()
                 ),
             ));

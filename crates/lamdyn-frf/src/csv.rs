@@ -87,12 +87,20 @@ fn declared_quantity(path: &str, text: &str) -> Result<Quantity, FrfError> {
         Some((line, other)) => Err(err(
             path,
             line,
-            format!("quantity '{other}' must be receptance, mobility or accelerance", other = quoted(other)),
+            format!(
+                "quantity '{other}' must be receptance, mobility or \
+                 accelerance",
+                other = quoted(other)
+            ),
         )),
         None => Err(err(
             path,
             1,
-            "no '# quantity = ...' line: say what the responses are, in a line before the header: `# quantity = accelerance` (m/s^2), `mobility` (m/s) or `receptance` (m); lamdyn does not guess, since a wrong quantity gives loss factors wrong by orders of magnitude".into(),
+            "no '# quantity = ...' line: say what the responses are, in a line before the header: \
+             `# quantity = accelerance` (m/s^2), `mobility` (m/s) or `receptance` (m); lamdyn does \
+             not guess, since a wrong quantity gives loss factors wrong by orders of \
+             magnitude"
+                .into(),
         )),
     }
 }
@@ -748,7 +756,8 @@ mod tests {
             .to_string();
         assert_eq!(
             e,
-            "error reading 'h.csv' line 2: column 'p3+X@hammer:im': response 'p3+X' is not in the channels file"
+            "error reading 'h.csv' line 2: column 'p3+X@hammer:im': response 'p3+X' is not in the \
+             channels file"
         );
         let bad = text.replacen("\n3.5,", "\n1.5,", 1);
         let e = parse_frf("h.csv", &bad, r.clone(), f.clone())

@@ -92,7 +92,8 @@ fn main() {
     let ladder_s = t.elapsed().as_secs_f64();
     let (dofs, _) = truth.size();
     println!(
-        "truth {truth_n} x {truth_n} grading {truth_grading} ({dofs} dofs, {truth_s:.1} s); coarsest {start_n} x {start_n} ({coarsest_s:.1} s); ladder {ladder_s:.1} s"
+        "truth {truth_n} x {truth_n} grading {truth_grading} ({dofs} dofs, {truth_s:.1} s); \
+         coarsest {start_n} x {start_n} ({coarsest_s:.1} s); ladder {ladder_s:.1} s"
     );
     let out = match out {
         Ok(o) => o,

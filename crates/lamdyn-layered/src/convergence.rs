@@ -313,7 +313,10 @@ pub fn converge_keeping_levels(
     let (third, about) = size(meshes[2], coarsest.size().0, start);
     if third > settings.max_dofs {
         return Err(LayeredError::Invalid(format!(
-            "the ladder's third level, {} x {} elements, would have {about}{} dofs, above inverse.layered_max_dofs = {} (the coarsest has {}): start from a coarser mesh (inverse.layered_elements, inverse.layered_subdivisions or fewer quadrilaterals in the plan's Gmsh mesh) or raise inverse.layered_max_dofs if the memory allows",
+            "the ladder's third level, {} x {} elements, would have {about}{} dofs, above \
+             inverse.layered_max_dofs = {} (the coarsest has {}): start from a coarser mesh \
+             (inverse.layered_elements, inverse.layered_subdivisions or fewer quadrilaterals in \
+             the plan's Gmsh mesh) or raise inverse.layered_max_dofs if the memory allows",
             meshes[2][0],
             meshes[2][1],
             third,
@@ -370,7 +373,9 @@ pub fn converge_keeping_levels(
             // others stand (a mode mixed with a support's bounce need not hold them back).
             let remedy = if too_big {
                 format!(
-                    "the next level, {} x {}, would have {about}{} dofs, above inverse.layered_max_dofs = {}: raise it if the memory allows, or inverse.tolerance",
+                    "the next level, {} x {}, would have {about}{} dofs, above \
+                     inverse.layered_max_dofs = {}: raise it if the memory allows, or \
+                     inverse.tolerance",
                     next[0], next[1], next_dofs, settings.max_dofs
                 )
             } else {
@@ -418,7 +423,8 @@ fn out_of_tolerance(
         .map(|m| match m {
             Ok(m) if m.residual_freq_error > settings.tolerance => {
                 Err(LayeredError::Tolerance(format!(
-                    "the layered model's estimated frequency error {:.2e} is above the tolerance {:.1e} after {} levels up to {} x {} elements ({finest} dofs); {remedy}",
+                    "the layered model's estimated frequency error {:.2e} is above the tolerance \
+                     {:.1e} after {} levels up to {} x {} elements ({finest} dofs); {remedy}",
                     m.residual_freq_error,
                     settings.tolerance,
                     meshes.len(),
@@ -1048,7 +1054,8 @@ mod surface_plan {
             let deta = (eta(b) / eta(a) - 1.0).abs();
             let coarse = (g.coarsest_pa.re / a.re - 1.0).abs();
             println!(
-                "G' {:.5e} / {:.5e} ({dg:.2e}, bands {:.2e} + {:.2e}), eta ({deta:.2e}, bands {:.2e} + {:.2e}), Gmsh coarsest {coarse:.2e}",
+                "G' {:.5e} / {:.5e} ({dg:.2e}, bands {:.2e} + {:.2e}), eta ({deta:.2e}, bands \
+                 {:.2e} + {:.2e}), Gmsh coarsest {coarse:.2e}",
                 a.re, b.re, s.storage_band, g.storage_band, s.loss_band, g.loss_band
             );
             assert!(dg <= s.storage_band + g.storage_band, "G': {s:?} {g:?}");

@@ -301,7 +301,8 @@ impl ObservedModel {
         };
         if !(finite(&h) && finite(&dh_ds) && dh_dinputs.iter().all(finite)) {
             return Err(LayeredError::Solver(format!(
-                "the reduced dynamic stiffness is singular at {:.4} Hz (core scale {core_scale:.4})",
+                "the reduced dynamic stiffness is singular at {:.4} Hz (core scale \
+                 {core_scale:.4})",
                 omega / (2.0 * std::f64::consts::PI)
             )));
         }

@@ -152,7 +152,8 @@ fn core_layers(plate: &LayeredPlate) -> Result<Vec<usize>, LayeredError> {
         .collect();
     if cores.is_empty() || cores.len() == plate.layers.len() {
         return Err(LayeredError::Invalid(format!(
-            "the layered inverse needs at least one core layer (no young_pa) and one elastic face (with young_pa); the stack has {} core layers of {}",
+            "the layered inverse needs at least one core layer (no young_pa) and one elastic face \
+             (with young_pa); the stack has {} core layers of {}",
             cores.len(),
             plate.layers.len()
         )));
@@ -435,7 +436,9 @@ impl LayeredInverse {
         let hz = lambda.re.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
         if hz > BASIS_COVER * self.basis_top_hz {
             return Err(LayeredError::Invalid(format!(
-                "the mode at {hz:.3} Hz lies above {:.0} % of the reduced basis's highest mode ({:.3} Hz on {} dofs), where the basis is not checked: raise inverse.layered_modes",
+                "the mode at {hz:.3} Hz lies above {:.0} % of the reduced basis's highest mode \
+                 ({:.3} Hz on {} dofs), where the basis is not checked: raise \
+                 inverse.layered_modes",
                 100.0 * BASIS_COVER,
                 self.basis_top_hz,
                 self.dofs
@@ -636,7 +639,8 @@ impl LayeredInverse {
         let hz = |l: Complex64| l.re.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
         if (hz(start[rank]) / hz(target) - 1.0).abs() > MATCH_WINDOW {
             return Err(LayeredError::Invalid(format!(
-                "the pole at {:.3} Hz matches no mode of the layered model: the nearest lies at {:.3} Hz with G* = {:.4e} Pa (more than {} % off)",
+                "the pole at {:.3} Hz matches no mode of the layered model: the nearest lies at \
+                 {:.3} Hz with G* = {:.4e} Pa (more than {} % off)",
                 hz(target),
                 hz(start[rank]),
                 g_start,
@@ -653,7 +657,9 @@ impl LayeredInverse {
         let slope = 0.5 * (up.re / start[rank].re).ln() / 1.01f64.ln();
         if slope.abs() < MIN_CORE_SLOPE {
             return Err(LayeredError::Invalid(format!(
-                "the pole at {:.3} Hz barely feels the core (d ln f / d ln G' = {slope:.1e} at G* = {:.4e} Pa, below {MIN_CORE_SLOPE:.0e}): a support's rigid-body mode or a mode of the faces alone, not used for the core",
+                "the pole at {:.3} Hz barely feels the core (d ln f / d ln G' = {slope:.1e} at G* \
+                 = {:.4e} Pa, below {MIN_CORE_SLOPE:.0e}): a support's rigid-body mode or a mode \
+                 of the faces alone, not used for the core",
                 hz(target),
                 g_start
             )));
@@ -979,7 +985,8 @@ mod tests {
                         }
                     }
                     eprintln!(
-                        "{name} {basis} G'/G_ref {ratio}: {held} modes below {:.0} Hz within {worst:.1e}",
+                        "{name} {basis} G'/G_ref {ratio}: {held} modes below {:.0} Hz within \
+                         {worst:.1e}",
                         BASIS_COVER * model.basis_top_hz()
                     );
                     assert!(held >= 2, "{name} {basis}: {held} modes held");

@@ -77,7 +77,8 @@ impl Plan {
                 let [m, n] = elements;
                 if m != n || !(1..=16).contains(&m) {
                     return Err(LayeredError::Invalid(format!(
-                        "subdivision {elements:?} of the plan's elements: give [m, m] with m in 1..=16"
+                        "subdivision {elements:?} of the plan's elements: give [m, m] with m in \
+                         1..=16"
                     )));
                 }
                 let fine = surface

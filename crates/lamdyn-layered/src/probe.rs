@@ -51,7 +51,8 @@ impl SurfaceProbe {
             .ok_or_else(|| LayeredError::Invalid(format!("{what}: the mesh has no top surface")))?;
         if distance.is_nan() || distance > tolerance_m {
             return Err(LayeredError::Invalid(format!(
-                "{what} at ({:.4}, {:.4}, {:.4}) m is {distance:.3e} m from the model's top surface (tolerance {tolerance_m:.1e} m): not on the part",
+                "{what} at ({:.4}, {:.4}, {:.4}) m is {distance:.3e} m from the model's top \
+                 surface (tolerance {tolerance_m:.1e} m): not on the part",
                 point[0], point[1], point[2]
             )));
         }

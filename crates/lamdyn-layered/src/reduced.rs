@@ -621,7 +621,8 @@ impl ReducedEigen {
         let (q, lam) = (evd.U(), evd.S().column_vector());
         if (0..m).any(|k| lam[k].is_nan() || lam[k] <= 0.0) {
             return Err(LayeredError::Invalid(
-                "the moved mass is not positive definite: the inputs' changes are far beyond first order".into(),
+                "the moved mass is not positive definite: the inputs' changes are far beyond first \
+                 order".into(),
             ));
         }
         let root = Mat::from_fn(m, m, |i, k| q[(i, k)] / lam[k].sqrt());

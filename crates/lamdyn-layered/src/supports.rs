@@ -48,13 +48,15 @@ impl PointSupport {
         let [fx, fy] = self.xy_fraction;
         if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
             return Err(LayeredError::Invalid(format!(
-                "supports[{i}].xy_fraction = [{fx}, {fy}]: the support lies outside the plate (fractions of its plan must lie in [0, 1])"
+                "supports[{i}].xy_fraction = [{fx}, {fy}]: the support lies outside the plate \
+                 (fractions of its plan must lie in [0, 1])"
             )));
         }
         let [px, py] = self.patch_m;
         if !(px.is_finite() && py.is_finite() && px >= 0.0 && py >= 0.0) {
             return Err(LayeredError::Invalid(format!(
-                "supports[{i}].patch_m = [{px}, {py}]: the patch's size must be finite and non-negative (m)"
+                "supports[{i}].patch_m = [{px}, {py}]: the patch's size must be finite and \
+                 non-negative (m)"
             )));
         }
         for (field, v) in [
@@ -122,7 +124,8 @@ pub fn support_terms(
         for [x, y] in points {
             let face = bottom_point(mesh, [x, y]).ok_or_else(|| {
                 LayeredError::Invalid(format!(
-                    "supports[{i}]: no bottom face of the mesh holds ({x:.4}, {y:.4}) m (its patch {:?} m reaches beyond the plate?)",
+                    "supports[{i}]: no bottom face of the mesh holds ({x:.4}, {y:.4}) m (its patch \
+                     {:?} m reaches beyond the plate?)",
                     s.patch_m
                 ))
             })?;

@@ -368,7 +368,8 @@ impl SeqCholesky {
             .map(|order| {
                 inverse_permutation(order, a.nrows()).ok_or_else(|| {
                     LayeredError::Solver(format!(
-                        "sparse Cholesky: an elimination order of {} entries is not a permutation of {} dofs",
+                        "sparse Cholesky: an elimination order of {} entries is not a permutation \
+                         of {} dofs",
                         order.len(),
                         a.nrows()
                     ))

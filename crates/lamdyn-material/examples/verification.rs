@@ -136,7 +136,8 @@ fn main() {
         worst = worst.max(rel(back.core_shear_pa, g));
     }
     println!(
-        "| Mead-Markus forward -> closed-form inverse (G 0.1-100 MPa, eta 0-1, 1-2000 Hz) | 2000 | {worst:.1e} |"
+        "| Mead-Markus forward -> closed-form inverse (G 0.1-100 MPa, eta 0-1, 1-2000 Hz) | 2000 | \
+         {worst:.1e} |"
     );
 
     // RKU(E2 = 0) vs Mead-Markus.
@@ -250,7 +251,8 @@ fn main() {
         }
     }
     println!(
-        "| E756 Oberst: forward -> the standard's first-order reduction, eta1 < 0.1 | {} | {:.1e} |",
+        "| E756 Oberst: forward -> the standard's first-order reduction, eta1 < 0.1 | {} | {:.1e} \
+         |",
         wstd.1, wstd.0
     );
 
@@ -268,7 +270,8 @@ fn main() {
 
     // The paper's chain on data of the full model.
     println!(
-        "\n| core | f (Hz) | G' (MPa) | bias eqs. 35, 40, 41 | eqs. 35, 39, 41 | eqs. 14, 40, 41 | eqs. 14, 39, 41 | eq. 43 |\n|---|---|---|---|---|---|---|---|"
+        "\n| core | f (Hz) | G' (MPa) | bias eqs. 35, 40, 41 | eqs. 35, 39, 41 | eqs. 14, 40, 41 | \
+         eqs. 14, 39, 41 | eq. 43 |\n|---|---|---|---|---|---|---|---|"
     );
     for (name, law) in &cores {
         let full = stack.with_core_law(law.clone()).unwrap();

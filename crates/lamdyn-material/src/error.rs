@@ -50,7 +50,8 @@ pub enum MaterialError {
     },
     /// An iteration stopped before its tolerance was met.
     #[error(
-        "{context}: no convergence after {iterations} iterations (last relative step {last_step:.3e})"
+        "{context}: no convergence after {iterations} iterations (last relative step \
+         {last_step:.3e})"
     )]
     NoConvergence {
         /// What was iterated.

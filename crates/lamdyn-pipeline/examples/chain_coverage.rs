@@ -45,7 +45,8 @@ fn small(snr_db: f64, seed: u64) -> Description {
         &format!("elements = [{n}, {n}]\nedge_grading = 0.2"),
     );
     let text = format!(
-        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\nfrf_snr_db = {snr_db}\nseed = {seed}\n"
+        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = \
+         [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\nfrf_snr_db = {snr_db}\nseed = {seed}\n"
     );
     Description::parse("small.toml", &text).expect("the small laminate parses")
 }
@@ -135,7 +136,8 @@ fn explain(band: &lamdyn_pipeline::band::LayeredBand, freq_hz: f64, err: [f64; 2
         0.5 * kappa[c] * u * u
     });
     println!(
-        "  at the true inputs, first order {:+.2}/{:+.2} % -> left {:+.2}/{:+.2} %; with the second order left {:+.2}/{:+.2} %",
+        "  at the true inputs, first order {:+.2}/{:+.2} % -> left {:+.2}/{:+.2} %; with the \
+         second order left {:+.2}/{:+.2} %",
         100.0 * shift[0],
         100.0 * shift[1],
         100.0 * (err[0] + shift[0]),
@@ -339,7 +341,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     for (which, inside, halves) in [("per-mode", in_mode, half_mode), ("law", in_law, half_law)] {
         println!(
-            "{which} band holds the truth: G' {:.1} %, eta {:.1} %; median half-width {:.2} % / {:.2} %",
+            "{which} band holds the truth: G' {:.1} %, eta {:.1} %; median half-width {:.2} % / \
+             {:.2} %",
             pct(inside[0]),
             pct(inside[1]),
             100.0 * median(halves[0].clone()),

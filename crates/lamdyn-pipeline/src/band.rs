@@ -166,7 +166,8 @@ impl BandSource {
                 "weighed layers (measured densities)"
             }
             Self::Input(Input::SupportStiffness) => {
-                "softer supports (their resonances well below the first mode), or their stiffness measured"
+                "softer supports (their resonances well below the first mode), or their stiffness \
+                 measured"
             }
             Self::Input(Input::SupportDamping) => {
                 "softer supports with less damping, or their damping measured"
@@ -174,26 +175,34 @@ impl BandSource {
             Self::InputsBeyondFirstOrder
             | Self::InputsBeyondSecondOrder
             | Self::SharedRemainder { .. } => {
-                "narrower priors on the inputs (a measured face modulus and thicknesses): the core then depends on them nearly linearly"
+                "narrower priors on the inputs (a measured face modulus and thicknesses): the core \
+                 then depends on them nearly linearly"
             }
             Self::EmaPole | Self::NoiseFloor => {
-                "a better-identified pole: more averages, more hits, or a reference that excites the mode"
+                "a better-identified pole: more averages, more hits, or a reference that excites \
+                 the mode"
             }
             Self::HitsLeftOut => {
-                "more hits, or cleaner ones (the identification moves when one hit is left out: check each hit for a double hit, an overload or a weak force)"
+                "more hits, or cleaner ones (the identification moves when one hit is left out: \
+                 check each hit for a double hit, an overload or a weak force)"
             }
             Self::Discretization => "a smaller inverse.tolerance (finer meshes in the ladder)",
             Self::ThroughThickness => {
-                "no setting yet: the ladder refines in plane and keeps one element per layer through the thickness, which a core thick against its faces needs more of (docs/run.md, 'Through the thickness')"
+                "no setting yet: the ladder refines in plane and keeps one element per layer \
+                 through the thickness, which a core thick against its faces needs more of \
+                 (docs/run.md, 'Through the thickness')"
             }
             Self::PairFit | Self::PairFitLines => {
-                "modes further apart in the data: a reference or response point where one of the pair dominates, or less damping from the supports"
+                "modes further apart in the data: a reference or response point where one of the \
+                 pair dominates, or less damping from the supports"
             }
             Self::LawBetweenModes => {
-                "more modes between those identified (another hammer or response point that excites them), or a narrower measured band"
+                "more modes between those identified (another hammer or response point that \
+                 excites them), or a narrower measured band"
             }
             Self::ScatterAboutTheLaw => {
-                "more modes, or a law that follows the modes (generalized Maxwell or a per-mode table)"
+                "more modes, or a law that follows the modes (generalized Maxwell or a per-mode \
+                 table)"
             }
         }
     }

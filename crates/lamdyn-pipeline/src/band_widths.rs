@@ -221,7 +221,8 @@ impl BandWidths {
         let mut parts = Vec::new();
         if let Some(m) = self.law_median {
             parts.push(format!(
-                "the law's 95 % band has a median half-width of {} in G' and {} in eta over the measured band",
+                "the law's 95 % band has a median half-width of {} in G' and {} in eta over the \
+                 measured band",
                 pct(m[0]),
                 pct(m[1])
             ));
@@ -272,7 +273,8 @@ impl BandWidths {
                 first.advice.clone()
             };
             text += &format!(
-                ". Not determined by its own mode (band wider than a factor {UNDETERMINED_FACTOR} either way; the law weighs it by that band): {}; what would narrow them: {advice}",
+                ". Not determined by its own mode (band wider than a factor {UNDETERMINED_FACTOR} \
+                 either way; the law weighs it by that band): {}; what would narrow them: {advice}",
                 list.join(", "),
             );
         }
@@ -364,7 +366,10 @@ mod tests {
             "{text}"
         );
         assert!(
-            text.contains("Widest in G' ±5.0 % at 20.0 Hz and in eta ±5.0 % at 40.0 Hz, both mainly from the EMA pole; what would narrow them: "),
+            text.contains(
+                "Widest in G' ±5.0 % at 20.0 Hz and in eta ±5.0 % at 40.0 Hz, both \
+                 mainly from the EMA pole; what would narrow them: "
+            ),
             "{text}"
         );
         assert!(

@@ -197,7 +197,8 @@ fn supports_text(d: &Description) -> String {
             .iter()
             .map(|p| {
                 format!(
-                    "\n[[inverse.supports]]\nxy_fraction = {:?}\nstiffness_n_m = {:?}\ndamping_n_s_m = {:?}\npatch_m = {:?}\n",
+                    "\n[[inverse.supports]]\nxy_fraction = {:?}\nstiffness_n_m = \
+                     {:?}\ndamping_n_s_m = {:?}\npatch_m = {:?}\n",
                     p.xy_fraction, p.stiffness_n_m, p.damping_n_s_m, p.patch_m
                 )
             })

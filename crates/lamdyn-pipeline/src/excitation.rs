@@ -41,7 +41,8 @@ impl Excitation {
         if kind == ExcitationKind::Impact {
             if window.is_some() || segment_s.is_some() || overlap.is_some() {
                 bail!(
-                    "window, segment and overlap are for continuous excitation (random, burst, periodic, sweep), not impact"
+                    "window, segment and overlap are for continuous excitation (random, burst, \
+                     periodic, sweep), not impact"
                 );
             }
             return Ok(Self::Impact);

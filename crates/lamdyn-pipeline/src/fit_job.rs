@@ -119,7 +119,8 @@ impl FitJob {
         let mut model = match &self.model {
             toml::Value::String(p) => {
                 notes.push(format!(
-                    "deprecated: model = \"{p}\" is the old layout; write [model] with file = \"{p}\" (as in a lamdyn run job)"
+                    "deprecated: model = \"{p}\" is the old layout; write [model] with file = \
+                     \"{p}\" (as in a lamdyn run job)"
                 ));
                 ModelSource {
                     file: Some(PathBuf::from(p)),
@@ -203,7 +204,8 @@ pub fn modal_model(
 ) -> Result<(ModalModel, String)> {
     if !spec.supports.is_empty() {
         crate::bail!(
-            "model: {name} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and exclude their resonance bands with fit.misfit.exclude_hz",
+            "model: {name} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: \
+             remove them and exclude their resonance bands with fit.misfit.exclude_hz",
             spec.supports.len()
         );
     }
@@ -268,7 +270,8 @@ pub fn read_poles(path: &Path) -> Result<Vec<Pole>> {
         }
         if !(damping_ratio.is_finite() && (0.0..1.0).contains(&damping_ratio)) {
             crate::bail!(
-                "'{}' line {line}: damping_ratio = {damping_ratio} must lie in [0, 1) (a ratio, not %)",
+                "'{}' line {line}: damping_ratio = {damping_ratio} must lie in [0, 1) (a ratio, \
+                 not %)",
                 path.display()
             );
         }
@@ -320,7 +323,8 @@ pub fn with_discretization_error(
     errors.resize(n_all, largest);
     let finest = study.levels.last().map_or(0, |l| l.n_dofs);
     let mut line = format!(
-        "discretization error estimated on 3 meshes (up to {finest} dofs): largest {largest:.2e} in frequency over {} modes up to {:.0} Hz",
+        "discretization error estimated on 3 meshes (up to {finest} dofs): largest {largest:.2e} \
+         in frequency over {} modes up to {:.0} Hz",
         n_est,
         1.25 * top_hz
     );

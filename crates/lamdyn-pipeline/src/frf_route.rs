@@ -77,12 +77,14 @@ impl std::fmt::Display for WhyFrfFit {
             ),
             Self::Overlapping { freqs_hz, overlap } => write!(
                 f,
-                "the modes at {:.2} and {:.2} Hz overlap (half-power half-widths {:.2} of their spacing, above {OVERLAP_FACTOR})",
+                "the modes at {:.2} and {:.2} Hz overlap (half-power half-widths {:.2} of their \
+                 spacing, above {OVERLAP_FACTOR})",
                 freqs_hz[0], freqs_hz[1], overlap
             ),
             Self::Smear { freq_hz, mpc } => write!(
                 f,
-                "the pole at {freq_hz:.2} Hz (MPC {mpc:.2}) is one pole over a cluster of modes, set aside"
+                "the pole at {freq_hz:.2} Hz (MPC {mpc:.2}) is one pole over a cluster of modes, \
+                 set aside"
             ),
             Self::NoLayeredCore { freq_hz } => {
                 write!(f, "the pole route found no core at {freq_hz:.2} Hz")
@@ -392,7 +394,8 @@ impl LawsCompared {
                     .map(|(n, a)| format!("{n} {a:.1}"))
                     .collect();
                 format!(
-                    "; {} kept by the corrected Akaike criterion ({} on {:.0} independent residuals; the comparison took {seconds:.1} s)",
+                    "; {} kept by the corrected Akaike criterion ({} on {:.0} independent \
+                     residuals; the comparison took {seconds:.1} s)",
                     names[comparison.chosen],
                     scores.join(", "),
                     comparison.effective_residuals
@@ -511,11 +514,15 @@ impl FrfOutcome {
                     "beside the pole route".to_string()
                 };
                 let correction = if r.correction.modes.is_empty() {
-                    "not corrected for the mesh (no mode converged on the ladder): its bands lack the discretization error".to_string()
+                    "not corrected for the mesh (no mode converged on the ladder): its bands lack \
+                     the discretization error"
+                        .to_string()
                 } else {
                     let [applied, own] = r.correction.storage_ranges();
                     format!(
-                        "corrected for the mesh by the ladder at {} mode(s): the level's model takes G*/c, c − 1 in G' {:+.2} … {:+.2} % (the level's own error at each mode {:+.2} … {:+.2} %)",
+                        "corrected for the mesh by the ladder at {} mode(s): the level's model \
+                         takes G*/c, c − 1 in G' {:+.2} … {:+.2} % (the level's own error at each \
+                         mode {:+.2} … {:+.2} %)",
                         r.correction.modes.len(),
                         100.0 * applied[0],
                         100.0 * applied[1],
@@ -574,7 +581,8 @@ fn inputs_found(route: &FrfRoute) -> String {
         }
     }
     let held = format!(
-        "; with them held the law moves G' {:+.2} … {:+.2} %, η {:+.2} … {:+.2} % (in its band as one sd)",
+        "; with them held the law moves G' {:+.2} … {:+.2} %, η {:+.2} … {:+.2} % (in its band as \
+         one sd)",
         100.0 * range[0][0],
         100.0 * range[0][1],
         100.0 * range[1][0],

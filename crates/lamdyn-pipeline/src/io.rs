@@ -27,7 +27,8 @@ pub fn encoding_note(path: &Path, encoding: Encoding) -> Option<String> {
             path.display()
         )),
         Encoding::Latin1 => Some(format!(
-            "'{}' is not UTF-8: read as Latin-1 (ISO 8859-1); if it was written in another encoding, names and comments in it may be wrong: save it as UTF-8",
+            "'{}' is not UTF-8: read as Latin-1 (ISO 8859-1); if it was written in another \
+             encoding, names and comments in it may be wrong: save it as UTF-8",
             path.display()
         )),
     }

@@ -612,7 +612,8 @@ impl Job {
             let [lo, hi] = TEMPERATURE_RANGE_K;
             if !(t.is_finite() && (lo..=hi).contains(&t)) {
                 return Err(err!(
-                    "temperature_k: {t} is outside [{lo}, {hi}]: temperatures are in K ({t} °C would be {:.2} K)",
+                    "temperature_k: {t} is outside [{lo}, {hi}]: temperatures are in K ({t} °C \
+                     would be {:.2} K)",
                     t + 273.15
                 ));
             }
@@ -647,7 +648,8 @@ impl Job {
             (None, None, true, Some(_)) => {}
             _ => {
                 return Err(err!(
-                    "measurement: give channels with frf (CSV) or with time (hit files), or uff alone"
+                    "measurement: give channels with frf (CSV) or with time (hit files), or uff \
+                     alone"
                 ));
             }
         }
@@ -714,7 +716,8 @@ impl Job {
         }
         if !(1..=8).contains(&inv.layered_subdivisions) {
             return Err(err!(
-                "inverse.layered_subdivisions: {} must lie in 1..=8 (each of the Gmsh model's quadrilaterals split m x m on the coarsest level)",
+                "inverse.layered_subdivisions: {} must lie in 1..=8 (each of the Gmsh model's \
+                 quadrilaterals split m x m on the coarsest level)",
                 inv.layered_subdivisions
             ));
         }
@@ -726,19 +729,22 @@ impl Job {
         }
         if !(inv.tolerance.is_finite() && inv.tolerance > 0.0 && inv.tolerance < 0.1) {
             return Err(err!(
-                "inverse.tolerance: {} must be a relative frequency error in (0, 0.1) (1e-4 is 0.01 %)",
+                "inverse.tolerance: {} must be a relative frequency error in (0, 0.1) (1e-4 is \
+                 0.01 %)",
                 inv.tolerance
             ));
         }
         if !(3..=6).contains(&inv.layered_levels) {
             return Err(err!(
-                "inverse.layered_levels: {} must lie in 3..=6 (three meshes give the order of convergence)",
+                "inverse.layered_levels: {} must lie in 3..=6 (three meshes give the order of \
+                 convergence)",
                 inv.layered_levels
             ));
         }
         if inv.layered_max_dofs < 1000 {
             return Err(err!(
-                "inverse.layered_max_dofs: {} is below 1000 dofs, smaller than any useful layered mesh",
+                "inverse.layered_max_dofs: {} is below 1000 dofs, smaller than any useful layered \
+                 mesh",
                 inv.layered_max_dofs
             ));
         }
@@ -765,13 +771,15 @@ impl Job {
         ] {
             if !(v.is_finite() && (0.0..below).contains(&v)) {
                 return Err(err!(
-                    "uncertainty.{name}: {v} must be a relative standard deviation in [0, {below}) (0.02 is 2 %)"
+                    "uncertainty.{name}: {v} must be a relative standard deviation in [0, {below}) \
+                     (0.02 is 2 %)"
                 ));
             }
         }
         if !(u.thickness_sd_m.is_finite() && (0.0..1e-3).contains(&u.thickness_sd_m)) {
             return Err(err!(
-                "uncertainty.thickness_sd_m: {} must be in m, below 1e-3 (a standard deviation of 0.01 mm is 1e-5)",
+                "uncertainty.thickness_sd_m: {} must be in m, below 1e-3 (a standard deviation of \
+                 0.01 mm is 1e-5)",
                 u.thickness_sd_m
             ));
         }
@@ -791,7 +799,8 @@ impl Job {
         }
         if !self.inverse.layered {
             return Err(err!(
-                "stack.layers: {} layers: the paper's route needs three (face, core, face); set inverse.layered = true for the layered route, which takes any stack",
+                "stack.layers: {} layers: the paper's route needs three (face, core, face); set \
+                 inverse.layered = true for the layered route, which takes any stack",
                 self.stack.layers.len()
             ));
         }
@@ -814,7 +823,9 @@ impl Job {
         let h_model = spec.material.thickness_m;
         if (h_model - h_stack).abs() > STACK_MODEL_THICKNESS * h_stack {
             return Err(err!(
-                "stack.layers: {:.4} mm thick in all, but the shell model {label} is {:.4} mm thick (material.thickness_m): one part, so they must agree within {:.0} %; check the units (m) of both",
+                "stack.layers: {:.4} mm thick in all, but the shell model {label} is {:.4} mm \
+                 thick (material.thickness_m): one part, so they must agree within {:.0} %; check \
+                 the units (m) of both",
                 1e3 * h_stack,
                 1e3 * h_model,
                 100.0 * STACK_MODEL_THICKNESS
@@ -824,7 +835,9 @@ impl Job {
         let rho_model = spec.material.density_kg_m3 * h_model;
         if (rho_model - rho_stack).abs() > STACK_MODEL_SURFACE_DENSITY * rho_stack {
             return Err(err!(
-                "stack: surface density {rho_stack:.4} kg/m^2, but the shell model {label} has {rho_model:.4} kg/m^2 (material.density_kg_m3 x thickness_m): one part, so they must agree within {:.0} %",
+                "stack: surface density {rho_stack:.4} kg/m^2, but the shell model {label} has \
+                 {rho_model:.4} kg/m^2 (material.density_kg_m3 x thickness_m): one part, so they \
+                 must agree within {:.0} %",
                 100.0 * STACK_MODEL_SURFACE_DENSITY
             ));
         }

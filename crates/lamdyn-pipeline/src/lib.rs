@@ -56,6 +56,7 @@ pub mod band;
 pub mod band_widths;
 pub mod cache;
 pub mod chain;
+mod config;
 pub mod demo;
 pub mod error;
 pub mod excitation;

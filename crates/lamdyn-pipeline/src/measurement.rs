@@ -1,11 +1,11 @@
 //! The measurement: FRFs from CSV (`lamdyn_frf::csv`) or UFF files, or H1/H2/Hv estimated from
 //! time files (CSV or UFF time responses; hammer hits or continuous excitation), as the chain
 //! and the commands read them; and the job's measurement
-//! ([`read_measurement`]) with its coherence and the estimator's warnings.
+//! ([`read_measurement_section`]) with its coherence and the estimator's warnings.
 
 use crate::error::{Context, Result};
 pub use crate::excitation::{ContinuousOptions, Excitation, ExcitationKind};
-use crate::job::{Job, Measurement, relative};
+use crate::job::{Measurement, relative};
 use crate::{bail, err};
 use lamdyn_ema::spectra::{Hit, Spectra, SpectraSettings, estimate};
 use lamdyn_frf::csv::TimeRecord;
@@ -288,7 +288,8 @@ pub fn read_frfs(
             ))
         }
         _ => bail!(
-            "give --uff FILE, --channels FILE with --frf FILE, or --channels FILE with --time FILE..."
+            "give --uff FILE, --channels FILE with --frf FILE, or --channels FILE with --time \
+             FILE..."
         ),
     }
 }
@@ -320,13 +321,15 @@ pub const JACKKNIFE_HITS: usize = 3;
 /// moves across these sets (`crate::layered`'s pole scatter).
 ///
 /// # Errors
-/// As [`read_measurement`].
-pub fn without_each_hit(job: &Job, measured: &Measured) -> Result<Vec<FrfSet>> {
+/// As [`read_measurement_section`].
+pub fn without_each_hit(
+    (section, band_hz): (&Measurement, Option<[f64; 2]>),
+    measured: &Measured,
+) -> Result<Vec<FrfSet>> {
     let Some(records) = &measured.records else {
         return Ok(Vec::new());
     };
-    let m = &job.measurement;
-    let options = time_options(m, job.fit.misfit.band_hz)?;
+    let options = time_options(section, band_hz)?;
     let n = records.hits.len();
     (0..n)
         .map(|left_out| {
@@ -341,11 +344,6 @@ pub fn without_each_hit(job: &Job, measured: &Measured) -> Result<Vec<FrfSet>> {
                 .with_context(|| format!("measurement.time without hit {}", left_out + 1))
         })
         .collect()
-}
-
-/// The measured FRF set of the job, with the expected channel count checked.
-pub fn read_measurement(job: &Job, base: &Path, path: &Path) -> Result<Measured> {
-    read_measurement_section(&job.measurement, job.fit.misfit.band_hz, base, path)
 }
 
 /// The measured FRF set of a job's `[measurement]` section (any command's job file), paths

@@ -7,15 +7,19 @@
 
 use crate::cache::{Cache, Key};
 use crate::chain::{CorePoint, NoSandwichInverse, StageTime, Truth, nearest_within};
+use crate::config::MAX_DAMPING_ALONE;
+use crate::config::{
+    EmaConfig, LayeredConfig, ModelConfig, PaperFitConfig, RunConfig, SandwichConfig,
+};
 use crate::error::{Context, Result};
 use crate::frf_route::{self, FrfOutcome, WhyFrfFit};
-use crate::job::{Job, KinematicsChoice, ModelFile, relative};
-use crate::measurement::{Measured, read_measurement};
+use crate::job::{FrfFitChoice, Job, ModelFile, relative};
+use crate::measurement::{Measured, read_measurement_section};
 use crate::result::ChainResult;
 use crate::{AsProgress, PipelineError, Reporter};
 use crate::{bail, err};
-use crate::{job, layered, text, uncertainty};
-use lamdyn_ema::identify::{EmaResult, EmaSettings, identify_with};
+use crate::{layered, text, uncertainty};
+use lamdyn_ema::identify::{EmaResult, identify_with};
 use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::{ModalParams, solve_modes};
 use lamdyn_fem::model::MeshSpec;
@@ -29,9 +33,7 @@ use lamdyn_frf::{Channel, FrfSet};
 use lamdyn_material::MaterialError;
 use lamdyn_material::causality::{CausalityParams, CausalityVerdict};
 use lamdyn_material::laminate::paper_inverse;
-use lamdyn_material::laminate::{
-    CoreShearFormula, FaceBending, FaceShear, Kinematics, PaperInverseOptions, SandwichStack,
-};
+use lamdyn_material::laminate::{PaperInverseOptions, SandwichStack};
 use lamdyn_material::sandwich::exact_inverse;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -72,62 +74,51 @@ pub fn run_job(
     spinner: &dyn Reporter,
 ) -> Result<ChainResult> {
     same_bits_on_any_thread_count();
-    let base = job::base_of(path);
     let cache = Cache::new(options.cache_dir.clone());
     let mut t = Timed {
         spinner,
         timings: Vec::new(),
     };
     let mut warnings = Vec::new();
+    let config = t.stage("job", || Ok((RunConfig::resolve(&job, path)?, false)))?;
     let measured = t.stage("measurement", || {
-        Ok((read_measurement(&job, &base, path)?, false))
+        let m = &config.measurement;
+        let measured = read_measurement_section(&m.section, m.band_hz, &m.base, &m.job_path)?;
+        Ok((measured, false))
     })?;
     warnings.extend(crate::io::encoding_notes([path]));
     warnings.extend(measured.warnings.iter().cloned());
-    let ema = t.stage("ema", || run_ema(&job, &measured.set, &cache, spinner))?;
-    let pole_checks = pole_checks(&mut t, &job, &measured, &cache)?;
+    let ema = t.stage("ema", || {
+        run_ema(&config.ema, &measured.set, &cache, spinner)
+    })?;
+    let pole_checks = pole_checks(&mut t, &config, &measured, &cache)?;
     // The model stage stays fatal: it is where the measurement's channels are checked against
     // the part (a sensor off the plate, a wrong unit).
     let (model, model_line) = t.stage("model", || {
-        build_model(&job, &base, &measured.set, &cache, spinner)
+        build_model(&config.model, &measured.set, &cache, spinner)
     })?;
-    let paper = paper_route(&mut t, &job, &ema, &model, &measured.set)?;
+    let paper = paper_route(&mut t, &config, &ema, &model, &measured.set)?;
     warnings.extend(paper.warnings());
     let fit_result = paper.fit.as_ref();
-    let sandwich = t.stage("inverse setup", || Ok((inverse_setup(&job)?, false)))?;
-    let modal_hz = modal_frequencies(fit_result, &ema);
-    let curve_hz = fit_result.map_or_else(Vec::new, |f| curve_grid(&job, f, &measured.set));
-    let hz = [modal_hz.as_slice(), curve_hz.as_slice()];
-    let (mut modal, curve, causality) = t.stage("inverse", || {
-        Ok((inverses(&sandwich, fit_result, hz)?, false))
-    })?;
-    if fit_result.is_none() {
-        starts_from_the_poles(&model, &ema, &mut modal);
-    }
+    let SandwichRoute {
+        mut modal,
+        curve,
+        causality,
+        freqs_hz,
+    } = sandwich_route(&mut t, &config, (fit_result, &ema), &model, &measured.set)?;
     let data = layered::Observations {
         frfs: &measured.set,
         ema: &ema,
         checks: &pole_checks,
     };
-    let LayeredRoute {
-        line: layered_line,
-        law: core_law,
-        setup,
-        levels,
-    } = layered_route(&mut t, (&job, &base), data, &mut modal, &cache)?;
-    layered::to_real_frequency(&mut modal, core_law.as_ref());
-    let frf = match &setup {
-        Some(s) => frf_fit_stage(&mut t, &job, (s, &levels), data, &modal, core_law.as_ref()),
-        None => FrfOutcome::NotRun("the layered route is off (inverse.layered = false)"),
-    };
-    if sandwich.stack.is_none() && job.uncertainty.samples > 0 {
-        warnings.push(text::monte_carlo_skipped(job.stack.layers.len()));
-    }
-    let mc = uncertainty_stage(&mut t, &job, fit_result, &sandwich, hz.concat())?;
-    let truth = truth_stage(&mut t, &job, &base)?;
+    let route = layered_route(&mut t, &config.layered, data, &mut modal, &cache)?;
+    layered::to_real_frequency(&mut modal, route.law.as_ref());
+    let frf = frf_fit_stage(&mut t, (&config, &route), data, &modal);
+    let mc = uncertainty_stage(&mut t, &config, fit_result, freqs_hz)?;
+    let truth = truth_stage(&mut t, config.truth.as_deref())?;
     warnings.extend(cache.notes());
     collect_warnings(
-        &job,
+        &config,
         &measured,
         &ema,
         fit_result,
@@ -136,14 +127,19 @@ pub fn run_job(
         &mut warnings,
     );
     let PaperRoute { fit, curves, error } = paper;
+    let SandwichConfig {
+        stack,
+        kinematics,
+        paper: paper_options,
+    } = config.sandwich;
     Ok(ChainResult {
         job,
         job_path: path.to_path_buf(),
         measured,
         ema,
         model_line,
-        layered_line,
-        core_law,
+        layered_line: route.line,
+        core_law: route.law,
         frf,
         fit,
         paper_route_error: error,
@@ -151,9 +147,9 @@ pub fn run_job(
         measured_rms: curves.measured_rms,
         fitted_rms: curves.fitted_rms,
         table3: curves.table3,
-        stack: sandwich.stack,
-        kinematics: sandwich.kinematics,
-        paper_options: sandwich.paper,
+        stack,
+        kinematics,
+        paper_options,
         modal,
         curve,
         causality,
@@ -164,14 +160,49 @@ pub fn run_job(
     })
 }
 
+/// The paper's and the exact inverse as run: at the modal frequencies and on the curve.
+struct SandwichRoute {
+    /// The modal points, each with its start for the layered route.
+    modal: Vec<CorePoint>,
+    /// The curve's points.
+    curve: Vec<CorePoint>,
+    /// The Kramers–Kronig verdicts of both inverses on the curve.
+    causality: [Vec<Option<CausalityVerdict>>; 2],
+    /// The modal frequencies, then the curve's, Hz (the Monte Carlo's lines).
+    freqs_hz: Vec<f64>,
+}
+
+/// Stage "inverse" ([`inverses`]) at the modal frequencies of the paper's fit and the EMA and
+/// on the curve; where the paper's fit failed, each modal point's start from its pole
+/// ([`starts_from_the_poles`]).
+fn sandwich_route(
+    t: &mut Timed,
+    config: &RunConfig,
+    (fit, ema): (Option<&FitResult>, &EmaResult),
+    model: &ModalModel,
+    set: &FrfSet,
+) -> Result<SandwichRoute> {
+    let modal_hz = modal_frequencies(fit, ema);
+    let curve_hz = fit.map_or_else(Vec::new, |f| curve_grid(&config.paper_fit, f, set));
+    let hz = [modal_hz.as_slice(), curve_hz.as_slice()];
+    let (mut modal, curve, causality) = t.stage("inverse", || {
+        Ok((inverses(&config.sandwich, fit, hz)?, false))
+    })?;
+    if fit.is_none() {
+        starts_from_the_poles(model, ema, &mut modal);
+    }
+    Ok(SandwichRoute {
+        modal,
+        curve,
+        causality,
+        freqs_hz: hz.concat(),
+    })
+}
+
 /// Stage "truth": the truth of a virtual test, when the job names one.
-fn truth_stage(t: &mut Timed<'_>, job: &Job, base: &Path) -> Result<Option<Truth>> {
-    match &job.truth {
-        Some(path) => {
-            Ok(Some(t.stage("truth", || {
-                Ok((read_truth(&relative(base, path))?, false))
-            })?))
-        }
+fn truth_stage(t: &mut Timed<'_>, path: Option<&Path>) -> Result<Option<Truth>> {
+    match path {
+        Some(path) => Ok(Some(t.stage("truth", || Ok((read_truth(path)?, false)))?)),
         None => Ok(None),
     }
 }
@@ -180,20 +211,20 @@ fn truth_stage(t: &mut Timed<'_>, job: &Job, base: &Path) -> Result<Option<Truth
 /// when the job asks for samples and the paper's route and a three-layer sandwich are there.
 fn uncertainty_stage(
     t: &mut Timed<'_>,
-    job: &Job,
+    config: &RunConfig,
     fit: Option<&FitResult>,
-    sandwich: &InverseSetup,
     freqs_hz: Vec<f64>,
 ) -> Result<Option<uncertainty::McResult>> {
-    let (Some(fit), Some(_)) = (fit, &sandwich.stack) else {
+    let (Some(fit), Some(_)) = (fit, &config.sandwich.stack) else {
         return Ok(None);
     };
-    if job.uncertainty.samples == 0 {
+    if config.uncertainty.options.samples == 0 {
         return Ok(None);
     }
     let spinner = t.spinner;
+    let paper = config.sandwich.paper;
     let mc = t.stage("uncertainty", || {
-        let mc = monte_carlo(job, fit, sandwich.paper, freqs_hz, spinner)?;
+        let mc = monte_carlo(&config.uncertainty, fit, paper, freqs_hz, spinner)?;
         Ok((mc, false))
     })?;
     Ok(Some(mc))
@@ -209,7 +240,7 @@ type Inverses = (
 
 /// Stage "inverse": [`Inverses`] of the fitted law at `modal_hz` and `curve_hz`.
 fn inverses(
-    sandwich: &InverseSetup,
+    sandwich: &SandwichConfig,
     fit: Option<&FitResult>,
     [modal_hz, curve_hz]: [&[f64]; 2],
 ) -> Result<Inverses> {
@@ -229,17 +260,17 @@ fn inverses(
 /// Stage "uncertainty": the paper's route's Monte Carlo over the stack's priors and the fit's
 /// covariance at `freqs_hz`.
 fn monte_carlo(
-    job: &Job,
+    config: &crate::config::UncertaintyConfig,
     fit: &FitResult,
     paper: PaperInverseOptions,
     freqs_hz: Vec<f64>,
     spinner: &dyn Reporter,
 ) -> Result<uncertainty::McResult> {
     let input = uncertainty::McInput {
-        stack: &job.stack,
+        stack: &config.stack,
         fit,
-        options: &job.uncertainty,
-        kinematics: job.inverse.kinematics,
+        options: &config.options,
+        kinematics: config.kinematics,
         paper,
         freqs_hz,
     };
@@ -276,25 +307,28 @@ impl Timed<'_> {
 /// without each hammer hit (FRF or UFF data, or too few hits: no stage at all).
 fn pole_checks(
     t: &mut Timed,
-    job: &Job,
+    config: &RunConfig,
     measured: &Measured,
     cache: &Cache,
 ) -> Result<layered::PoleChecks> {
-    if !job.inverse.layered {
+    if config.layered.setup.is_none() {
         return Ok(layered::PoleChecks::default());
     }
     let spinner = t.spinner;
     let set = &measured.set;
+    let ema = &config.ema;
     Ok(layered::PoleChecks {
         groups: t.stage("ema by response group", || {
-            response_group_emas(job, set, cache, spinner)
+            response_group_emas(ema, set, cache, spinner)
         })?,
         orders: t.stage("ema at other model orders", || {
-            other_order_emas(job, set, cache, spinner)
+            other_order_emas(ema, set, cache, spinner)
         })?,
         hits: if measured.has_hits_to_leave_out() {
             t.stage("ema without each hit", || {
-                without_each_hit_emas(job, measured, cache, spinner)
+                let m = (&config.measurement.section, config.measurement.band_hz);
+                let sets = crate::measurement::without_each_hit(m, measured);
+                without_each_hit_emas(ema, &sets.unwrap_or_default(), cache, spinner)
             })?
         } else {
             Vec::new()
@@ -328,63 +362,28 @@ impl PaperRoute {
 /// ([`without_the_paper_route`]).
 fn paper_route(
     t: &mut Timed,
-    job: &Job,
+    config: &RunConfig,
     ema: &EmaResult,
     model: &ModalModel,
     set: &FrfSet,
 ) -> Result<PaperRoute> {
-    let fitted = t.stage("fit", || Ok((run_fit(job, model, set)?, false)));
-    Ok(match without_the_paper_route(job, ema, fitted)? {
-        Ok((fit, curves)) => PaperRoute {
-            fit: Some(fit),
-            curves,
-            error: None,
+    let fitted = t.stage("fit", || {
+        Ok((run_fit(&config.paper_fit, model, set)?, false))
+    });
+    Ok(
+        match without_the_paper_route(&config.layered, ema, fitted)? {
+            Ok((fit, curves)) => PaperRoute {
+                fit: Some(fit),
+                curves,
+                error: None,
+            },
+            Err(e) => PaperRoute {
+                fit: None,
+                curves: FitCurves::default(),
+                error: Some(crate::error::chain_text(&e)),
+            },
         },
-        Err(e) => PaperRoute {
-            fit: None,
-            curves: FitCurves::default(),
-            error: Some(crate::error::chain_text(&e)),
-        },
-    })
-}
-
-/// What the paper's and the exact inverse take from the job.
-struct InverseSetup {
-    /// The sandwich; `None` for a stack of other than three layers, which only the layered
-    /// route takes.
-    stack: Option<SandwichStack>,
-    /// The inverses' kinematics.
-    kinematics: Kinematics,
-    /// The paper inverse's options.
-    paper: PaperInverseOptions,
-}
-
-/// The job's [`InverseSetup`].
-///
-/// # Errors
-/// A three-layer stack that is no sandwich.
-fn inverse_setup(job: &Job) -> Result<InverseSetup> {
-    let stack = match job.stack.layers.len() {
-        3 => Some(job.stack.to_sandwich().context("the job's [stack]")?),
-        _ => None,
-    };
-    let kinematics = match job.inverse.kinematics {
-        KinematicsChoice::Beam => Kinematics::Beam,
-        KinematicsChoice::Plate => Kinematics::Plate {
-            poisson: job.stack.layers[0].poisson,
-        },
-    };
-    let paper = PaperInverseOptions::new(
-        CoreShearFormula::Eq41,
-        FaceShear::Neglected,
-        FaceBending::CoreNeglected,
-        kinematics,
-    );
-    Ok(InverseSetup {
-        stack,
-        kinematics,
-        paper,
-    })
+    )
 }
 
 /// The law fitted to the layered modes, or why it failed; `None` when not asked for.
@@ -403,26 +402,26 @@ struct LayeredRoute {
     levels: Vec<([usize; 2], usize)>,
 }
 
-/// The layered route (when `inverse.layered`): stage "layered inverse" on the job's
-/// [`layered::LayeredSetup`], then "core law"; where the law finds the supports far from the
-/// job's, the ladder and the law again at those.
+/// The layered route (when `inverse.layered`): stage "layered inverse" on the
+/// configuration's [`layered::LayeredSetup`], then "core law"; where the law finds the
+/// supports far from the job's, the ladder and the law again at those.
 fn layered_route(
     t: &mut Timed,
-    (job, base): (&Job, &Path),
+    config: &LayeredConfig,
     data: layered::Observations,
     modal: &mut [CorePoint],
     cache: &Cache,
 ) -> Result<LayeredRoute> {
     let spinner = t.spinner;
-    let (mut line, mut coarsest, mut setup, mut levels) = (None, None, None, Vec::new());
-    if job.inverse.layered {
-        let (s, outcome) = t.stage("layered inverse", || {
-            let s = layered::LayeredSetup::resolve(job, base)?;
-            let outcome = layered::run(&s, data, modal, cache, spinner)?;
+    let (mut line, mut coarsest, mut levels) = (None, None, Vec::new());
+    let setup = config.setup.clone();
+    if let Some(s) = &setup {
+        let outcome = t.stage("layered inverse", || {
+            let outcome = layered::run(s, data, modal, cache, spinner)?;
             let cached = outcome.all_cached;
-            Ok(((s, outcome), cached))
+            Ok((outcome, cached))
         })?;
-        (line, coarsest, setup) = (Some(outcome.line), outcome.coarsest, Some(s));
+        (line, coarsest) = (Some(outcome.line), outcome.coarsest);
         levels = outcome.levels;
     }
     let law = t.stage("core law", || {
@@ -430,7 +429,7 @@ fn layered_route(
             .as_ref()
             .map(|s| s.tuning.law.clone())
             .unwrap_or_default();
-        let law = layered::fit_law(job.inverse.core_law, &tuning, modal, coarsest.as_ref());
+        let law = layered::fit_law(config.core_law, &tuning, modal, coarsest.as_ref());
         Ok((law, false))
     })?;
     let Some((setup, at)) = setup
@@ -470,27 +469,31 @@ fn layered_route(
 /// the outcome (the pole route stays the answer), not raised.
 fn frf_fit_stage(
     t: &mut Timed,
-    job: &Job,
-    (setup, levels): (&layered::LayeredSetup, &[([usize; 2], usize)]),
+    (config, route): (&RunConfig, &LayeredRoute),
     data: layered::Observations,
     modal: &[CorePoint],
-    law: Option<&std::result::Result<lamdyn_fit::joint::CoreLawFit, FitError>>,
 ) -> FrfOutcome {
-    use crate::job::FrfFitChoice;
+    let (law, levels) = (route.law.as_ref(), route.levels.as_slice());
+    let Some(setup) = &route.setup else {
+        return FrfOutcome::NotRun("the layered route is off (inverse.layered = false)");
+    };
+    let ema_band_hz = config.ema.band_hz;
+    let config = &config.layered;
     let mut why = frf_route::reasons(&data.ema.modes, &data.ema.set_aside, modal);
-    match job.inverse.frf_fit {
+    match config.frf_fit {
         FrfFitChoice::Never => return FrfOutcome::NotRun("inverse.frf_fit = \"never\""),
         FrfFitChoice::Always => why.insert(0, WhyFrfFit::Asked),
         FrfFitChoice::Auto if why.is_empty() => {
             return FrfOutcome::NotRun(
-                "the modes are light and separated and each has a layered core: the pole route holds (inverse.frf_fit = \"always\" runs the FRF fit beside it)",
+                "the modes are light and separated and each has a layered core: the pole route \
+                 holds (inverse.frf_fit = \"always\" runs the FRF fit beside it)",
             );
         }
         FrfFitChoice::Auto => {}
     }
     let input = layered::FrfFitInput {
         set: data.frfs,
-        band_hz: frf_band(job, data.ema),
+        band_hz: frf_band(ema_band_hz, data.ema),
         start: law.and_then(|l| l.as_ref().ok()),
         modal,
         levels,
@@ -517,11 +520,11 @@ fn frf_fit_stage(
     }
 }
 
-/// The FRF fit's band: the EMA's (the job's, else the fit's, else the data's), from half the
-/// lowest identified pole (smears set aside included) at least (a free part's rigid-body modes
-/// make the model singular at 0 Hz).
-fn frf_band(job: &Job, ema: &EmaResult) -> [f64; 2] {
-    let [lo, hi] = ema_band(job).unwrap_or(ema.band_hz);
+/// The FRF fit's band: the EMA's (`ema_band_hz`, else the data's), from half the lowest
+/// identified pole (smears set aside included) at least (a free part's rigid-body modes make
+/// the model singular at 0 Hz).
+fn frf_band(ema_band_hz: Option<[f64; 2]>, ema: &EmaResult) -> [f64; 2] {
+    let [lo, hi] = ema_band_hz.unwrap_or(ema.band_hz);
     let lowest = ema
         .modes
         .iter()
@@ -536,11 +539,6 @@ fn frf_band(job: &Job, ema: &EmaResult) -> [f64; 2] {
     [lo.max(floor).max(1e-3), hi]
 }
 
-/// The EMA band: the job's, else the fit's, else every line.
-fn ema_band(job: &Job) -> Option<[f64; 2]> {
-    job.ema.band_hz.or(job.fit.misfit.band_hz)
-}
-
 fn channels_key(key: Key, channels: &[Channel]) -> Key {
     channels.iter().fold(key, |k, c| {
         let k = k.bytes(c.name.as_bytes());
@@ -551,25 +549,21 @@ fn channels_key(key: Key, channels: &[Channel]) -> Key {
     })
 }
 
-/// Groups of responses whose separate identifications measure how much a pole depends on
-/// the responses it is read from (`response_group_emas`).
-pub const RESPONSE_GROUPS: usize = 4;
-
-/// The modal identification again on each of [`RESPONSE_GROUPS`] groups of the responses (the
-/// measurement points dealt round-robin in the order they first appear, every direction of a
-/// point in one group; none when there are fewer than two points per group), each cached like
-/// the whole. A pole the whole set pins by its stabilization diagram can still move with the
-/// responses it is read from (noise at a weakly excited mode, a close mode seen by some
-/// points): on a five-layer roof's hammer data the fourth mode's damping ratio came out 1.78,
-/// 2.22 and 1.96 % from three groups, 1.96 % from all, 2.01 % from noise-free FRFs, while its
-/// stable poles scattered by 0.1 %. The spread of the groups' poles is that uncertainty
-/// ([`crate::layered`]'s pole scatter). A group whose identification fails is left out.
+/// The modal identification again on each of `config.response_groups` groups of the
+/// responses (the measurement points dealt round-robin in the order they first appear, every
+/// direction of a point in one group; none when there are fewer than two points per group),
+/// each cached like the whole. A pole the whole set pins by its stabilization diagram can
+/// still move with the responses it is read from (noise at a weakly excited mode, a close mode
+/// seen by some points; [`crate::config::RESPONSE_GROUPS`]). The spread of the groups' poles
+/// is that uncertainty ([`crate::layered`]'s pole scatter). A group whose identification fails
+/// is left out.
 fn response_group_emas(
-    job: &Job,
+    config: &EmaConfig,
     set: &FrfSet,
     cache: &Cache,
     spinner: &dyn Reporter,
 ) -> Result<(Vec<EmaResult>, bool)> {
+    let groups = config.response_groups;
     let mut points: Vec<[f64; 3]> = Vec::new();
     let group_of: Vec<usize> = set
         .responses()
@@ -582,24 +576,24 @@ fn response_group_emas(
                     points.push(c.point_m);
                     points.len() - 1
                 });
-            k % RESPONSE_GROUPS
+            k % groups
         })
         .collect();
-    if points.len() < 2 * RESPONSE_GROUPS {
+    if points.len() < 2 * groups {
         return Ok((Vec::new(), true));
     }
     let mut subsets = Vec::new();
-    for g in 0..RESPONSE_GROUPS {
+    for g in 0..groups {
         let keep: Vec<usize> = (0..group_of.len()).filter(|&i| group_of[i] == g).collect();
         subsets.push((keep.len(), set.with_responses(&keep)?));
     }
     Ok(successful(subsets.iter().enumerate().map(
         |(g, (n, subset))| {
             spinner.stage(&format!(
-                "stage 'ema by response group': group {} of {RESPONSE_GROUPS} ({n} responses)",
+                "stage 'ema by response group': group {} of {groups} ({n} responses)",
                 g + 1
             ));
-            run_ema(job, subset, cache, &crate::Silent)
+            run_ema(config, subset, cache, &crate::Silent)
         },
     )))
 }
@@ -616,31 +610,26 @@ fn successful(runs: impl Iterator<Item = Result<(EmaResult, bool)>>) -> (Vec<Ema
     (out, all_cached)
 }
 
-/// The highest model orders of the identifications that measure how much a pole depends on
-/// the model order (stage "ema at other model orders"): the job's times these, rounded to even.
-pub const OTHER_ORDERS: [f64; 2] = [2.0 / 3.0, 4.0 / 3.0];
-
 /// The modal identification again with the highest model order of the stabilization diagram
-/// at the job's times each of [`OTHER_ORDERS`] (40 and 80 for the default 60), each cached like
-/// the whole. The poles are refined on every FRF, but from the diagram's selection, and a mode
-/// the selection misses at one order is fitted by the others: on an aluminium sandwich's hammer
-/// data (seed 1 of the damped-sandwich example) order 60 missed the mode at 486 Hz and the
-/// first mode's damping ratio came out 2.54 %, order 80 found it and gave 2.48 % (2.47 % from
-/// noise-free FRFs). The spread across orders is that uncertainty ([`crate::layered`]'s pole
-/// scatter). An order whose identification fails is left out.
+/// at each of [`EmaConfig::other_max_orders`], each cached like the whole. The poles are
+/// refined on every FRF, but from the diagram's selection, and a mode the selection misses at
+/// one order is fitted by the others ([`crate::config::OTHER_ORDERS`]). The spread across
+/// orders is that uncertainty ([`crate::layered`]'s pole scatter). An order whose
+/// identification fails is left out.
 fn other_order_emas(
-    job: &Job,
+    config: &EmaConfig,
     set: &FrfSet,
     cache: &Cache,
     spinner: &dyn Reporter,
 ) -> Result<(Vec<EmaResult>, bool)> {
-    Ok(successful(OTHER_ORDERS.iter().map(|factor| {
-        let order = 2 * ((job.ema.max_order as f64 * factor / 2.0).round() as usize).max(2);
-        spinner.stage(&format!(
-            "stage 'ema at other model orders': highest order {order}"
-        ));
-        run_ema_to_order(job, set, cache, &crate::Silent, order)
-    })))
+    Ok(successful(config.other_max_orders().into_iter().map(
+        |order| {
+            spinner.stage(&format!(
+                "stage 'ema at other model orders': highest order {order}"
+            ));
+            run_ema_to_order(config, set, cache, &crate::Silent, order)
+        },
+    )))
 }
 
 /// The modal identification again on the FRFs without each hammer hit in turn
@@ -648,19 +637,18 @@ fn other_order_emas(
 /// least three hits), each cached like the whole. An identification that fails is left out;
 /// sets that cannot be read (the whole was) leave the jackknife out.
 fn without_each_hit_emas(
-    job: &Job,
-    measured: &Measured,
+    config: &EmaConfig,
+    sets: &[FrfSet],
     cache: &Cache,
     spinner: &dyn Reporter,
 ) -> Result<(Vec<EmaResult>, bool)> {
-    let sets = crate::measurement::without_each_hit(job, measured).unwrap_or_default();
     let (out, all_cached) = successful(sets.iter().enumerate().map(|(k, set)| {
         spinner.stage(&format!(
             "stage 'ema without each hit': without hit {} of {}",
             k + 1,
             sets.len()
         ));
-        run_ema(job, set, cache, &crate::Silent)
+        run_ema(config, set, cache, &crate::Silent)
     }));
     // Nothing to run (FRF data, fewer than three hits) is not a cache hit.
     Ok((out, all_cached && !sets.is_empty()))
@@ -668,29 +656,23 @@ fn without_each_hit_emas(
 
 /// Modal identification, from the cache when the FRFs and settings are unchanged.
 fn run_ema(
-    job: &Job,
+    config: &EmaConfig,
     set: &FrfSet,
     cache: &Cache,
     spinner: &dyn Reporter,
 ) -> Result<(EmaResult, bool)> {
-    run_ema_to_order(job, set, cache, spinner, job.ema.max_order)
+    run_ema_to_order(config, set, cache, spinner, config.max_order)
 }
 
 /// [`run_ema`] with the stabilization diagram's highest model order `max_order`.
 fn run_ema_to_order(
-    job: &Job,
+    config: &EmaConfig,
     set: &FrfSet,
     cache: &Cache,
     spinner: &dyn Reporter,
     max_order: usize,
 ) -> Result<(EmaResult, bool)> {
-    let settings = EmaSettings {
-        band_hz: ema_band(job),
-        orders: (2, max_order, 2),
-        reject_hz: job.ema.reject_hz.clone(),
-        estimator: job.ema.poles,
-        ..Default::default()
-    };
+    let settings = config.settings(max_order);
     let mut key = Key::new(concat!("ema ", env!("CARGO_PKG_VERSION")))
         .bytes(format!("{settings:?}").as_bytes());
     key = channels_key(key, set.responses());
@@ -701,7 +683,7 @@ fn run_ema_to_order(
     for h in set.data() {
         key = key.f64(h.re).f64(h.im);
     }
-    let keep_smears = job.ema.keep_smears;
+    let keep_smears = config.keep_smears;
     let set_aside = |mut r: EmaResult| {
         if !keep_smears {
             r.set_aside_smears();
@@ -723,8 +705,7 @@ fn run_ema_to_order(
 
 /// The modal model of the FE model on the measured channels, cached.
 fn build_model(
-    job: &Job,
-    base: &Path,
+    config: &ModelConfig,
     set: &FrfSet,
     cache: &Cache,
     spinner: &dyn Reporter,
@@ -733,26 +714,27 @@ fn build_model(
         spec,
         dir: spec_dir,
         label,
-    } = job.model_file(base)?;
+    } = &config.file;
     if !spec.supports.is_empty() {
         bail!(
-            "model: {label} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: remove them and keep the support resonances out of the fit band",
+            "model: {label} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: \
+             remove them and keep the support resonances out of the fit band",
             spec.supports.len()
         );
     }
-    let modes = job.model.modes.unwrap_or(spec.solver.modes);
+    let modes = config.modes.unwrap_or(spec.solver.modes);
     if modes < 7 {
         bail!("model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode");
     }
-    let tol = job.measurement.tolerance_m;
+    let tol = config.tolerance_m;
     let mut key = Key::new(concat!("model with its line ", env!("CARGO_PKG_VERSION")))
         .bytes(format!("{spec:?}").as_bytes())
         .bytes(&(modes as u64).to_le_bytes())
-        .bytes(&[u8::from(job.model.residual)])
+        .bytes(&[u8::from(config.residual)])
         .f64(tol)
-        .bytes(format!("{:?}", job.measurement.sensor_mapping).as_bytes());
+        .bytes(format!("{:?}", config.sensor_mapping).as_bytes());
     if let MeshSpec::Gmsh { file, .. } = &spec.mesh {
-        let p = relative(&spec_dir, Path::new(file));
+        let p = relative(spec_dir, Path::new(file));
         key = key
             .bytes(&std::fs::read(&p).with_context(|| format!("cannot read '{}'", p.display()))?);
     }
@@ -760,8 +742,9 @@ fn build_model(
     key = channels_key(key, set.references());
     let line = |n_nodes: String, n_el: String| {
         format!(
-            "{label}: {n_nodes} nodes, {n_el} elements, {modes} modes{}, E_ref = {:.4e} Pa, h = {:.4} mm, rho = {:.1} kg/m^3",
-            if job.model.residual {
+            "{label}: {n_nodes} nodes, {n_el} elements, {modes} modes{}, E_ref = {:.4e} Pa, h = \
+             {:.4} mm, rho = {:.1} kg/m^3",
+            if config.residual {
                 " + residual term"
             } else {
                 ""
@@ -779,18 +762,20 @@ fn build_model(
         }
     }
     let (mesh, _) = spec
-        .build(&spec_dir)
+        .build(spec_dir)
         .with_context(|| format!("invalid model {label}"))?;
     let asm = Assembly::new(&mesh, &spec.material, &[])
         .with_context(|| format!("invalid model {label}"))?;
-    let mapping = job.measurement.sensor_mapping;
-    let resp = probes_with(&mesh, set.responses(), tol, mapping)
-        .context("the response channels do not lie on the model (measurement.channels vs model; see measurement.tolerance_m)")?;
+    let mapping = config.sensor_mapping;
+    let resp = probes_with(&mesh, set.responses(), tol, mapping).context(
+        "the response channels do not lie on the model (measurement.channels vs model; \
+         see measurement.tolerance_m)",
+    )?;
     let refs = probes_with(&mesh, set.references(), tol, mapping).context(
         "the reference channels do not lie on the model (measurement.channels vs model)",
     )?;
     let sol = solve_modes(&asm, &ModalParams::lowest(modes), &AsProgress(spinner))?;
-    let residual = if job.model.residual {
+    let residual = if config.residual {
         ResidualTerm::Static
     } else {
         ResidualTerm::None
@@ -842,7 +827,7 @@ struct FitCurves {
 /// The paper's route's fit as run: its result, or, when the layered route is on and can go on
 /// alone, why it failed. The layered route does not need the fit: it reads the EMA's poles and
 /// starts each from the modulus its pole implies on the shell model (`starts_from_the_poles`).
-/// It goes on alone where every pole is damped at most [`MAX_DAMPING_ALONE`], or where the FRF
+/// It goes on alone where every pole is damped at most `max_damping_alone`, or where the FRF
 /// fit may run (`inverse.frf_fit` not `never`): a fit that finds no resonance peak at all is a
 /// sign of poles the EMA cannot resolve, and the rule of [`crate::frf_route`] then makes the fit to
 /// the FRFs the answer. Without the layered route the paper's is the only answer and its
@@ -850,27 +835,34 @@ struct FitCurves {
 ///
 /// # Errors
 /// The fit's error when `inverse.layered` is off, or when a pole is damped more than
-/// [`MAX_DAMPING_ALONE`] and the FRF fit is off (the poles named).
+/// `max_damping_alone` and the FRF fit is off (the poles named).
 fn without_the_paper_route<T>(
-    job: &Job,
+    config: &LayeredConfig,
     ema: &EmaResult,
     route: Result<T>,
 ) -> Result<std::result::Result<T, PipelineError>> {
     let e = match route {
         Ok(t) => return Ok(Ok(t)),
-        Err(e) if !job.inverse.layered => return Err(e),
+        Err(e) if config.setup.is_none() => return Err(e),
         Err(e) => e,
     };
-    let damped = damped_beyond(&ema.modes, MAX_DAMPING_ALONE);
-    if damped.is_empty() || job.inverse.frf_fit != crate::job::FrfFitChoice::Never {
+    let damped = damped_beyond(&ema.modes, config.max_damping_alone);
+    if damped.is_empty() || config.frf_fit != FrfFitChoice::Never {
         return Ok(Err(e));
     }
     Err(e).context(format!(
-        "the paper's route failed, and the layered route cannot go on from the poles alone: {} of {} poles are damped more than {:.0} % ({}{}), where the EMA's poles are not to be trusted without a fit to the FRFs (inverse.frf_fit = \"never\")",
+        "the paper's route failed, and the layered route cannot go on from the poles alone: {} of \
+         {} poles are damped more than {:.0} % ({}{}), where the EMA's poles are not to be trusted \
+         without a fit to the FRFs (inverse.frf_fit = \"never\")",
         damped.len(),
         ema.modes.len(),
-        100.0 * MAX_DAMPING_ALONE,
-        damped.iter().take(4).cloned().collect::<Vec<_>>().join(", "),
+        100.0 * config.max_damping_alone,
+        damped
+            .iter()
+            .take(4)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", "),
         if damped.len() > 4 { ", ..." } else { "" }
     ))
 }
@@ -885,21 +877,19 @@ fn damped_beyond(modes: &[lamdyn_ema::identify::Mode], limit: f64) -> Vec<String
         .collect()
 }
 
-/// The highest damping ratio of a pole the layered route takes without the paper's fit. The
-/// cases it recovers reach 7.2 % (the damped sandwich's edge mode near 490 Hz); on the same
-/// panel with a core 30 times softer (ζ 16–22 %, modes overlapping four deep) the fit found no
-/// peak and the poles alone gave G' 104–224 % off the truth inside ±13 % bands.
-pub const MAX_DAMPING_ALONE: f64 = 0.10;
-
 /// The fit and its RMS curves and Table 3.
-fn run_fit(job: &Job, model: &ModalModel, set: &FrfSet) -> Result<(FitResult, FitCurves)> {
-    let mut settings = FitSettings::new(job.fit.law, job.fit.misfit.clone());
-    settings.covariance = job.fit.covariance;
-    settings.prominence = job.fit.prominence;
-    if job.fit.misfit.reference >= set.references().len() {
+fn run_fit(
+    config: &PaperFitConfig,
+    model: &ModalModel,
+    set: &FrfSet,
+) -> Result<(FitResult, FitCurves)> {
+    let mut settings = FitSettings::new(config.law, config.misfit.clone());
+    settings.covariance = config.covariance;
+    settings.prominence = config.prominence;
+    if config.misfit.reference >= set.references().len() {
         bail!(
             "fit.misfit.reference = {} but the measurement has {} reference(s), counted from 0",
-            job.fit.misfit.reference,
+            config.misfit.reference,
             set.references().len()
         );
     }
@@ -955,12 +945,12 @@ pub fn modal_frequencies(r: Option<&FitResult>, ema: &EmaResult) -> Vec<f64> {
 
 /// Lines of the curves: the job's, else 40 log-spaced lines over the modal frequencies
 /// (per-mode law: only there is it identified) or the fit band.
-fn curve_grid(job: &Job, r: &FitResult, set: &FrfSet) -> Vec<f64> {
-    if let Some(f) = &job.inverse.freq_hz {
+fn curve_grid(config: &PaperFitConfig, r: &FitResult, set: &FrfSet) -> Vec<f64> {
+    if let Some(f) = &config.curve_hz {
         return f.clone();
     }
     let peaks: Vec<f64> = r.peaks.iter().map(|p| p.freq_hz).collect();
-    let (lo, hi) = match (job.fit.law, job.fit.misfit.band_hz) {
+    let (lo, hi) = match (config.law, config.misfit.band_hz) {
         (lamdyn_fit::fit::LawKind::PerMode, _) | (_, None) => (
             peaks.first().copied().unwrap_or(set.freqs_hz()[0].max(1.0)),
             peaks
@@ -1071,7 +1061,7 @@ fn read_truth(path: &Path) -> Result<Truth> {
 }
 
 fn collect_warnings(
-    job: &Job,
+    config: &RunConfig,
     measured: &Measured,
     ema: &EmaResult,
     fit: Option<&FitResult>,
@@ -1080,18 +1070,23 @@ fn collect_warnings(
     out: &mut Vec<String>,
 ) {
     use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
+    let u = &config.uncertainty;
+    if config.sandwich.stack.is_none() && u.options.samples > 0 {
+        out.push(text::monte_carlo_skipped(u.stack.layers.len()));
+    }
+    let min_coherence = config.measurement.section.min_coherence;
     if let Some(c) = &measured.min_coherence {
         let names = measured.set.responses();
         let poor: Vec<String> = c
             .iter()
             .enumerate()
-            .filter(|(_, g)| **g < job.measurement.min_coherence)
+            .filter(|(_, g)| **g < min_coherence)
             .map(|(i, g)| format!("{} ({g:.2})", names[i].name))
             .collect();
         if !poor.is_empty() {
             out.push(format!(
                 "poor coherence (below {}) in the fit band at {} of {} responses: {}{}",
-                job.measurement.min_coherence,
+                min_coherence,
                 poor.len(),
                 c.len(),
                 poor.iter().take(6).cloned().collect::<Vec<_>>().join(", "),
@@ -1108,7 +1103,8 @@ fn collect_warnings(
     }
     for m in &ema.set_aside {
         out.push(format!(
-            "EMA: pole at {:.3} Hz (zeta {:.2} %, MPC {:.2}) set aside from the inverses: one pole over a cluster of modes (ema.keep_smears = true keeps it)",
+            "EMA: pole at {:.3} Hz (zeta {:.2} %, MPC {:.2}) set aside from the inverses: one pole \
+             over a cluster of modes (ema.keep_smears = true keeps it)",
             m.freq_hz,
             100.0 * m.damping_ratio,
             m.mpc
@@ -1127,7 +1123,8 @@ fn collect_warnings(
         if let Some(phi) = p.phi() {
             if phi > PHI_ACCURACY_LIMIT {
                 out.push(format!(
-                    "{:.2} Hz: |phi| = {phi:.3} > {PHI_ACCURACY_LIMIT}: the paper's inverse is beyond its ~1 % validity; prefer the exact inverse",
+                    "{:.2} Hz: |phi| = {phi:.3} > {PHI_ACCURACY_LIMIT}: the paper's inverse is \
+                     beyond its ~1 % validity; prefer the exact inverse",
                     p.freq_hz
                 ));
             }
@@ -1168,7 +1165,9 @@ fn fit_warnings(ema: &EmaResult, r: &FitResult, out: &mut Vec<String>) {
     for m in &ema.modes {
         if !fe.iter().any(|f| (f / m.freq_hz - 1.0).abs() < 0.02) {
             out.push(format!(
-                "EMA mode at {:.3} Hz has no RMS peak in the fit (weakly excited, a close pair, or a mode the shell model lacks): the paper's and the exact inverse read the fitted law there, the layered inverse its pole",
+                "EMA mode at {:.3} Hz has no RMS peak in the fit (weakly excited, a close pair, or \
+                 a mode the shell model lacks): the paper's and the exact inverse read the fitted \
+                 law there, the layered inverse its pole",
                 m.freq_hz
             ));
         }
@@ -1195,7 +1194,10 @@ fn shared_layered_modes(modal: &[CorePoint]) -> Vec<String> {
         for &(fb, rb) in &ranked[i + 1..] {
             if ra == rb && (fb / fa - 1.0).abs() > 0.02 {
                 out.push(format!(
-                    "layered inverse: the poles at {fa:.2} Hz and {fb:.2} Hz both matched the model's elastic mode {} (at their own G*): one of them may sit on a neighbouring mode's branch (a close pair); check the mode shapes, or the law's residuals at those two modes",
+                    "layered inverse: the poles at {fa:.2} Hz and {fb:.2} Hz both matched the \
+                     model's elastic mode {} (at their own G*): one of them may sit on a \
+                     neighbouring mode's branch (a close pair); check the mode shapes, or the \
+                     law's residuals at those two modes",
                     ra + 1
                 ));
             }
@@ -1227,7 +1229,11 @@ fn falling_layered_storage(modal: &[CorePoint]) -> Vec<String> {
         .filter(|w| (w[1].1 / w[0].1).ln() < -(w[0].2 + w[1].2))
         .map(|w| {
             format!(
-                "layered inverse: G' falls from {:.4} MPa at {:.2} Hz to {:.4} MPa at {:.2} Hz ({:+.1} %), beyond both modes' bands: a passive core's storage modulus does not fall with frequency, so one of the two poles is matched to a neighbouring mode of the model or is not a true pole; check the mode shapes and the core's shear_pa start",
+                "layered inverse: G' falls from {:.4} MPa at {:.2} Hz to {:.4} MPa at {:.2} Hz \
+                 ({:+.1} %), beyond both modes' bands: a passive core's storage modulus does not \
+                 fall with frequency, so one of the two poles is matched to a neighbouring mode of \
+                 the model or is not a true pole; check the mode shapes and the core's shear_pa \
+                 start",
                 w[0].1 / 1e6,
                 w[0].0,
                 w[1].1 / 1e6,
@@ -1253,7 +1259,10 @@ fn poles_beyond_the_ema(modes: &[lamdyn_ema::identify::Mode]) -> Vec<String> {
     let damped = damped_beyond(modes, MAX_DAMPING_ALONE);
     if !damped.is_empty() {
         out.push(format!(
-            "EMA: {} of {} poles are damped more than {:.0} % ({}): an EMA's poles of such modes can be far off (a core 30 times softer than the damped sandwich's, zeta 16-22 %, came out 104-224 % off in G' from its poles); compare the model's FRFs with the measured ones there before trusting G*",
+            "EMA: {} of {} poles are damped more than {:.0} % ({}): an EMA's poles of such modes \
+             can be far off (a core 30 times softer than the damped sandwich's, zeta 16-22 %, came \
+             out 104-224 % off in G' from its poles); compare the model's FRFs with the measured \
+             ones there before trusting G*",
             damped.len(),
             modes.len(),
             100.0 * MAX_DAMPING_ALONE,
@@ -1267,7 +1276,12 @@ fn poles_beyond_the_ema(modes: &[lamdyn_ema::identify::Mode]) -> Vec<String> {
         let apart = w[1].freq_hz - w[0].freq_hz;
         if apart < widths {
             out.push(format!(
-                "EMA: the poles at {:.2} Hz and {:.2} Hz overlap ({apart:.3} Hz apart, {:.2} of their half-power half-widths): an EMA moves the poles of such a pair by more than their scatter shows (the in-band foam roof's pair at 20.1 / 20.5 Hz: G* 16-24 % off from noise-free FRFs), so G* from each pole alone is less certain than its band: the layered route fits such a pair to the FRFs around it with both poles tied to its model instead (its line says how that went)",
+                "EMA: the poles at {:.2} Hz and {:.2} Hz overlap ({apart:.3} Hz apart, {:.2} of \
+                 their half-power half-widths): an EMA moves the poles of such a pair by more than \
+                 their scatter shows (the in-band foam roof's pair at 20.1 / 20.5 Hz: G* 16-24 % \
+                 off from noise-free FRFs), so G* from each pole alone is less certain than its \
+                 band: the layered route fits such a pair to the FRFs around it with both poles \
+                 tied to its model instead (its line says how that went)",
                 w[0].freq_hz,
                 w[1].freq_hz,
                 apart / widths

@@ -25,7 +25,8 @@ fn small() -> Description {
         "elements = [18, 18]\nedge_grading = 0.2",
     );
     let text = format!(
-        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\n"
+        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = \
+         [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\n"
     );
     Description::parse("small.toml", &text).unwrap()
 }
@@ -408,7 +409,8 @@ fn a_gmsh_model_goes_the_layered_route() {
         text.find("[model.spec.material]").unwrap(),
     );
     let text = format!(
-        "{}[model.spec.mesh]\nkind = \"gmsh\"\nfile = \"plan.msh\"\nunit = \"mm\"\nelement = \"mitc9\"\n\n{}",
+        "{}[model.spec.mesh]\nkind = \"gmsh\"\nfile = \"plan.msh\"\nunit = \"mm\"\nelement = \
+         \"mitc9\"\n\n{}",
         &text[..from],
         &text[to..]
     );
@@ -681,7 +683,8 @@ fn bad_job_files_name_the_field() {
     check(
         "five_paper.toml",
         five.replace("[inverse]\n", "[inverse]\nlayered = false\n"),
-        "stack.layers: 5 layers: the paper's route needs three (face, core, face); set inverse.layered = true",
+        "stack.layers: 5 layers: the paper's route needs three (face, core, face); set \
+         inverse.layered = true",
     );
     check(
         "four_faces.toml",
@@ -712,7 +715,8 @@ fn bad_job_files_name_the_field() {
         "support.toml",
         good.replace(
             "tolerance = 1e-4\n",
-            "tolerance = 1e-4\n\n[[inverse.supports]]\nxy_fraction = [1.2, 0.5]\nstiffness_n_m = [100.0, 100.0, 500.0]\n",
+            "tolerance = 1e-4\n\n[[inverse.supports]]\nxy_fraction = [1.2, 0.5]\nstiffness_n_m = \
+             [100.0, 100.0, 500.0]\n",
         ),
         "inverse.supports[0].xy_fraction = [1.2, 0.5]: the support lies outside the plate",
     );
@@ -844,7 +848,8 @@ fn a_job_measures_a_swept_sine() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../lamdyn-ema/tests/fixtures/plate-sweep");
     let section = |extra: &str| -> Measurement {
         toml::from_str(&format!(
-            "channels = \"channels.csv\"\ntime = [\"run1.csv\", \"run2.csv\", \"run3.csv\", \"run4.csv\"]\nquantity = \"accelerance\"\n{extra}"
+            "channels = \"channels.csv\"\ntime = [\"run1.csv\", \"run2.csv\", \"run3.csv\", \
+             \"run4.csv\"]\nquantity = \"accelerance\"\n{extra}"
         ))
         .unwrap()
     };
@@ -948,7 +953,8 @@ fn damped() -> Description {
             r#"shear_law = { kind = "generalized_maxwell", g_e_pa = 0.2e6, terms = [{ g_pa = 0.5e6, tau_s = 1e-1 }, { g_pa = 2.0e6, tau_s = 1e-2 }, { g_pa = 8.0e6, tau_s = 1e-3 }, { g_pa = 32e6, tau_s = 1e-4 }, { g_pa = 128e6, tau_s = 1e-5 }] }"#,
         );
     let text = format!(
-        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 400.0\nstep_hz = 1.0\nfrf_snr_db = 40.0\nseed = 5\n"
+        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = \
+         [0.0, 0.0, -1.0]\nmax_hz = 400.0\nstep_hz = 1.0\nfrf_snr_db = 40.0\nseed = 5\n"
     );
     Description::parse("damped.toml", &text).unwrap()
 }
@@ -998,7 +1004,8 @@ fn damped_modes_take_the_frf_fit() {
         let (eg, ee) = (g.re / t.re - 1.0, (g.im / g.re) / (t.im / t.re) - 1.0);
         let a = route.at(f);
         eprintln!(
-            "{f:.2} Hz: FRF fit G' {eg:+.4} [{:.3e}, {:.3e}] vs {:.3e}, eta {ee:+.4}; pole route {:?} (None: set aside)",
+            "{f:.2} Hz: FRF fit G' {eg:+.4} [{:.3e}, {:.3e}] vs {:.3e}, eta {ee:+.4}; pole route \
+             {:?} (None: set aside)",
             a.storage_ci95[0],
             a.storage_ci95[1],
             t.re,

@@ -131,7 +131,9 @@ impl HtmlReport {
         let mut h = String::new();
         let _ = write!(
             h,
-            "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{}</h1>\n",
+            "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta \
+             name=\"viewport\" content=\"width=device-width, \
+             initial-scale=1\">\n<title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{}</h1>\n",
             escape(&self.title),
             escape(&self.title)
         );
@@ -185,7 +187,9 @@ impl HtmlReport {
                     let n = escape(name);
                     let _ = write!(
                         h,
-                        "<figure id=\"fig-{n}\">\n{svg}\n<figcaption>Figure {figure_no}: {} (<a href=\"figures/{n}.svg\">SVG</a>, <a href=\"figures/{n}.png\">PNG</a>)</figcaption>\n</figure>\n",
+                        "<figure id=\"fig-{n}\">\n{svg}\n<figcaption>Figure {figure_no}: {} (<a \
+                         href=\"figures/{n}.svg\">SVG</a>, <a \
+                         href=\"figures/{n}.png\">PNG</a>)</figcaption>\n</figure>\n",
                         escape(caption)
                     );
                 }

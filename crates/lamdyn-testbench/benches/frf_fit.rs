@@ -62,7 +62,10 @@ fn main() {
                 .expect("fit");
             let fit_s = t.elapsed().as_secs_f64();
             println!(
-                "{threads} thread(s): {} channels x {lines} lines, basis {} vectors built in {build_s:.2} s; one sweep ({ok} LUs) {sweep_s:.3} s; fit {fit_s:.1} s: {} iterations ({:.2} s each), {} evaluations ({:.3} s each) over all starts and passes; {}",
+                "{threads} thread(s): {} channels x {lines} lines, basis {} vectors built in \
+                 {build_s:.2} s; one sweep ({ok} LUs) {sweep_s:.3} s; fit {fit_s:.1} s: {} \
+                 iterations ({:.2} s each), {} evaluations ({:.3} s each) over all starts and \
+                 passes; {}",
                 set.responses().len(),
                 model.basis_size(),
                 fit.work[0],

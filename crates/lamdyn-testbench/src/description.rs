@@ -543,7 +543,8 @@ impl Description {
                             return Err(invalid(
                                 &layer_name(l, i),
                                 format!(
-                                    "its law differs from {}'s: the core layers share one law (one material)",
+                                    "its law differs from {}'s: the core layers share one law (one \
+                                     material)",
                                     layer_name(first, at[0])
                                 ),
                             ));
@@ -695,7 +696,8 @@ impl Description {
             return Err(invalid(
                 "hits.rate_hz",
                 format!(
-                    "{} Hz: at least 4 x test.max_hz = {} Hz (the anti-alias filter's corner is 0.15 x the rate)",
+                    "{} Hz: at least 4 x test.max_hz = {} Hz (the anti-alias filter's corner is \
+                     0.15 x the rate)",
                     s.rate_hz,
                     4.0 * self.test.max_hz
                 ),

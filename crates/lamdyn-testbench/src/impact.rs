@@ -130,7 +130,8 @@ fn on_surface(
     let d = d2(best.0).sqrt();
     if d.is_nan() || d > tol {
         return Err(BenchError::Invalid(format!(
-            "{what} at ({:.4}, {:.4}, {:.4}) m is {d:.3e} m from the top surface's nearest node (tolerance {tol:.1e} m)",
+            "{what} at ({:.4}, {:.4}, {:.4}) m is {d:.3e} m from the top surface's nearest node \
+             (tolerance {tol:.1e} m)",
             p[0], p[1], p[2]
         )));
     }
@@ -238,7 +239,8 @@ fn hammer_direction(test: &ImpactTest, n: [f64; 3]) -> Result<[f64; 3], BenchErr
     let dot = (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / l;
     if !(l.is_finite() && l > 0.0) || dot.is_nan() || dot >= 0.0 {
         return Err(BenchError::Invalid(format!(
-            "hammer direction {d:?}: must be a non-zero vector pushing into the surface (outward normal {n:.3?})"
+            "hammer direction {d:?}: must be a non-zero vector pushing into the surface (outward \
+             normal {n:.3?})"
         )));
     }
     Ok([d[0] / l, d[1] / l, d[2] / l])
@@ -267,7 +269,8 @@ pub fn to_global_frame(set: &FrfSet) -> Result<FrfSet, BenchError> {
         .find(|&c| (hammer.direction[c].abs() - 1.0).abs() < 1e-9)
         .ok_or_else(|| {
             BenchError::Invalid(format!(
-                "the hammer's direction {:.4?} is not along a global axis: UFF 58 needs one (set test.hammer_direction = [0, 0, -1])",
+                "the hammer's direction {:.4?} is not along a global axis: UFF 58 needs one (set \
+                 test.hammer_direction = [0, 0, -1])",
                 hammer.direction
             ))
         })?;

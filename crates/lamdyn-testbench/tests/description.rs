@@ -192,7 +192,8 @@ fn bad_descriptions_name_the_field() {
         ),
         (
             small(
-                "[test]\n[supports]\npoints = [{ xy_fraction = [0.1, 0.1], stiffness_n_m = [1.0, 1.0, -5.0] }]\n",
+                "[test]\n[supports]\npoints = \
+                 [{ xy_fraction = [0.1, 0.1], stiffness_n_m = [1.0, 1.0, -5.0] }]\n",
             ),
             "supports[0].stiffness_n_m",
         ),
@@ -202,7 +203,9 @@ fn bad_descriptions_name_the_field() {
         assert!(e.contains(want), "expected '{want}' in: {e}");
     }
     let e = build_error(&base.replacen(
-        "shear_law = { kind = \"fractional_zener\", g0_pa = 0.3e6, g_inf_pa = 300e6, tau_s = 1e-4, alpha = 0.55 }",
+        "shear_law = \
+         { kind = \"fractional_zener\", g0_pa = 0.3e6, g_inf_pa = 300e6, tau_s = 1e-4, alpha = \
+         0.55 }",
         "shear_pa = 1e6",
         1,
     ));

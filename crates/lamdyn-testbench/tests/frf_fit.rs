@@ -92,7 +92,8 @@ fn damped_glass_plate_core_from_frfs() {
         let t = truth.core_law.modulus(2.0 * PI * f);
         let p = fit.at(f);
         eprintln!(
-            "{f:6.1} Hz: G' {:.4e} ({:+.2} %) [{:.3e}, {:.3e}]  eta {:.3} ({:+.2} %) [{:.3}, {:.3}]",
+            "{f:6.1} Hz: G' {:.4e} ({:+.2} %) [{:.3e}, {:.3e}]  eta {:.3} ({:+.2} %) [{:.3}, \
+             {:.3}]",
             p.storage_pa,
             100.0 * (p.storage_pa / t.re - 1.0),
             p.storage_ci95[0],
@@ -327,7 +328,8 @@ fn bands_cover_the_truth_over_twenty_seeds() {
             total += 1;
         }
         eprintln!(
-            "seed {seed} {:.1?}: {} work {:?}; chi2 of the fit less the truth's {gap:.1}; core thickness {:+.2} % (truth {:+.2} %); inside the bands G' {}/{n}, eta {}/{n}",
+            "seed {seed} {:.1?}: {} work {:?}; chi2 of the fit less the truth's {gap:.1}; core \
+             thickness {:+.2} % (truth {:+.2} %); inside the bands G' {}/{n}, eta {}/{n}",
             tf.elapsed(),
             fit.describe(),
             fit.work,
@@ -340,7 +342,8 @@ fn bands_cover_the_truth_over_twenty_seeds() {
     }
     let rate = covered.map(|c| c as f64 / total as f64);
     eprintln!(
-        "20 seeds {:.1?}: coverage G' {:.1} %, eta {:.1} %; worst error G' {:.2} %, eta {:.2} %; mean band sd G' {:.2} %, eta {:.2} %",
+        "20 seeds {:.1?}: coverage G' {:.1} %, eta {:.1} %; worst error G' {:.2} %, eta {:.2} %; \
+         mean band sd G' {:.2} %, eta {:.2} %",
         t1.elapsed(),
         100.0 * rate[0],
         100.0 * rate[1],

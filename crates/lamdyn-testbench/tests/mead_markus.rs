@@ -101,7 +101,8 @@ fn simply_supported_sandwich_beam_matches_mead_markus() {
         let (f_t, f_fe) = (theory.re.sqrt() / (2.0 * PI), fe.re.sqrt() / (2.0 * PI));
         let (eta_t, eta_fe) = (theory.im / theory.re, fe.im / fe.re);
         eprintln!(
-            "mode {n}: f {f_fe:.4} Hz vs Mead-Markus {f_t:.4} Hz ({:+.2e}); eta {eta_fe:.5} vs {eta_t:.5} ({:+.2e})",
+            "mode {n}: f {f_fe:.4} Hz vs Mead-Markus {f_t:.4} Hz ({:+.2e}); eta {eta_fe:.5} vs \
+             {eta_t:.5} ({:+.2e})",
             f_fe / f_t - 1.0,
             eta_fe / eta_t - 1.0
         );

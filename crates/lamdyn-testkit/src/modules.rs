@@ -607,7 +607,8 @@ mod tests {
             file("b", "fn f() -> crate::Thing { crate::Thing }\n"),
             file(
                 "c",
-                "// crate::a::Thing\nconst S: &str = \"crate::a\";\n#[cfg(test)]\nmod tests { use crate::a; }\n",
+                "// crate::a::Thing\nconst S: &str = \"crate::a\";\n#[cfg(test)]\nmod tests \
+                 { use crate::a; }\n",
             ),
         ];
         let found = cycles(&files);

@@ -14,22 +14,28 @@ const ALLOWED: [(&str, &str, &str); 4] = [
     (
         "lamdyn-fem/src/eigen/lanczos.rs",
         "lanczos",
-        "one thick-restart Lanczos iteration: the basis, the tridiagonal matrix, the restart and the convergence test share their state and invariants, which split functions would pass around in pieces",
+        "one thick-restart Lanczos iteration: the basis, the tridiagonal matrix, the restart and \
+         the convergence test share their state and invariants, which split functions would pass \
+         around in pieces",
     ),
     (
         "lamdyn-fem/src/eigen/mod.rs",
         "solve_modes",
-        "the eigensolver's driver, one step after another (shift, factorization, Lanczos, Sturm count, residuals) with each step's time and error in one place",
+        "the eigensolver's driver, one step after another (shift, factorization, Lanczos, Sturm \
+         count, residuals) with each step's time and error in one place",
     ),
     (
         "lamdyn-fit/src/joint.rs",
         "fit_core_law_shifted",
-        "the joint law fit's one least-squares problem: the rows of the modes, the priors and the shared remainder are built together so their scales and order stay aligned with the covariance read from them",
+        "the joint law fit's one least-squares problem: the rows of the modes, the priors and the \
+         shared remainder are built together so their scales and order stay aligned with the \
+         covariance read from them",
     ),
     (
         "lamdyn-report/src/chart.rs",
         "draw",
-        "one chart drawn by plotters in painting order (axes, bands, lines, marks, legend); the drawing backend's borrow spans it",
+        "one chart drawn by plotters in painting order (axes, bands, lines, marks, legend); the \
+         drawing backend's borrow spans it",
     ),
 ];
 

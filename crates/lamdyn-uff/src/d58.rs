@@ -411,7 +411,8 @@ pub fn parse(ds: &RawDataset, lenient: bool) -> Result<(Function58, Option<Strin
                 return Err(syntax(
                     at,
                     format!(
-                        "dataset 58 at line {}: record 7 announces {n} points ({want} numbers), record 12 holds {} numbers",
+                        "dataset 58 at line {}: record 7 announces {n} points ({want} numbers), \
+                         record 12 holds {} numbers",
                         ds.line,
                         v.len()
                     ),
@@ -437,7 +438,8 @@ pub fn parse(ds: &RawDataset, lenient: bool) -> Result<(Function58, Option<Strin
                 return Err(syntax(
                     ds.line,
                     format!(
-                        "dataset 58b: {} bytes of data, but {n} points of this layout take {expect} (wrong byte count)",
+                        "dataset 58b: {} bytes of data, but {n} points of this layout take \
+                         {expect} (wrong byte count)",
                         ds.payload.len()
                     ),
                 ));

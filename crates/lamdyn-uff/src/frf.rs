@@ -100,7 +100,8 @@ fn quantity_of(f: &Function58, units: &Units164) -> Result<(Quantity, f64), UffE
         (Some(q), Some(s)) => Ok((q, s)),
         (Some(q), None) => Ok((q, 1.0)),
         _ => Err(convert(format!(
-            "FRF {}: neither the numerator data type ({}) nor its units label '{}' says whether it is a receptance, mobility or accelerance",
+            "FRF {}: neither the numerator data type ({}) nor its units label '{}' says whether it \
+             is a receptance, mobility or accelerance",
             dof_name(&f.response),
             num.data_type,
             num.units

@@ -233,7 +233,8 @@ pub fn list<R: BufRead>(input: R) -> Result<Vec<Entry>, UffError> {
                     d58::Abscissa::Uneven(_) => "uneven abscissa".into(),
                 };
                 format!(
-                    "function type {} '{}': {}:{}{:+} / {}:{}{:+}, {n} {:?} points, {x} {}, ordinate {} / {}",
+                    "function type {} '{}': {}:{}{:+} / {}:{}{:+}, {n} {:?} points, {x} {}, \
+                     ordinate {} / {}",
                     f.function_type,
                     f.id_lines[0].trim(),
                     f.response.entity,

@@ -206,7 +206,8 @@ impl<R: BufRead> Scanner<R> {
                 return Err(syntax(
                     number_line,
                     format!(
-                        "58b header '{}': expected byte order, float format, ASCII line count and byte count",
+                        "58b header '{}': expected byte order, float format, ASCII line count and \
+                         byte count",
                         head.trim()
                     ),
                 ));
@@ -262,7 +263,8 @@ impl<R: BufRead> Scanner<R> {
                     return Err(syntax(
                         self.line,
                         format!(
-                            "dataset {} starting at line {} ends without its closing '    -1' (truncated file?)",
+                            "dataset {} starting at line {} ends without its closing '    -1' \
+                             (truncated file?)",
                             ds.number, ds.line
                         ),
                     ));
@@ -294,7 +296,8 @@ impl<R: BufRead> Scanner<R> {
             if let Some(layout) = crate::record7::layout_bytes(&ds.lines) {
                 if layout != h.bytes {
                     ds.notice = Some(format!(
-                        "line {}: dataset 58b header gives {} bytes, its records 6-7 {layout}: read {layout}",
+                        "line {}: dataset 58b header gives {} bytes, its records 6-7 {layout}: \
+                         read {layout}",
                         ds.line, h.bytes
                     ));
                     bytes = layout;
@@ -305,7 +308,8 @@ impl<R: BufRead> Scanner<R> {
             syntax(
                 data_line,
                 format!(
-                    "dataset 58b at line {}: the header gives {} bytes of data but the file ends before",
+                    "dataset 58b at line {}: the header gives {} bytes of data but the file ends \
+                     before",
                     ds.line, bytes
                 ),
             )
@@ -346,7 +350,8 @@ impl<R: BufRead> Scanner<R> {
                 return Err(syntax(
                     data_line,
                     format!(
-                        "dataset 58b at line {}: binary data longer than the {} bytes its header gives (wrong byte count)",
+                        "dataset 58b at line {}: binary data longer than the {} bytes its header \
+                         gives (wrong byte count)",
                         ds.line, h.bytes
                     ),
                 ));
@@ -359,7 +364,8 @@ impl<R: BufRead> Scanner<R> {
                     return Err(syntax(
                         data_line,
                         format!(
-                            "dataset 58b at line {}: no closing '    -1' after its {} bytes of data (wrong byte count?)",
+                            "dataset 58b at line {}: no closing '    -1' after its {} bytes of \
+                             data (wrong byte count?)",
                             ds.line, h.bytes
                         ),
                     ));

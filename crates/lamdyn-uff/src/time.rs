@@ -137,7 +137,8 @@ fn same_axis(force: &Function58, f: &Function58, dt: f64) -> Result<(), UffError
     }
     if f.data.len() != force.data.len() {
         return Err(convert(format!(
-            "time response {b} has {} samples, the force {a} {}: records of one run must have the same length",
+            "time response {b} has {} samples, the force {a} {}: records of one run must have the \
+             same length",
             f.data.len(),
             force.data.len()
         )));
@@ -149,7 +150,8 @@ fn same_axis(force: &Function58, f: &Function58, dt: f64) -> Result<(), UffError
     let (t0, t1) = (start(force), start(f));
     if (t1 - t0).abs() > 0.5 * dt {
         return Err(convert(format!(
-            "time response {b} starts at {t1} s, the force {a} at {t0} s: they were not sampled together"
+            "time response {b} starts at {t1} s, the force {a} at {t0} s: they were not sampled \
+             together"
         )));
     }
     Ok(())
@@ -158,7 +160,8 @@ fn same_axis(force: &Function58, f: &Function58, dt: f64) -> Result<(), UffError
 fn not_a_force(f: &Function58) -> UffError {
     let num = &f.axes[1];
     convert(format!(
-        "the reference channel {} is not a force: its data type is {} and its units '{}' (expected 13 or N, kN, lbf)",
+        "the reference channel {} is not a force: its data type is {} and its units '{}' (expected \
+         13 or N, kN, lbf)",
         channel_name(&f.response),
         num.data_type,
         num.units
@@ -201,7 +204,8 @@ fn response_quantity(
     let by_label = quantity_from_label(&format!("{}/N", num.units.trim()));
     let q = by_type.or(by_label.map(|b| b.0)).or(known).ok_or_else(|| {
         convert(format!(
-            "time response {name}: neither its data type ({}) nor its units '{}' say whether it is a displacement, velocity or acceleration; give the quantity (--quantity)",
+            "time response {name}: neither its data type ({}) nor its units '{}' say whether it is \
+             a displacement, velocity or acceleration; give the quantity (--quantity)",
             num.data_type, num.units
         ))
     })?;

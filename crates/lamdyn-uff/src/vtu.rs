@@ -76,11 +76,13 @@ pub fn to_vtu(file: &UffFile) -> Result<String, UffError> {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>"
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" \
+         byte_order=\"LittleEndian\">\n<UnstructuredGrid>"
     );
     let _ = writeln!(
         s,
-        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">",
+        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n<Points>\n<DataArray type=\"Float64\" \
+         NumberOfComponents=\"3\" format=\"ascii\">",
         nodes.len(),
         cells.len()
     );
@@ -89,7 +91,8 @@ pub fn to_vtu(file: &UffFile) -> Result<String, UffError> {
     }
     let _ = writeln!(
         s,
-        "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+        "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" \
+         format=\"ascii\">"
     );
     let join = |v: &mut dyn Iterator<Item = String>| v.collect::<Vec<_>>().join(" ");
     let _ = writeln!(s, "{}", join(&mut conn.iter().map(|v| v.to_string())));
@@ -130,7 +133,8 @@ fn write_mode(s: &mut String, k: usize, m: &Modal55, nodes: &[Node]) {
     for (suffix, imag) in parts {
         let _ = writeln!(
             s,
-            "<DataArray type=\"Float64\" Name=\"mode_{:02}{f}{suffix}\" NumberOfComponents=\"3\" format=\"ascii\">",
+            "<DataArray type=\"Float64\" Name=\"mode_{:02}{f}{suffix}\" NumberOfComponents=\"3\" \
+             format=\"ascii\">",
             k + 1
         );
         for n in nodes {

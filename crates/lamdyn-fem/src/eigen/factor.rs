@@ -104,10 +104,21 @@ impl FactorPlan {
             reason: "out of memory".into(),
         })?;
         self.symbolic
-            .factorize_numeric_llt(&mut values, a, Side::Lower, Default::default(), self.par, MemStack::new(&mut mem), Default::default())
+            .factorize_numeric_llt(
+                &mut values,
+                a,
+                Side::Lower,
+                Default::default(),
+                self.par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
             .map_err(|e| FemError::Factorization {
                 shift,
-                reason: format!("{e:?}: K - sigma M is not positive definite (is the model free to move, or sigma above the lowest eigenvalue?)"),
+                reason: format!(
+                    "{e:?}: K - sigma M is not positive definite (is the model free to \
+                     move, or sigma above the lowest eigenvalue?)"
+                ),
             })?;
         let solve_req = self
             .symbolic

@@ -142,13 +142,16 @@ impl std::fmt::Display for EntityError {
                 first_line,
             } => write!(
                 f,
-                "a {nodes}-node quadrilateral after {first}-node ones (line {first_line}): one file must hold one element order"
+                "a {nodes}-node quadrilateral after {first}-node ones (line {first_line}): one \
+                 file must hold one element order"
             ),
             Self::Triangles => f.write_str(
-                "triangles are not supported: recombine the mesh into quadrilaterals (Mesh.RecombineAll = 1)",
+                "triangles are not supported: recombine the mesh into quadrilaterals \
+                 (Mesh.RecombineAll = 1)",
             ),
             Self::Serendipity => f.write_str(
-                "8-node (serendipity) quadrilaterals are not supported: mesh with Mesh.SecondOrderIncomplete = 0 for 9-node ones",
+                "8-node (serendipity) quadrilaterals are not supported: mesh with \
+                 Mesh.SecondOrderIncomplete = 0 for 9-node ones",
             ),
             Self::Volume { etype } => write!(
                 f,
@@ -394,7 +397,12 @@ impl<'a, I: Iterator<Item = (usize, &'a str)>> Reader<'a, I> {
         let v = match f[0] {
             "2.2" | "2.1" | "2" => Version::V2,
             "4.1" => Version::V4,
-            other => return Err(self.err(format!("MSH version {other} is not supported: save as version 4.1 or 2.2 (Mesh.MshFileVersion)"))),
+            other => {
+                return Err(self.err(format!(
+                    "MSH version {other} is not supported: save as \
+                     version 4.1 or 2.2 (Mesh.MshFileVersion)"
+                )));
+            }
         };
         self.expect_end("$MeshFormat")?;
         Ok(v)

@@ -218,11 +218,13 @@ impl Mesh {
                 let (el, nodes) = (id.element(e), id.nodes(mesh.element_nodes(e)));
                 FemError::InvalidMesh(match d {
                     ElementDefect::Degenerate { at } => format!(
-                        "element {el} (nodes {nodes}) is degenerate (zero area near r = {}, s = {})",
+                        "element {el} (nodes {nodes}) is degenerate (zero area near r = {}, s = \
+                         {})",
                         at[0], at[1]
                     ),
                     ElementDefect::Inverted { at } => format!(
-                        "element {el} (nodes {nodes}) is inverted (negative Jacobian near r = {}, s = {}): check the node order",
+                        "element {el} (nodes {nodes}) is inverted (negative Jacobian near r = {}, \
+                         s = {}): check the node order",
                         at[0], at[1]
                     ),
                 })
@@ -419,7 +421,8 @@ fn check_orientation(connectivity: &[usize], per: usize, id: &Numbering) -> Resu
             let mid = (per == 9).then(|| el[4 + k]);
             if let Some(&(other, _)) = edges.get(&(a, b)) {
                 return Err(FemError::InvalidMesh(format!(
-                    "elements {} and {} run along edge {}-{} in the same direction: their orientations (normals) disagree",
+                    "elements {} and {} run along edge {}-{} in the same direction: their \
+                     orientations (normals) disagree",
                     id.element(other),
                     id.element(e),
                     id.node(a),
@@ -463,7 +466,9 @@ fn check_quadratic_nodes(
             let off = norm(sub(x(4 + k), scale(0.5, add(a, b))));
             if off > 0.25 * chord {
                 return Err(FemError::InvalidMesh(format!(
-                    "element {}: mid-side node {} is {off:.4e} m from the middle of edge {}-{} ({chord:.4e} m long): more than a quarter of the edge, the element would fold (check the node order)",
+                    "element {}: mid-side node {} is {off:.4e} m from the middle of edge {}-{} \
+                     ({chord:.4e} m long): more than a quarter of the edge, the element would fold \
+                     (check the node order)",
                     id.element(e),
                     id.node(el[4 + k]),
                     id.node(el[k]),
@@ -479,7 +484,8 @@ fn check_quadratic_nodes(
         let off = norm(sub(x(8), centre));
         if off > 0.25 * diagonal {
             return Err(FemError::InvalidMesh(format!(
-                "element {}: centre node {} is {off:.4e} m from where its edges put it, more than a quarter of the diagonal ({diagonal:.4e} m)",
+                "element {}: centre node {} is {off:.4e} m from where its edges put it, more than \
+                 a quarter of the diagonal ({diagonal:.4e} m)",
                 id.element(e),
                 id.node(el[8])
             )));

@@ -170,7 +170,8 @@ impl RectangleSpec {
                     field: field.into(),
                     value: format!("{r}"),
                     requirement: format!(
-                        "must be at least the span ({l} m) in size for a shallow shell (negative: curved the other way, a bowl); use inf for flat"
+                        "must be at least the span ({l} m) in size for a shallow shell (negative: \
+                         curved the other way, a bowl); use inf for flat"
                     ),
                 });
             }
@@ -335,12 +336,14 @@ impl std::fmt::Display for GridError {
         match *self {
             Self::TooFewElements { layers } => write!(
                 f,
-                "needs more than {} elements along the side for {layers} layers at each edge and an interior",
+                "needs more than {} elements along the side for {layers} layers at each edge and \
+                 an interior",
                 2 * layers
             ),
             Self::FirstLayerTooWide { first_m, uniform_m } => write!(
                 f,
-                "the first layer ({first_m} m) must be thinner than a uniform element ({uniform_m} m)"
+                "the first layer ({first_m} m) must be thinner than a uniform element ({uniform_m} \
+                 m)"
             ),
             Self::NoGrowth => f.write_str("no geometric growth fits the side"),
             Self::Outside { at_m, side_m } => write!(
@@ -351,11 +354,13 @@ impl std::fmt::Display for GridError {
             Self::NoMovableEdge => f.write_str("no interior element edge is left to move"),
             Self::EdgeTaken { at_m, edge_m } => write!(
                 f,
-                "{at_m} m needs the same element edge ({edge_m} m) as another coordinate: use more elements"
+                "{at_m} m needs the same element edge ({edge_m} m) as another coordinate: use more \
+                 elements"
             ),
             Self::TooFar { at_m, edge_m } => write!(
                 f,
-                "{at_m} m is more than half an element from the nearest movable edge ({edge_m} m): use more elements"
+                "{at_m} m is more than half an element from the nearest movable edge ({edge_m} m): \
+                 use more elements"
             ),
             Self::Crossing => f.write_str("moved edges would cross: use more elements"),
         }

@@ -35,11 +35,13 @@ pub fn vtu_text(mesh: &Mesh, freqs_hz: &[f64], shapes: &[Vec<f64>]) -> String {
     };
     let _ = writeln!(
         s,
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>"
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" \
+         byte_order=\"LittleEndian\">\n<UnstructuredGrid>"
     );
     let _ = writeln!(
         s,
-        "<FieldData>\n<DataArray type=\"Float64\" Name=\"frequencies_hz\" NumberOfTuples=\"{}\" format=\"ascii\">",
+        "<FieldData>\n<DataArray type=\"Float64\" Name=\"frequencies_hz\" NumberOfTuples=\"{}\" \
+         format=\"ascii\">",
         freqs_hz.len()
     );
     for f in freqs_hz {
@@ -48,14 +50,16 @@ pub fn vtu_text(mesh: &Mesh, freqs_hz: &[f64], shapes: &[Vec<f64>]) -> String {
     let _ = writeln!(s, "\n</DataArray>\n</FieldData>");
     let _ = writeln!(
         s,
-        "<Piece NumberOfPoints=\"{nn}\" NumberOfCells=\"{ne}\">\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">"
+        "<Piece NumberOfPoints=\"{nn}\" NumberOfCells=\"{ne}\">\n<Points>\n<DataArray \
+         type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">"
     );
     for p in mesh.nodes() {
         let _ = writeln!(s, "{:.12e} {:.12e} {:.12e}", p[0], p[1], p[2]);
     }
     let _ = writeln!(
         s,
-        "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+        "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" \
+         format=\"ascii\">"
     );
     for e in mesh.elements() {
         let line: Vec<String> = e.iter().map(|n| n.to_string()).collect();
@@ -80,7 +84,8 @@ pub fn vtu_text(mesh: &Mesh, freqs_hz: &[f64], shapes: &[Vec<f64>]) -> String {
         for (name, off) in [("mode", 0), ("rotation", 3)] {
             let _ = writeln!(
                 s,
-                "<DataArray type=\"Float64\" Name=\"{name}_{:02}\" NumberOfComponents=\"3\" format=\"ascii\">",
+                "<DataArray type=\"Float64\" Name=\"{name}_{:02}\" NumberOfComponents=\"3\" \
+                 format=\"ascii\">",
                 m + 1
             );
             for i in 0..nn {

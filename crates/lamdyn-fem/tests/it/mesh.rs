@@ -153,7 +153,8 @@ fn bad_meshes_name_the_node_or_element() {
     let e = invalid(Mesh::new(two, vec![[0, 1, 4, 3], [1, 4, 5, 2]]).unwrap_err());
     assert_eq!(
         e,
-        "invalid mesh: elements 0 and 1 run along edge 1-4 in the same direction: their orientations (normals) disagree"
+        "invalid mesh: elements 0 and 1 run along edge 1-4 in the same direction: their \
+         orientations (normals) disagree"
     );
 }
 
@@ -199,7 +200,13 @@ fn gmsh_curved_quads_have_radial_directors() {
 #[test]
 fn gmsh_errors_name_file_and_line() {
     let e = invalid(read_msh(&fixture("triangles-v41.msh"), 1.0).unwrap_err());
-    assert!(e.contains("triangles are not supported: recombine the mesh into quadrilaterals (Mesh.RecombineAll = 1)"), "{e}");
+    assert!(
+        e.contains(
+            "triangles are not supported: recombine the mesh into quadrilaterals \
+             (Mesh.RecombineAll = 1)"
+        ),
+        "{e}"
+    );
     assert!(
         e.starts_with("error reading '") && e.contains("triangles-v41.msh' line "),
         "{e}"
@@ -212,11 +219,13 @@ fn gmsh_errors_name_file_and_line() {
     let e = invalid(read_msh(&fixture("missing.msh"), 1.0).unwrap_err());
     assert!(e.contains("missing.msh': No such file"), "{e}");
     // A file with no quadrilaterals was reported at "line 0".
-    let lines_only = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n2 1 0 0\n$EndNodes\n$Elements\n1\n1 1 2 0 1 1 2\n$EndElements\n";
+    let lines_only = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n2 1 0 \
+                      0\n$EndNodes\n$Elements\n1\n1 1 2 0 1 1 2\n$EndElements\n";
     let e = invalid(parse_msh("edges.msh", lines_only, 1.0).unwrap_err());
     assert_eq!(
         e,
-        "error reading 'edges.msh': no 4-node or 9-node quadrilaterals (element types 3, 10) in the file"
+        "error reading 'edges.msh': no 4-node or 9-node quadrilaterals (element types 3, 10) in \
+         the file"
     );
     let text = std::fs::read_to_string(fixture("plate-v22.msh")).unwrap();
     let cases = [
@@ -404,7 +413,10 @@ fn bad_nine_node_meshes_are_refused_with_the_node() {
     let off = TWO_QUAD9.replacen("7 0.5 0 0", "7 0.9 0 0", 1);
     let e = invalid(parse_msh("off.msh", &off, 1.0).unwrap_err());
     assert!(
-        e.contains("element 1 (line 24): mid-side node 7 is 4.0000e-1 m from the middle of edge 1-2 (1.0000e0 m long): more than a quarter of the edge"),
+        e.contains(
+            "element 1 (line 24): mid-side node 7 is 4.0000e-1 m from the middle of edge \
+             1-2 (1.0000e0 m long): more than a quarter of the edge"
+        ),
         "{e}"
     );
     let unshared = TWO_QUAD9.replacen(
@@ -415,7 +427,10 @@ fn bad_nine_node_meshes_are_refused_with_the_node() {
     let e = invalid(parse_msh("unshared.msh", &unshared, 1.0).unwrap_err());
     // Elements and nodes by the file's tags and lines, not by indices from 0.
     assert!(
-        e.contains("elements 1 (line 24) and 2 (line 25) share edge 5-2 but not its mid-side node (12 and 14)"),
+        e.contains(
+            "elements 1 (line 24) and 2 (line 25) share edge 5-2 but not its mid-side node \
+             (12 and 14)"
+        ),
         "{e}"
     );
     let mixed = TWO_QUAD9
@@ -426,7 +441,8 @@ fn bad_nine_node_meshes_are_refused_with_the_node() {
         e.contains("a 4-node quadrilateral after 9-node ones"),
         "{e}"
     );
-    let serendipity = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n1\n1 16 2 1 1 1 1 1 1 1 1 1 1\n$EndElements\n";
+    let serendipity = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 \
+                       0\n$EndNodes\n$Elements\n1\n1 16 2 1 1 1 1 1 1 1 1 1 1\n$EndElements\n";
     let e = invalid(parse_msh("q8.msh", serendipity, 1.0).unwrap_err());
     assert!(e.contains("Mesh.SecondOrderIncomplete = 0"), "{e}");
 }
@@ -449,7 +465,10 @@ fn an_element_order_the_file_cannot_give_is_refused() {
     let dir = fixture("");
     let e = invalid(spec(Some(ElementOrder::Quadratic)).build(&dir).unwrap_err());
     assert!(
-        e.contains("'plate-v22.msh' holds 4-node quadrilaterals (MITC4); MITC9 needs 9-node ones (Gmsh: Mesh.ElementOrder = 2"),
+        e.contains(
+            "'plate-v22.msh' holds 4-node quadrilaterals (MITC4); MITC9 needs 9-node ones \
+             (Gmsh: Mesh.ElementOrder = 2"
+        ),
         "{e}"
     );
     assert!(spec(Some(ElementOrder::Linear)).build(&dir).is_ok());

@@ -63,7 +63,8 @@ impl BandData {
             return Err(inconsistent(
                 "FRF fit",
                 format!(
-                    "{} line(s) in {:.3}–{:.3} Hz, fewer than the {min_lines} the fit's parameters need",
+                    "{} line(s) in {:.3}–{:.3} Hz, fewer than the {min_lines} the fit's parameters \
+                     need",
                     lines.len(),
                     band_hz[0],
                     band_hz[1]

@@ -360,12 +360,15 @@ impl FrfFit {
     pub fn describe(&self) -> String {
         let grid = match &self.sibling_failed {
             Some(e) => format!(
-                "; the grid moved by half a step did not fit ({e}): the bands lack the grid's spread"
+                "; the grid moved by half a step did not fit ({e}): the bands lack the grid's \
+                 spread"
             ),
             None => String::new(),
         };
         format!(
-            "{} fitted to {} lines in {:.1}–{:.1} Hz: misfit {:.3e} → {:.3e} (relative RMS {:.1} %), {} iterations in the last pass, noise scale {:.3}, correlation inflation {:.1}{grid}, {} iterations in all",
+            "{} fitted to {} lines in {:.1}–{:.1} Hz: misfit {:.3e} → {:.3e} (relative RMS {:.1} \
+             %), {} iterations in the last pass, noise scale {:.3}, correlation inflation \
+             {:.1}{grid}, {} iterations in all",
             self.law.name(),
             self.lines,
             self.band_hz[0],
@@ -1122,7 +1125,9 @@ impl Problem<'_> {
         inconsistent(
             CONTEXT,
             format!(
-                "the fit did not settle in {} iterations ({}): the misfit fell from {:.4e} to {:.4e}; the parameters that move together are {together}. Narrow the band, give a start law, or choose a law with fewer terms",
+                "the fit did not settle in {} iterations ({}): the misfit fell from {:.4e} to \
+                 {:.4e}; the parameters that move together are {together}. Narrow the band, give a \
+                 start law, or choose a law with fewer terms",
                 run.iterations, run.reason, run.initial_cost, run.cost
             ),
         )

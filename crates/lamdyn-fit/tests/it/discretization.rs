@@ -115,7 +115,8 @@ fn intervals_with_the_discretization_error_cover_the_converged_answer() {
     let (a, n) = covered(&noise_only, &law);
     let (b, m) = covered(&both, &law);
     eprintln!(
-        "truth inside the 95 % interval: noise only {a} of {n} peaks, with the discretization error {b} of {m}"
+        "truth inside the 95 % interval: noise only {a} of {n} peaks, with the discretization \
+         error {b} of {m}"
     );
     assert!(n >= 5);
     assert!(

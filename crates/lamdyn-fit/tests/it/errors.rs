@@ -120,7 +120,8 @@ fn inconsistent_inputs() {
         .to_string();
     assert_eq!(
         e,
-        "misfit: weights[0].weight = 0 must be positive and finite (use exclude_hz to leave a band out)"
+        "misfit: weights[0].weight = 0 must be positive and finite (use exclude_hz to leave a band \
+         out)"
     );
     // NaN and non-increasing axes are refused by the set itself.
     let e = FrfSet::new(

@@ -144,7 +144,8 @@ fn grids_apart(order: ElementOrder, coarse_elements: usize) -> (usize, f64, f64,
         nearest_eta = nearest_eta.max((nn / na - 1.0).abs());
     }
     eprintln!(
-        "{order:?}: {} peaks: between nodes vs on nodes: E' {worst_e:.2e}, eta {worst_eta:.2e}; nearest node: eta {nearest_eta:.2e}",
+        "{order:?}: {} peaks: between nodes vs on nodes: E' {worst_e:.2e}, eta {worst_eta:.2e}; \
+         nearest node: eta {nearest_eta:.2e}",
         a.peaks.len()
     );
     (a.peaks.len(), worst_e, worst_eta, nearest_eta)

@@ -106,7 +106,8 @@ fn synthesis_matches_direct_solves() {
     let e_res = worst(|w, s| with.receptance(w, s), &direct);
     let e_none = worst(|w, s| without.receptance(w, s), &direct);
     eprintln!(
-        "synthesis vs direct, 20x20 plate, 50 lines 1.6-80 Hz: all modes {e_all:.2e}, 30 modes + residual {e_res:.2e}, 30 modes alone {e_none:.2e}"
+        "synthesis vs direct, 20x20 plate, 50 lines 1.6-80 Hz: all modes {e_all:.2e}, 30 modes + \
+         residual {e_res:.2e}, 30 modes alone {e_none:.2e}"
     );
     assert!(e_all < 1e-8, "all modes: {e_all:e}");
     assert!(e_res < 1e-3, "30 modes + residual: {e_res:e}");

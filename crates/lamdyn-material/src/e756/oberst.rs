@@ -175,7 +175,8 @@ impl OberstBeam {
         MaterialError::InvalidData {
             context: format!("Oberst reduction, mode {mode}"),
             reason: format!(
-                "alpha = (f_c/f_n)^2 (1 + D T) = {alpha:.6} gives no positive layer modulus (needs alpha > 1)"
+                "alpha = (f_c/f_n)^2 (1 + D T) = {alpha:.6} gives no positive layer modulus (needs \
+                 alpha > 1)"
             ),
         }
     }

@@ -261,7 +261,8 @@ fn closed_form_with(
     let phi = phi_from_stiffness_ratio(kappa); // eq. 37
     if phi.re <= 0.0 {
         return Err(no_solution(format!(
-            "the laminate shows no shear softening (Re phi* = {:.3e} <= 0; E_eff' = {:.6e} Pa, bonded 12 B_eq/h^3 = {:.6e} Pa)",
+            "the laminate shows no shear softening (Re phi* = {:.3e} <= 0; E_eff' = {:.6e} Pa, \
+             bonded 12 B_eq/h^3 = {:.6e} Pa)",
             phi.re,
             e_eff_pa.re,
             12.0 * b_eq.re / (h * h * h) * options.kinematics.effective_modulus_factor()
@@ -341,7 +342,8 @@ fn core_coefficient(
         return Err(MaterialError::UnsupportedStack {
             context: format!("paper {formula:?}").replace("Eq", "eq. "),
             reason: format!(
-                "assumes identical faces, got {} m / {} Pa below and {} m / {} Pa above; use eq. 26",
+                "assumes identical faces, got {} m / {} Pa below and {} m / {} Pa above; use eq. \
+                 26",
                 stack.bottom().thickness_m,
                 stack.bottom().young_pa,
                 stack.top().thickness_m,

@@ -193,7 +193,9 @@ fn check_surface_density(context: &str, given: f64, of_layers: f64) -> Result<()
         field: "surface_density_kg_m2".into(),
         value: format!("{given}"),
         requirement: format!(
-            "contradicts the layers, whose densities times thicknesses sum to {of_layers:.4} kg/m^2 ({ratio:.2} times that; at most a factor {SURFACE_DENSITY_FACTOR} is accepted): check its unit (kg/m^2) and the layers' densities and thicknesses"
+            "contradicts the layers, whose densities times thicknesses sum to {of_layers:.4} \
+             kg/m^2 ({ratio:.2} times that; at most a factor {SURFACE_DENSITY_FACTOR} is \
+             accepted): check its unit (kg/m^2) and the layers' densities and thicknesses"
         ),
     })
 }

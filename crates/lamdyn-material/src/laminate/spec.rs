@@ -308,7 +308,8 @@ impl StackSpec {
             return Err(unsupported(
                 "stack",
                 format!(
-                    "the layered inverse needs elastic faces (with young_pa) and at least one core (without): {n} layers, {} without young_pa",
+                    "the layered inverse needs elastic faces (with young_pa) and at least one core \
+                     (without): {n} layers, {} without young_pa",
                     cores.len()
                 ),
             ));

@@ -143,13 +143,15 @@ impl MeadMarkus {
         };
         if r.re <= 0.0 {
             return Err(fail(format!(
-                "the laminate is no stiffer than its faces alone (B = {:.6e} N m <= D_t = {:.6e} N m)",
+                "the laminate is no stiffer than its faces alone (B = {:.6e} N m <= D_t = {:.6e} N \
+                 m)",
                 stiffness.re, self.d_t.re
             )));
         }
         if r.re >= self.y.re {
             return Err(fail(format!(
-                "the laminate is at least as stiff as the bonded faces (B = {:.6e} N m >= D_t (1 + Y) = {:.6e} N m)",
+                "the laminate is at least as stiff as the bonded faces (B = {:.6e} N m >= D_t (1 + \
+                 Y) = {:.6e} N m)",
                 stiffness.re,
                 self.bonded_stiffness().re
             )));

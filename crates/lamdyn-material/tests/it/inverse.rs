@@ -84,7 +84,8 @@ fn every_option_round_trips() {
         }
     }
     eprintln!(
-        "worst round-trip error over all options: {worst:.2e} ({skipped} lines with E_eff' <= 0 skipped)"
+        "worst round-trip error over all options: {worst:.2e} ({skipped} lines with E_eff' <= 0 \
+         skipped)"
     );
     assert!(skipped < all_options().len() * cores().len() * FREQS_HZ.len() / 4);
 }
@@ -236,7 +237,13 @@ fn asymmetric_faces_need_eq26() {
     let m = paper_inverse(&stack, w, e, &PaperInverseOptions::default())
         .unwrap_err()
         .to_string();
-    assert!(m.starts_with("paper eq. 41: assumes identical faces, got 0.001715 m / 70000000000 Pa below and 0.0021 m / 70000000000 Pa above"), "{m}");
+    assert!(
+        m.starts_with(
+            "paper eq. 41: assumes identical faces, got 0.001715 m / 70000000000 Pa \
+             below and 0.0021 m / 70000000000 Pa above"
+        ),
+        "{m}"
+    );
     let opts = PaperInverseOptions::full_model(Kinematics::Beam);
     let g = Complex64::new(3e6, 1.5e6);
     let e = paper_forward(&stack, w, g, &opts).unwrap().e_eff;
@@ -260,7 +267,13 @@ fn stiffer_than_bonded_has_no_core() {
     )
     .unwrap_err()
     .to_string();
-    assert!(m.starts_with("no core modulus at 10.0000 Hz (paper inverse (eqs. 35, 40, 41)): the laminate shows no shear softening"), "{m}");
+    assert!(
+        m.starts_with(
+            "no core modulus at 10.0000 Hz (paper inverse (eqs. 35, 40, 41)): the \
+             laminate shows no shear softening"
+        ),
+        "{m}"
+    );
     let m = paper_inverse(
         &stack,
         w,

@@ -140,7 +140,8 @@ fn fractional_zener_rejects_bad_parameters() {
     let m = message(FractionalZener::new(1e6, 1e5, 1e-6, 0.5).unwrap_err());
     assert_eq!(
         m,
-        "fractional Zener law: g_inf_pa = 100000 must exceed g0_pa = 1000000 (a passive material stiffens with frequency)"
+        "fractional Zener law: g_inf_pa = 100000 must exceed g0_pa = 1000000 (a passive material \
+         stiffens with frequency)"
     );
     let m = message(FractionalZener::new(0.0, 1e5, 1e-6, 0.5).unwrap_err());
     assert_eq!(m, "fractional Zener law: g0_pa = 0 must be positive");
@@ -329,7 +330,8 @@ fn law_spec_errors_name_the_field() {
     let m = bad.unwrap_err().to_string();
     assert!(m.contains("unknown variant `zener`"), "{m}");
     let spec: LawSpec = toml::from_str(
-        "kind = \"wlf\"\nc1 = 17\nc2_k = 50\nreference_temperature_k = 293\ntemperature_k = 300\nlaw = { kind = \"constant\", storage_pa = -1 }\n",
+        "kind = \"wlf\"\nc1 = 17\nc2_k = 50\nreference_temperature_k = 293\ntemperature_k = \
+         300\nlaw = { kind = \"constant\", storage_pa = -1 }\n",
     )
     .unwrap();
     assert_eq!(

@@ -154,7 +154,8 @@ fn sandwich_spec_errors() {
     );
     assert_eq!(
         parse(&law_face).to_sandwich().unwrap_err().to_string(),
-        "layers[0] ('glass'): a face of the inverse must be elastic: give young_pa (and loss_factor)"
+        "layers[0] ('glass'): a face of the inverse must be elastic: give young_pa (and \
+         loss_factor)"
     );
     let core_rho = ROOF.replacen("density_kg_m3 = 1070.0", "density_kg_m3 = 0", 1);
     assert_eq!(
@@ -163,7 +164,9 @@ fn sandwich_spec_errors() {
     );
     // The core's law is the unknown of the inverse and may be omitted.
     let no_core_law = ROOF.replacen(
-        "shear_law = { kind = \"fractional_zener\", g0_pa = 3.504e5, g_inf_pa = 3.062e9, tau_s = 8.23e-9, alpha = 0.675 }\n",
+        "shear_law = \
+         { kind = \"fractional_zener\", g0_pa = 3.504e5, g_inf_pa = 3.062e9, tau_s = 8.23e-9, \
+         alpha = 0.675 }\n",
         "",
         1,
     );
@@ -193,7 +196,8 @@ fn layered_cores_of_three_and_five_layers() {
     assert_eq!(parse(ROOF).layered_cores().unwrap(), vec![1]);
     let glass =
         "[[layers]]\nthickness_m = 2e-3\ndensity_kg_m3 = 2500.0\npoisson = 0.22\nyoung_pa = 70e9\n";
-    let pvb = "[[layers]]\nname = \"PVB\"\nthickness_m = 0.38e-3\ndensity_kg_m3 = 1070.0\npoisson = 0.49\n";
+    let pvb = "[[layers]]\nname = \"PVB\"\nthickness_m = 0.38e-3\ndensity_kg_m3 = 1070.0\npoisson \
+               = 0.49\n";
     let five = [glass, pvb, glass, pvb, glass].concat();
     assert_eq!(parse(&five).layered_cores().unwrap(), vec![1, 3]);
     // No core, or no face.

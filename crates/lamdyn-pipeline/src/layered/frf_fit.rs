@@ -165,7 +165,8 @@ pub fn fit_to_frfs(
             };
             let thinned = if step > 1 {
                 format!(
-                    "; one line in {step} ({LINES_PER_HALF_WIDTH} per half-power half-width of the narrowest pole)"
+                    "; one line in {step} ({LINES_PER_HALF_WIDTH} per half-power half-width of the \
+                     narrowest pole)"
                 )
             } else {
                 String::new()
@@ -177,7 +178,8 @@ pub fn fit_to_frfs(
             };
             return Ok(FrfRoute {
                 model_line: format!(
-                    "C3D20 {} ({} basis vectors at G_ref {g_ref:.4e} Pa x [{:.2}, {:.2}]{recentred}{outside}){thinned}, inputs under their priors: {}",
+                    "C3D20 {} ({} basis vectors at G_ref {g_ref:.4e} Pa x [{:.2}, \
+                     {:.2}]{recentred}{outside}){thinned}, inputs under their priors: {}",
                     setup.plate.plan.level_label(level),
                     once.model.model.basis_size(),
                     ratios[0],
@@ -194,7 +196,8 @@ pub fn fit_to_frfs(
         }
         round += 1;
         spinner.stage(&format!(
-            "FRF fit: the fitted law (G' {lo:.3e}-{hi:.3e} Pa) leaves the basis's range; the basis again about it"
+            "FRF fit: the fitted law (G' {lo:.3e}-{hi:.3e} Pa) leaves the basis's range; the basis \
+             again about it"
         ));
         g_ref = (lo * hi).sqrt();
         ratios = bracket(lo, hi, g_ref);
@@ -226,7 +229,8 @@ fn fit_level(setup: &LayeredSetup, levels: &[([usize; 2], usize)]) -> Result<[us
         .context("cannot mesh the FRF fit's layered model")?;
     if dofs > setup.ladder.max_dofs {
         return Err(crate::err!(
-            "the layered model's coarsest mesh ({}) has {dofs} dofs, above inverse.layered_max_dofs = {}: raise it to run the FRF fit",
+            "the layered model's coarsest mesh ({}) has {dofs} dofs, above \
+             inverse.layered_max_dofs = {}: raise it to run the FRF fit",
             setup.plate.plan.level_label(setup.start),
             setup.ladder.max_dofs
         ));
@@ -414,7 +418,8 @@ fn fit_once(
     let band_hz = [input.band_hz[0], input.band_hz[1].min(held_hz)];
     if band_hz[1] <= band_hz[0] {
         return Err(crate::err!(
-            "the FRF fit's basis holds the model only up to {held_hz:.1} Hz, below the band {:.1}-{:.1} Hz: raise inverse.layered_modes",
+            "the FRF fit's basis holds the model only up to {held_hz:.1} Hz, below the band \
+             {:.1}-{:.1} Hz: raise inverse.layered_modes",
             input.band_hz[0],
             input.band_hz[1]
         ));

@@ -142,7 +142,10 @@ pub fn fit_law(
         let mut f = f.with_alternatives(own, others);
         if let Some(why) = why {
             f.selection = Some(format!(
-                "{why}, each fitted with the modes' own noise (the inputs beyond second order left out: they act on every mode at once, and as independent noise they hide the law's shape); the law's values and bands are from its fit with them, and its band holds the others' spread where their Akaike weights reach 1e-3"
+                "{why}, each fitted with the modes' own noise (the inputs beyond second order left \
+                 out: they act on every mode at once, and as independent noise they hide the law's \
+                 shape); the law's values and bands are from its fit with them, and its band holds \
+                 the others' spread where their Akaike weights reach 1e-3"
             ));
         }
         f

@@ -427,7 +427,8 @@ impl<'a> Pair<'a> {
                 .ok_or_else(|| lost(self.ranks[i]))?;
             if (self.delta[i] * by_rank - fit).norm() > 1e-6 * fit.norm() {
                 return Err(err!(
-                    "the fit's pole at {:.3} Hz is not the model's elastic mode {} at G* = {g:.4e} Pa",
+                    "the fit's pole at {:.3} Hz is not the model's elastic mode {} at G* = {g:.4e} \
+                     Pa",
                     freq_and_zeta(*fit).0,
                     self.ranks[i] + 1
                 ));

@@ -101,7 +101,7 @@ fn same_pole(ema: &EmaResult, mode: usize, others: &[EmaResult]) -> Vec<[f64; 2]
 
 /// How much a pole (Hz, damping ratio) depends on the highest model order of the
 /// identification: the sample standard deviation of the whole's estimate `main` and those
-/// `found` at the other orders ([`crate::stages::OTHER_ORDERS`]); `None` without another. It is
+/// `found` at the other orders ([`crate::config::OTHER_ORDERS`]); `None` without another. It is
 /// not divided by √n: the orders are not independent draws that average out, each is an
 /// equally good choice of a setting, and the whole's estimate is one of them.
 pub(super) fn order_spread(main: [f64; 2], found: &[[f64; 2]]) -> Option<[f64; 2]> {

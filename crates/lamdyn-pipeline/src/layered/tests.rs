@@ -291,7 +291,8 @@ fn coverage(
         median_half_width: widths.map(|mut w| [median(&mut w[0]), median(&mut w[1])]),
     };
     eprintln!(
-        "{total} pairs: coverage per mode {:?}, joint {:?}; median half-widths per mode {:?}, joint {:?}",
+        "{total} pairs: coverage per mode {:?}, joint {:?}; median half-widths per mode {:?}, \
+         joint {:?}",
         c.rate[0], c.rate[1], c.median_half_width[0], c.median_half_width[1]
     );
     c

@@ -46,7 +46,8 @@ mod swap;
 pub const MANIFEST: &str = ".lamdyn-manifest";
 
 /// First line of a manifest.
-const MANIFEST_HEADER: &str = "# lamdyn results: files written by lamdyn (one path per line, relative to this folder); lamdyn replaces or removes only these";
+const MANIFEST_HEADER: &str = "# lamdyn results: files written by lamdyn (one path per line, \
+                               relative to this folder); lamdyn replaces or removes only these";
 
 /// How many foreign names an error lists.
 const LISTED: usize = 5;
@@ -159,7 +160,8 @@ impl FolderLock {
                             format!("another lamdyn (process {pid})")
                         };
                         bail!(
-                            "{who} is writing results into '{}': wait for it to finish, or choose another {} (if no such run is going, remove '{}')",
+                            "{who} is writing results into '{}': wait for it to finish, or choose \
+                             another {} (if no such run is going, remove '{}')",
                             dir.display(),
                             names.out,
                             path.display()
@@ -248,7 +250,9 @@ impl OutputDir {
             let what = if *input == canonical { "is" } else { "holds" };
             if !self.force {
                 bail!(
-                    "the results folder '{}' {what} an input of this run ('{}'): lamdyn writes its results into a folder of their own; choose another {} (or {} to write beside the inputs, which are never written over)",
+                    "the results folder '{}' {what} an input of this run ('{}'): lamdyn writes its \
+                     results into a folder of their own; choose another {} (or {} to write beside \
+                     the inputs, which are never written over)",
                     self.dir.display(),
                     input.display(),
                     self.names.out,
@@ -270,7 +274,8 @@ impl OutputDir {
                 .map(|f| format!("'{f}'"))
                 .collect();
             bail!(
-                "the results folder '{}' holds {} file(s) lamdyn did not write ({}{}): lamdyn does not delete them; choose a new or empty folder, or pass {} to write beside them",
+                "the results folder '{}' holds {} file(s) lamdyn did not write ({}{}): lamdyn does \
+                 not delete them; choose a new or empty folder, or pass {} to write beside them",
                 self.dir.display(),
                 foreign.len(),
                 shown.join(", "),
@@ -296,14 +301,18 @@ impl OutputDir {
             let here = parts[..=k].join("/");
             if meta.file_type().is_symlink() {
                 bail!(
-                    "cannot write '{name}' in '{}': '{here}' there is a symbolic link, and lamdyn does not write through links in its results folder; remove the link or choose another {}",
+                    "cannot write '{name}' in '{}': '{here}' there is a symbolic link, and lamdyn \
+                     does not write through links in its results folder; remove the link or choose \
+                     another {}",
                     self.dir.display(),
                     self.names.out
                 );
             }
             if k + 1 == parts.len() && !self.previous.contains(name) {
                 bail!(
-                    "cannot write '{name}' in '{}': a file of that name is there that lamdyn did not write; {} lets lamdyn write beside such files, never over them: move it or choose another {}",
+                    "cannot write '{name}' in '{}': a file of that name is there that lamdyn did \
+                     not write; {} lets lamdyn write beside such files, never over them: move it \
+                     or choose another {}",
                     self.dir.display(),
                     self.names.force,
                     self.names.out
@@ -450,7 +459,8 @@ pub fn write_own_file(
             .with_context(|| format!("cannot read '{}'", path.display()))?;
         if !is_own(&head) {
             bail!(
-                "cannot write '{}': it exists and lamdyn did not write it (it does not open with {mark}); lamdyn replaces only files it wrote: remove it or choose another name",
+                "cannot write '{}': it exists and lamdyn did not write it (it does not open with \
+                 {mark}); lamdyn replaces only files it wrote: remove it or choose another name",
                 path.display()
             );
         }
@@ -501,7 +511,8 @@ fn resolve_target(path: &Path, inputs: &[PathBuf]) -> Result<PathBuf> {
         std::fs::metadata(&target).with_context(|| format!("cannot write '{}'", path.display()))?;
     if !meta.is_file() {
         bail!(
-            "cannot write '{}': it exists and is not a regular file ({}); lamdyn writes only regular files",
+            "cannot write '{}': it exists and is not a regular file ({}); lamdyn writes only \
+             regular files",
             path.display(),
             kind_of(&meta)
         );

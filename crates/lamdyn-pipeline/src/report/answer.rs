@@ -203,7 +203,8 @@ pub(super) fn sentence(r: &ChainResult) -> String {
         }
     };
     format!(
-        "The core's shear storage modulus G' is {} MPa at {:.1} Hz and {} MPa at {:.1} Hz, its loss factor η {} and {} (95 % bands: G' {}, η {}), from {}. {}",
+        "The core's shear storage modulus G' is {} MPa at {:.1} Hz and {} MPa at {:.1} Hz, its \
+         loss factor η {} and {} (95 % bands: G' {}, η {}), from {}. {}",
         significant(first.storage_pa / 1e6),
         first.freq_hz,
         significant(last.storage_pa / 1e6),
@@ -235,7 +236,8 @@ fn judgement(r: &ChainResult, points: &[Point]) -> String {
     } else {
         let list: Vec<String> = without.iter().map(|f| format!("{f:.1}")).collect();
         s.push(format!(
-            "Not passed: {} identified mode(s) got no core ({} Hz; why under Warnings), and lamdyn exits with status 1.",
+            "Not passed: {} identified mode(s) got no core ({} Hz; why under Warnings), and lamdyn \
+             exits with status 1.",
             without.len(),
             list.join(", ")
         ));
@@ -257,7 +259,8 @@ fn judgement(r: &ChainResult, points: &[Point]) -> String {
         if !errors.is_empty() {
             let max = |k: usize| errors.iter().map(|e| e[k]).fold(0.0, f64::max);
             s.push(format!(
-                "Against the virtual test's truth: within {:.1} % in G' and {:.1} % in η at the modes.",
+                "Against the virtual test's truth: within {:.1} % in G' and {:.1} % in η at the \
+                 modes.",
                 100.0 * max(0),
                 100.0 * max(1)
             ));

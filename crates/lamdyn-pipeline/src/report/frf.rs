@@ -31,7 +31,8 @@ pub(super) fn section(
     files.push(("core_frf_law.csv".into(), law_csv(route).into_bytes()));
     let (header, rows) = law_table(r, route);
     html.table(
-        "The core's law fitted to the FRFs (corrected for the mesh, 95 % band) beside the pole route's law, at each modal frequency.",
+        "The core's law fitted to the FRFs (corrected for the mesh, 95 % band) beside the pole \
+         route's law, at each modal frequency.",
         &header,
         rows,
     );
@@ -41,7 +42,8 @@ pub(super) fn section(
             files,
             &format!("frf_fit_{}", k + 1),
             &format!(
-                "|FRF| measured and from the fitted layered model at {} / {}, and their difference.",
+                "|FRF| measured and from the fitted layered model at {} / {}, and their \
+                 difference.",
                 curve.channel, curve.reference
             ),
             &curve_chart(curve, r.measured.set.quantity().unit()),

@@ -35,7 +35,22 @@ const PURPLE: [u8; 3] = [148, 60, 189];
 
 /// How the layered inverse finds the core at a mode and what its band holds (the report's text
 /// under its table).
-const LAYERED_METHOD: &str = "How the layered inverse finds it: each EMA pole p (frequency and damping) matched by a layered solid model of the part, converged over a ladder of meshes (Richardson extrapolation, model line below); the core so found holds at the pole's complex frequency −ip, and is moved from there to the mode's real frequency by the fitted law (or the modes' log-slope): 1–1.5 % of η on a lightly damped glass laminate. Its 95 % band holds, in quadrature, the inputs known within a tolerance ([uncertainty]: face modulus, thicknesses, densities, each through its sensitivity on the layered model), the pole's scatter over the stabilization diagram (and, from hammer hits, how the pole moves when each hit is left out), the discretization in plane (grid convergence index of the finest mesh) and through the thickness (the coarsest mesh with two elements per layer); the modal table names each band's main source. It does not hold a model-form error (an unmodelled support); the law fitted to all modes below narrows it.";
+const LAYERED_METHOD: &str = "How the layered inverse finds it: each EMA pole p (frequency and \
+                              damping) matched by a layered solid model of the part, converged \
+                              over a ladder of meshes (Richardson extrapolation, model line \
+                              below); the core so found holds at the pole's complex frequency −ip, \
+                              and is moved from there to the mode's real frequency by the fitted \
+                              law (or the modes' log-slope): 1–1.5 % of η on a lightly damped \
+                              glass laminate. Its 95 % band holds, in quadrature, the inputs known \
+                              within a tolerance ([uncertainty]: face modulus, thicknesses, \
+                              densities, each through its sensitivity on the layered model), the \
+                              pole's scatter over the stabilization diagram (and, from hammer \
+                              hits, how the pole moves when each hit is left out), the \
+                              discretization in plane (grid convergence index of the finest mesh) \
+                              and through the thickness (the coarsest mesh with two elements per \
+                              layer); the modal table names each band's main source. It does not \
+                              hold a model-form error (an unmodelled support); the law fitted to \
+                              all modes below narrows it.";
 
 /// A positive parameter whose 95 % interval spans more decades than this is shown as not
 /// determined.
@@ -449,11 +464,18 @@ fn shape_charts(r: &ChainResult) -> Vec<(String, String, Chart)> {
                 .iter()
                 .map(|&i| m.real_shape[i] * resp[i].direction[2].signum())
                 .collect();
-            let title = format!("Mode {}: {:.2} Hz, zeta {:.2} %", k + 1, m.freq_hz, 100.0 * m.damping_ratio);
+            let title = format!(
+                "Mode {}: {:.2} Hz, zeta {:.2} \
+                 %",
+                k + 1,
+                m.freq_hz,
+                100.0 * m.damping_ratio
+            );
             (
                 format!("mode{}", k + 1),
                 format!(
-                    "Mode {} shape (EMA, real part, normal channels) at {:.3} Hz, contour map interpolated between the sensors (dots)",
+                    "Mode {} shape (EMA, real part, normal channels) at {:.3} Hz, contour map \
+                     interpolated between the sensors (dots)",
                     k + 1,
                     m.freq_hz
                 ),
@@ -683,14 +705,17 @@ fn lead_section(
     }
     if layered {
         html.table(
-            "G*(f) of the core at each identified mode by the layered inverse, with its 95 % band; the last columns: how far the paper's route lies from it.",
+            "G*(f) of the core at each identified mode by the layered inverse, with its 95 % band; \
+             the last columns: how far the paper's route lies from it.",
             &h,
             t,
         );
         html.paragraph(LAYERED_METHOD);
     } else {
         html.table(
-            "G*(f) of the core at each identified mode by the exact Mead-Markus inverse, with 95 % Monte Carlo bands (the layered inverse did not run); the last columns: the paper's route against it.",
+            "G*(f) of the core at each identified mode by the exact Mead-Markus inverse, with 95 % \
+             Monte Carlo bands (the layered inverse did not run); the last columns: the paper's \
+             route against it.",
             &h,
             t,
         );
@@ -745,13 +770,19 @@ fn law_summary(html: &mut HtmlReport, law: &CoreLawFit) {
         })
         .collect();
     html.paragraph(&format!(
-        "A {} law fitted to every layered mode at once (ln G' and ln eta, each mode weighted by its pole scatter and discretization error), jointly with the inputs known within a tolerance, one change per input shared by all modes under its prior from [uncertainty] (lamdyn_fit::joint). chi2 = {:.2} over {} degrees of freedom{}. The inputs the fit finds (relative change, 95 %): {}.{}",
+        "A {} law fitted to every layered mode at once (ln G' and ln eta, each mode weighted by \
+         its pole scatter and discretization error), jointly with the inputs known within a \
+         tolerance, one change per input shared by all modes under its prior from [uncertainty] \
+         (lamdyn_fit::joint). chi2 = {:.2} over {} degrees of freedom{}. The inputs the fit finds \
+         (relative change, 95 %): {}.{}",
         law.law.name(),
         law.chi2,
         law.dof,
         if law.scale > 1.0 {
             format!(
-                "; the scatter about the law exceeds the stated noise by {:.2}x, so the fit scales the modes' noise by that much (the inputs' priors keep their weight) and the bands use Student's t",
+                "; the scatter about the law exceeds the stated noise by {:.2}x, so the fit scales \
+                 the modes' noise by that much (the inputs' priors keep their weight) and the \
+                 bands use Student's t",
                 law.scale
             )
         } else {
@@ -820,7 +851,8 @@ fn law_at_modes(html: &mut HtmlReport, r: &ChainResult, law: &CoreLawFit) {
         })
         .collect();
     html.table(
-        "The law and its 95 % band at each mode (log-normal, all sources); the last column: each mode's layered point, moved by the inputs found, against the law.",
+        "The law and its 95 % band at each mode (log-normal, all sources); the last column: each \
+         mode's layered point, moved by the inputs found, against the law.",
         &header,
         rows,
     );
@@ -830,7 +862,8 @@ fn law_at_modes(html: &mut HtmlReport, r: &ChainResult, law: &CoreLawFit) {
 /// data do not determine is said to be.
 fn law_parameters(html: &mut HtmlReport, law: &CoreLawFit) {
     html.table(
-        "The law's parameters and the inputs' relative changes with 95 % intervals (correlations in result.json).",
+        "The law's parameters and the inputs' relative changes with 95 % intervals (correlations \
+         in result.json).",
         &["parameter", "value", "95% low", "95% high"],
         law.parameters
             .iter()
@@ -854,16 +887,17 @@ fn law_parameters(html: &mut HtmlReport, law: &CoreLawFit) {
                 } else {
                     format!("(search stopped at {:.1e})", p.value)
                 };
-                vec![
-                    p.name.clone(),
-                    value,
-                    bound(p.ci95[0]),
-                    bound(p.ci95[1]),
-                ]
+                vec![p.name.clone(), value, bound(p.ci95[0]), bound(p.ci95[1])]
             })
             .collect(),
     );
-    html.paragraph("Positive parameters and alpha have intervals of their logarithm or logit, mapped back; the two terms 'inputs beyond second order, shared' are in units of their unit prior. An interval spanning more than three decades is shown as not determined: the data do not fix that parameter (core_law.csv and result.json keep the numbers).");
+    html.paragraph(
+        "Positive parameters and alpha have intervals of their logarithm or logit, \
+         mapped back; the two terms 'inputs beyond second order, shared' are in units \
+         of their unit prior. An interval spanning more than three decades is shown as \
+         not determined: the data do not fix that parameter (core_law.csv and \
+         result.json keep the numbers).",
+    );
 }
 
 /// `core_law.csv`: the law and its band on 60 lines over the modes.
@@ -928,7 +962,8 @@ fn causality_verdict(r: &ChainResult) -> String {
             )
         } else {
             format!(
-                "{name} inverse: fails the Kramers-Kronig check at {bad} of {checked} lines: no causal material has exactly this G*(f)"
+                "{name} inverse: fails the Kramers-Kronig check at {bad} of {checked} lines: no \
+                 causal material has exactly this G*(f)"
             )
         }
     };
@@ -997,10 +1032,14 @@ fn reference_methods_section(
         html,
         files,
         "core_storage",
-        "Core G'(f) by every route: the paper's and the exact inverse with their 95 % bands (paper Fig. 7), the law and the layered inverse per mode.",
+        "Core G'(f) by every route: the paper's and the exact inverse with their 95 % bands (paper \
+         Fig. 7), the law and the layered inverse per mode.",
         &core_chart(r, false),
     )?;
-    html.paragraph("The axes are scaled to the estimates: a band beyond them is clipped, and its legend entry says so.");
+    html.paragraph(
+        "The axes are scaled to the estimates: a band beyond them is clipped, and its \
+         legend entry says so.",
+    );
     add_figure(
         html,
         files,
@@ -1028,7 +1067,8 @@ fn reference_methods_section(
         ["err G'_paper [%]", "err eta_paper [%]"],
     ));
     html.table(
-        "The paper's route: E*(f) fitted to the FRFs, then the paper's inverse (eqs. 33-45, 41), with 95 % Monte Carlo bands; |phi| > 0.1 is beyond its validity (NO).",
+        "The paper's route: E*(f) fitted to the FRFs, then the paper's inverse (eqs. 33-45, 41), \
+         with 95 % Monte Carlo bands; |phi| > 0.1 is beyond its validity (NO).",
         &h,
         t,
     );
@@ -1045,7 +1085,8 @@ fn reference_methods_section(
         ["err G'_exact [%]", "err eta_exact [%]"],
     ));
     html.table(
-        "The same effective modulus through the exact Mead-Markus sandwich inverse, with 95 % Monte Carlo bands (all columns: core_modal.csv)",
+        "The same effective modulus through the exact Mead-Markus sandwich inverse, with 95 % \
+         Monte Carlo bands (all columns: core_modal.csv)",
         &h,
         t,
     );
@@ -1062,7 +1103,9 @@ fn reference_methods_section(
     match &r.fit {
         Some(fit) => paper_route_sections(html, files, r, fit)?,
         None => html.paragraph(&format!(
-            "The paper's route has no result: {}. Its figures and files (core_curve.csv, parameters.csv, table3.csv, rms.csv) are not written; the layered route above does not depend on it.",
+            "The paper's route has no result: {}. Its figures and files (core_curve.csv, \
+             parameters.csv, table3.csv, rms.csv) are not written; the layered route above does \
+             not depend on it.",
             r.paper_route_error.as_deref().unwrap_or("not run")
         )),
     }
@@ -1125,7 +1168,10 @@ fn uncertainty_and_run_section(html: &mut HtmlReport, r: &ChainResult) {
     html.heading("Uncertainty");
     html.paragraph(&match &r.uncertainty {
         Some(m) => format!(
-            "Monte Carlo: {} samples, seed {}, {} threads, {:.2} s. Drawn: the faces' Young's modulus (relative sd {}), thickness (sd {} m) and density (relative sd {}), one draw for both faces and one for the core{}. Bands: 2.5 % and 97.5 % quantiles of the samples with a solution.",
+            "Monte Carlo: {} samples, seed {}, {} threads, {:.2} s. Drawn: the faces' Young's \
+             modulus (relative sd {}), thickness (sd {} m) and density (relative sd {}), one draw \
+             for both faces and one for the core{}. Bands: 2.5 % and 97.5 % quantiles of the \
+             samples with a solution.",
             m.samples,
             m.seed,
             m.threads,
@@ -1133,7 +1179,11 @@ fn uncertainty_and_run_section(html: &mut HtmlReport, r: &ChainResult) {
             r.job.uncertainty.face_modulus_rel_sd,
             r.job.uncertainty.thickness_sd_m,
             r.job.uncertainty.density_rel_sd,
-            if m.fit_covariance { ", and the law's parameters from the fit's covariance" } else { "; the fit's covariance was not used (none, or switched off)" }
+            if m.fit_covariance {
+                ", and the law's parameters from the fit's covariance"
+            } else {
+                "; the fit's covariance was not used (none, or switched off)"
+            }
         ),
         None => "No Monte Carlo (uncertainty.samples = 0).".into(),
     });

@@ -135,7 +135,14 @@ fn validate(args: &CoreArgs) -> Result<CoreConfig> {
             let (stack, law) = examples::paper_roof();
             let lines = sample(&law, &grid()?);
             let source = format!("built-in paper-roof: {}", law.describe());
-            (source, "built-in paper-roof (Table 1; glass 70 GPa, nu 0.22; PVB nu 0.49; 10.40 kg/m^2 measured)".to_string(), stack, lines)
+            (
+                source,
+                "built-in paper-roof (Table 1; glass 70 GPa, nu 0.22; PVB nu 0.49; 10.40 \
+                 kg/m^2 measured)"
+                    .to_string(),
+                stack,
+                lines,
+            )
         }
         (None, Some(path)) => {
             let spec: StackSpec = read_toml(path)?;
@@ -281,15 +288,28 @@ fn build_report(config: &CoreConfig, lines: &[CoreLine]) -> Result<Report> {
     }
     if beyond > 0 {
         report.warnings.push(format!(
-            "|phi| > {PHI_ACCURACY_LIMIT} at {beyond} of {} lines: the paper's inverse is beyond its ~1 % accuracy range there; prefer G'_exact",
+            "|phi| > {PHI_ACCURACY_LIMIT} at {beyond} of {} lines: the paper's inverse is beyond \
+             its ~1 % accuracy range there; prefer G'_exact",
             lines.len()
         ));
     }
     add_causality_warnings(&mut report, lines);
     report.warnings.extend(failures);
-    report.notes.push("G'_paper, eta_paper: paper eqs. 33-45; G'_exact, eta_exact: Mead-Markus exact sandwich inverse.".into());
-    report.notes.push("|phi|: paper eq. 37; phi<=0.1: within the paper model's ~1 % accuracy range (method-notes section 3).".into());
-    report.notes.push("KK: local Kramers-Kronig check of the recovered G*(f) (causal | G' falls | too little loss | negative loss).".into());
+    report.notes.push(
+        "G'_paper, eta_paper: paper eqs. 33-45; G'_exact, eta_exact: Mead-Markus \
+         exact sandwich inverse."
+            .into(),
+    );
+    report.notes.push(
+        "|phi|: paper eq. 37; phi<=0.1: within the paper model's ~1 % accuracy range \
+         (method-notes section 3)."
+            .into(),
+    );
+    report.notes.push(
+        "KK: local Kramers-Kronig check of the recovered G*(f) (causal | G' falls | \
+         too little loss | negative loss)."
+            .into(),
+    );
     report.extra = Some(serde_json::to_value(
         lines.iter().map(CoreLine::json).collect::<Vec<_>>(),
     )?);
@@ -355,7 +375,8 @@ fn add_causality_warnings(report: &mut Report, lines: &[CoreLine]) {
     ] {
         if n > 0 {
             report.warnings.push(format!(
-                "the {name} inverse's G*(f) fails the Kramers-Kronig check at {n} of {} lines: no causal material has this modulus",
+                "the {name} inverse's G*(f) fails the Kramers-Kronig check at {n} of {} lines: no \
+                 causal material has this modulus",
                 lines.len()
             ));
         }

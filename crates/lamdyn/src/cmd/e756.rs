@@ -41,7 +41,12 @@ pub fn run(args: &E756Args, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         .with_context(|| format!("invalid beam '{beam_file}'"))?;
     let layer = || -> Result<&LayerSpec> {
         spec.layer.as_ref().with_context(|| {
-            format!("'{beam_file}': the {:?} configuration needs a [layer] table (thickness_m, density_kg_m3)", args.configuration).to_lowercase()
+            format!(
+                "'{beam_file}': the {:?} configuration needs a [layer] table (thickness_m, \
+                 density_kg_m3)",
+                args.configuration
+            )
+            .to_lowercase()
         })
     };
     let report = if args.forward {
@@ -210,11 +215,15 @@ fn two_frequency(
         ]);
     }
     report.notes.push(if sandwich {
-        "G1, eta1: ASTM E756-05 sandwich-beam equations (the exact inverse of symmetric RKU).".to_string()
+        "G1, eta1: ASTM E756-05 sandwich-beam equations (the exact inverse of symmetric \
+         RKU)."
+            .to_string()
     } else if args.exact {
         "E1, eta1: exact complex solution of the Oberst quadratic.".to_string()
     } else {
-        "E1, eta1: ASTM E756-05 Oberst equations (eta1 first order in the loss; --exact for the complex solution).".to_string()
+        "E1, eta1: ASTM E756-05 Oberst equations (eta1 first order in the loss; --exact for the \
+         complex solution)."
+            .to_string()
     });
     Ok(report)
 }
@@ -226,7 +235,12 @@ fn forward(args: &E756Args, spec: &BeamSpec, base: UniformBeam, beam_file: &str)
         args.loss_factor.unwrap_or_default(),
     );
     let layer = |name: &str| {
-        spec.layer.as_ref().with_context(|| format!("'{beam_file}': the {name} configuration needs a [layer] table (thickness_m, density_kg_m3)"))
+        spec.layer.as_ref().with_context(|| {
+            format!(
+                "'{beam_file}': the {name} configuration needs \
+                 a [layer] table (thickness_m, density_kg_m3)"
+            )
+        })
     };
     let e_base = || {
         spec.young_pa
@@ -290,6 +304,10 @@ fn forward(args: &E756Args, spec: &BeamSpec, base: UniformBeam, beam_file: &str)
         }
     }
     report.input("material", format!("modulus {m} Pa, loss factor {eta}"));
-    report.notes.push("Forward model: resonance f = sqrt(Re lambda)/(2 pi), loss factor Im lambda / Re lambda, clamped-free wavenumbers.".into());
+    report.notes.push(
+        "Forward model: resonance f = sqrt(Re lambda)/(2 pi), loss factor Im lambda \
+         / Re lambda, clamped-free wavenumbers."
+            .into(),
+    );
     Ok(report)
 }

@@ -69,7 +69,8 @@ fn excitation(args: &EmaArgs) -> Result<Excitation> {
     if kind == ExcitationKind::Impact {
         if args.window.is_some() || args.segment_s.is_some() || args.overlap.is_some() {
             bail!(
-                "--window, --segment-s and --overlap are for continuous excitation: give --excitation random|burst|periodic|sweep"
+                "--window, --segment-s and --overlap are for continuous excitation: give \
+                 --excitation random|burst|periodic|sweep"
             );
         }
     } else if args.exp_tau_s.is_some() {
@@ -269,7 +270,8 @@ fn estimator_text(s: &EmaSettings) -> &'static str {
         PoleEstimator::Diagram => "LSFD residues on the diagram's poles",
         PoleEstimator::Refined => "poles refined with LSFD residues (variable projection)",
         PoleEstimator::Checked => {
-            "poles refined with LSFD residues (variable projection), each refined pole kept only where it fits significantly better than the diagram's in the LSCF model's own context"
+            "poles refined with LSFD residues (variable projection), each refined pole kept only \
+             where it fits significantly better than the diagram's in the LSCF model's own context"
         }
     }
 }
@@ -380,7 +382,8 @@ fn mode_columns() -> Vec<Column> {
 /// estimator.
 fn method_line(set: &FrfSet, s: &EmaSettings, r: &EmaResult) -> String {
     format!(
-        "{} orders {}-{} step {} on {:.3}-{:.3} Hz; stable: df/f <= {} %, dzeta/zeta <= {} %{}; {}; {}",
+        "{} orders {}-{} step {} on {:.3}-{:.3} Hz; stable: df/f <= {} %, dzeta/zeta <= {} %{}; \
+         {}; {}",
         if s.polymax && set.references().len() > 1 {
             "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
         } else {
@@ -463,7 +466,17 @@ fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
         .map(|(n, _)| n)
         .collect();
     if !low.is_empty() {
-        report.warnings.push(format!("{} regenerated FRF(s) correlate below 0.9 with the measured ones ({}): modes may be missing", low.len(), low.iter().take(5).map(|s| s.as_str()).collect::<Vec<_>>().join(", ")));
+        report.warnings.push(format!(
+            "{} regenerated FRF(s) correlate below 0.9 with the measured \
+             ones ({}): modes may be \
+             missing",
+            low.len(),
+            low.iter()
+                .take(5)
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
     }
     if !r.missing_hz.is_empty() {
         report.warnings.push(format!(
@@ -471,11 +484,30 @@ fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
             s.window_hz, r.missing_hz
         ));
     }
-    report.notes.push("zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and MPD 0 for a real (normal) mode.".into());
-    report.notes.push("sd(f), sd(zeta): standard deviations from the fit's noise (the refinement's covariance); they leave out the estimator's bias (modes outside the band, an unmodelled mode).".into());
+    report.notes.push(
+        "zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and \
+         MPD 0 for a real (normal) mode."
+            .into(),
+    );
+    report.notes.push(
+        "sd(f), sd(zeta): standard deviations from the fit's noise (the refinement's \
+         covariance); they leave out the estimator's bias (modes outside the band, \
+         an unmodelled mode)."
+            .into(),
+    );
     report.notes.push(stable_footnote(&r.modes));
-    report.notes.push("pole: refined, or diagram where the refinement did not fit the curves significantly better in the LSCF model's context (or was not run); f and zeta (diagram): the diagram's pole it started from.".into());
-    report.notes.push("FRAC drop: the mean FRAC the regenerated FRFs lose without the mode; verdict: sound, doubtful (kept; the reasons above) or smear (one pole over a cluster of modes: its f and zeta describe no mode).".into());
+    report.notes.push(
+        "pole: refined, or diagram where the refinement did not fit the curves \
+         significantly better in the LSCF model's context (or was not run); f and \
+         zeta (diagram): the diagram's pole it started from."
+            .into(),
+    );
+    report.notes.push(
+        "FRAC drop: the mean FRAC the regenerated FRFs lose without the mode; \
+         verdict: sound, doubtful (kept; the reasons above) or smear (one pole over \
+         a cluster of modes: its f and zeta describe no mode)."
+            .into(),
+    );
 }
 
 /// The JSON's extra fields: the modes in full, the rejected poles, the auto-MAC, the diagram,

@@ -59,7 +59,8 @@ pub fn run(args: &FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     }
     if let Some(poles) = &problem.settings.poles {
         problem.notes.push(format!(
-            "peaks: {} identified poles (freq_hz, damping_ratio) instead of the RMS FRF's peaks; the mode-wise eta from each pole's zeta",
+            "peaks: {} identified poles (freq_hz, damping_ratio) instead of the RMS FRF's peaks; \
+             the mode-wise eta from each pole's zeta",
             poles.len()
         ));
     }
@@ -283,10 +284,23 @@ fn build_report(
         }
         report.row(row);
     }
-    report.notes.push("Main table: the fitted law at the measured resonances (sd by the delta method through the parameter covariance); its CSV (--csv) is a `lamdyn core --table` input.".into());
-    report.notes.push("Table 3: peaks of the measured and fitted RMS FRFs, parabolic refinement in log magnitude; damping ratio by the half-power bandwidth on the RMS curve, linearly interpolated between lines ('-' when the bandwidth spans less than two lines).".into());
     report.notes.push(
-        "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak (or identified pole); eta = 2 zeta (1 - beta/2), zeta the resonance's damping (half-power or the pole's), beta = d ln E'/d ln f between neighbouring resonances (docs/fit.md)."
+        "Main table: the fitted law at the measured resonances (sd by the delta \
+         method through the parameter covariance); its CSV (--csv) is a `lamdyn core \
+         --table` input."
+            .into(),
+    );
+    report.notes.push(
+        "Table 3: peaks of the measured and fitted RMS FRFs, parabolic refinement in \
+         log magnitude; damping ratio by the half-power bandwidth on the RMS curve, \
+         linearly interpolated between lines ('-' when the bandwidth spans less than \
+         two lines)."
+            .into(),
+    );
+    report.notes.push(
+        "Mode-wise: E' = E_ref (f_exp/f_num)^2 at each measured peak (or identified pole); eta = 2 \
+         zeta (1 - beta/2), zeta the resonance's damping (half-power or the pole's), beta = d ln \
+         E'/d ln f between neighbouring resonances (docs/fit.md)."
             .into(),
     );
     report.warnings.extend(problem.notes.iter().cloned());
@@ -363,8 +377,13 @@ fn add_inputs(report: &mut Report, problem: &Problem, r: &FitResult, objective: 
     report.input(
         "convergence",
         format!(
-            "{} ({}), cost {:.6e}, residual rms {:.4e} over {} residuals, {} misfit evaluations, {:.3} s",
-            if r.converged { "converged" } else { "NOT converged" },
+            "{} ({}), cost {:.6e}, residual rms {:.4e} over {} residuals, {} misfit evaluations, \
+             {:.3} s",
+            if r.converged {
+                "converged"
+            } else {
+                "NOT converged"
+            },
             r.reason,
             r.cost,
             r.residual_rms,

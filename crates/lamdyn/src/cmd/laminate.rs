@@ -127,7 +127,8 @@ fn add_warnings_and_notes(
 ) {
     if !beyond.is_empty() {
         report.warnings.push(format!(
-            "|phi| > 0.1 at {} of {} lines ({:.2} Hz and above): the paper's homogenization is beyond its ~1 % accuracy range there",
+            "|phi| > 0.1 at {} of {} lines ({:.2} Hz and above): the paper's homogenization is \
+             beyond its ~1 % accuracy range there",
             beyond.len(),
             lines,
             beyond[0]
@@ -135,7 +136,10 @@ fn add_warnings_and_notes(
     }
     if let [first, .., last] | [first @ last] = disagree {
         report.warnings.push(format!(
-            "the paper's homogenization disagrees with exact sandwich theory at {} of {} lines ({first:.2}-{last:.2} Hz): E_eff' more than {:.0} % or its loss factor more than {:.0} % from E_exact's, though |phi| may be small (a core whose own bending or extension matters): the paper's model is not valid there",
+            "the paper's homogenization disagrees with exact sandwich theory at {} of {} lines \
+             ({first:.2}-{last:.2} Hz): E_eff' more than {:.0} % or its loss factor more than \
+             {:.0} % from E_exact's, though |phi| may be small (a core whose own bending or \
+             extension matters): the paper's model is not valid there",
             disagree.len(),
             lines,
             100.0 * PAPER_STORAGE_AGREEMENT,
@@ -143,7 +147,8 @@ fn add_warnings_and_notes(
         ));
     }
     report.notes.push(format!(
-        "valid: |phi| <= 0.1 and, for three-layer stacks, E_eff' within {:.0} % and its loss factor within {:.0} % of exact sandwich theory's.",
+        "valid: |phi| <= 0.1 and, for three-layer stacks, E_eff' within {:.0} % and its loss \
+         factor within {:.0} % of exact sandwich theory's.",
         100.0 * PAPER_STORAGE_AGREEMENT,
         100.0 * PAPER_LOSS_AGREEMENT
     ));
@@ -152,7 +157,11 @@ fn add_warnings_and_notes(
             .into(),
     );
     if sandwich {
-        report.notes.push("E_exact: Mead-Markus sandwich beam at the same frequency (faces in bending and extension, core in shear).".into());
+        report.notes.push(
+            "E_exact: Mead-Markus sandwich beam at the same frequency (faces in \
+             bending and extension, core in shear)."
+                .into(),
+        );
     }
 }
 

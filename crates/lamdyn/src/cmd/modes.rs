@@ -111,7 +111,8 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
                 }
             }
             MeshSpec::Gmsh { .. } => bail!(
-                "--elements, --element and --edge-layers apply to rectangle models; this model reads a mesh file (its element order is the file's)"
+                "--elements, --element and --edge-layers apply to rectangle models; this model \
+                 reads a mesh file (its element order is the file's)"
             ),
         }
     }
@@ -235,7 +236,13 @@ fn converge(
             order,
         ]);
     }
-    report.notes.push("f: the finest mesh's frequency; est. error: its estimated relative discretization error (grid convergence index: Richardson over the last three meshes with the observed order, factor of safety 1.25; 3 where the order is assumed); order: the observed order of convergence.".into());
+    report.notes.push(
+        "f: the finest mesh's frequency; est. error: its estimated relative \
+         discretization error (grid convergence index: Richardson over the last \
+         three meshes with the observed order, factor of safety 1.25; 3 where the \
+         order is assumed); order: the observed order of convergence."
+            .into(),
+    );
     report.warnings.extend(result.warnings.iter().cloned());
     report.extra = Some(serde_json::to_value(&result)?);
     report.write(args.output.format(), out, err)?;
@@ -249,7 +256,8 @@ fn converge(
     let last = result.levels.last().map_or(0, |l| l.n_dofs);
     writeln!(
         err,
-        "lamdyn: not converged to {tolerance:e}: {worst} after {} meshes (finest {last} dofs); stopped: {}",
+        "lamdyn: not converged to {tolerance:e}: {worst} after {} meshes (finest {last} dofs); \
+         stopped: {}",
         result.levels.len(),
         result.stopped
     )?;
@@ -350,8 +358,16 @@ fn build_report(
         }
         report.row(row);
     }
-    report.notes.push("modal mass: generalised mass of the shape scaled to a largest translation of 1 m; eff. mass z: (phi^T M e_z)^2 / total mass.".into());
-    report.notes.push("residual: |K phi - lambda M phi|_2 / (|K|_1 |phi|_2); shapes are mass-normalised (phi^T M phi = 1).".into());
+    report.notes.push(
+        "modal mass: generalised mass of the shape scaled to a largest translation \
+         of 1 m; eff. mass z: (phi^T M e_z)^2 / total mass."
+            .into(),
+    );
+    report.notes.push(
+        "residual: |K phi - lambda M phi|_2 / (|K|_1 |phi|_2); shapes are \
+         mass-normalised (phi^T M phi = 1)."
+            .into(),
+    );
     report.extra =
         Some(serde_json::json!({ "sturm": sol.sturm, "info": sol.info, "modes": sol.modes }));
     Ok(report)

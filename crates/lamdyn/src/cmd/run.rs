@@ -118,17 +118,30 @@ pub(crate) fn summary(r: &ChainResult, dir: &Path) -> Report {
     if !failed.is_empty() {
         let list: Vec<String> = failed.iter().map(|f| format!("{f:.2}")).collect();
         rep.warnings.push(format!(
-            "no core at {} Hz: neither the exact nor the layered inverse has a solution and the paper's is beyond its validity{}; check the stack's faces (modulus, thicknesses, densities) against the part; exit code 1",
+            "no core at {} Hz: neither the exact nor the layered inverse has a solution and the \
+             paper's is beyond its validity{}; check the stack's faces (modulus, thicknesses, \
+             densities) against the part; exit code 1",
             list.join(", "),
             r.frf.answer().map_or(String::new(), |a| format!(
-                ", and they lie beyond the FRF fit's band ({:.1}-{:.1} Hz, as far as its basis holds the layered model: raise inverse.layered_modes)",
+                ", and they lie beyond the FRF fit's band ({:.1}-{:.1} Hz, as far as its basis \
+                 holds the layered model: raise inverse.layered_modes)",
                 a.fit.band_hz[0], a.fit.band_hz[1]
             ))
         ));
     }
-    rep.notes.push("G'_paper: paper eqs. 33-45 (eq. 41); G'_exact: Mead-Markus exact sandwich inverse; G'_layer: layered solid model matched to each EMA pole; |phi| > 0.1: beyond the paper model's ~1 % validity.".into());
+    rep.notes.push(
+        "G'_paper: paper eqs. 33-45 (eq. 41); G'_exact: Mead-Markus exact sandwich \
+         inverse; G'_layer: layered solid model matched to each EMA pole; |phi| > 0.1: \
+         beyond the paper model's ~1 % validity."
+            .into(),
+    );
     if frf.is_some() {
-        rep.notes.push("G'_frf: the core's law fitted to the measured FRFs through the layered model (the whole band at once, no poles), corrected for the mesh by the ladder.".into());
+        rep.notes.push(
+            "G'_frf: the core's law fitted to the measured FRFs through the layered \
+             model (the whole band at once, no poles), corrected for the mesh by the \
+             ladder."
+                .into(),
+        );
     }
     rep
 }

@@ -49,7 +49,8 @@ fn info(args: &UffInfoArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let skipped = entries.iter().filter(|e| !e.supported).count();
     if skipped > 0 {
         report.notes.push(format!(
-            "{skipped} dataset(s) of kinds lamdyn does not read are skipped when the file is read (and copied as they are by convert --to ascii|binary)."
+            "{skipped} dataset(s) of kinds lamdyn does not read are skipped when the file is read \
+             (and copied as they are by convert --to ascii|binary)."
         ));
     }
     report.write(args.output.format(), out, err)?;

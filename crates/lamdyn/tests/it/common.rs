@@ -62,7 +62,8 @@ pub fn num(row: &std::collections::BTreeMap<String, String>, key: &str) -> f64 {
 pub fn small_description(dir: &Path) -> PathBuf {
     let laminate = include_str!("../../../lamdyn-testbench/tests/data/small_laminate.toml");
     let text = format!(
-        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\n"
+        "{laminate}\n[test]\ngrid = [5, 5]\nhammer_xy_fraction = [0.3, 0.35]\nhammer_direction = \
+         [0.0, 0.0, -1.0]\nmax_hz = 240.0\nstep_hz = 0.5\n"
     );
     let p = dir.join("small.toml");
     std::fs::write(&p, text).unwrap();

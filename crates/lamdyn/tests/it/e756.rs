@@ -65,7 +65,13 @@ fn standard_oberst_reduction_is_first_order_in_the_loss() {
 fn bandwidth_column_replaces_loss_factor_and_base_modulus_may_come_from_f_base() {
     let dir = temp_dir("e756-bw");
     let beam = dir.join("beam.toml");
-    std::fs::write(&beam, "length_m = 0.180\nthickness_m = 1.5e-3\ndensity_kg_m3 = 7850.0\n[layer]\nthickness_m = 0.25e-3\ndensity_kg_m3 = 1100.0\n").unwrap();
+    std::fs::write(
+        &beam,
+        "length_m = 0.180\nthickness_m = 1.5e-3\ndensity_kg_m3 = \
+         7850.0\n[layer]\nthickness_m = 0.25e-3\ndensity_kg_m3 = \
+         1100.0\n",
+    )
+    .unwrap();
     let data = std::fs::read_to_string(example("e756/sandwich-data.csv")).unwrap();
     let rows = csv_rows(&data);
     let mut bw = String::from("mode,f_base_hz,f_sandwich_hz,half_power_bandwidth_hz\n");

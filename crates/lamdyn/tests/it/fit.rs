@@ -362,7 +362,8 @@ fn uff_converted_to_csv_feeds_fit_and_ema() {
     std::fs::write(
         &job,
         format!(
-            "[measurement]\nchannels = {:?}\nfrf = {:?}\ntolerance_m = 1e-6\n[model]\nfile = {:?}\n",
+            "[measurement]\nchannels = {:?}\nfrf = {:?}\ntolerance_m = 1e-6\n[model]\nfile = \
+             {:?}\n",
             channels,
             frf,
             base.join("model.toml")
@@ -376,7 +377,8 @@ fn uff_converted_to_csv_feeds_fit_and_ema() {
     std::fs::write(
         &direct,
         format!(
-            "[measurement]\nchannels = \"channels.csv\"\nfrf = \"frf.csv\"\ntolerance_m = 1e-6\n[model]\nfile = {:?}\n",
+            "[measurement]\nchannels = \"channels.csv\"\nfrf = \"frf.csv\"\ntolerance_m = \
+             1e-6\n[model]\nfile = {:?}\n",
             base.join("model.toml")
         ),
     )

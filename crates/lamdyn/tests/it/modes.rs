@@ -56,7 +56,10 @@ fn model_file_with_supports_vtu_json_and_compare() {
     let model = dir.join("m.toml");
     std::fs::write(
         &model,
-        "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = 10\nelements_y = 8\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n\n[[supports]]\npoint_m = [0.0, 0.0, 0.0]\ntranslational_n_per_m = [0.0, 0.0, 1e4]\n\n[solver]\nmodes = 8\n",
+        "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = \
+         10\nelements_y = 8\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = \
+         2500.0\nthickness_m = 0.004\n\n[[supports]]\npoint_m = [0.0, 0.0, \
+         0.0]\ntranslational_n_per_m = [0.0, 0.0, 1e4]\n\n[solver]\nmodes = 8\n",
     )
     .unwrap();
     let vtu = dir.join("m.vtu");
@@ -96,12 +99,24 @@ fn gmsh_model_relative_to_the_model_file() {
         .join("../lamdyn-fem/testdata/gmsh/plate-v41.msh");
     std::fs::copy(fixture, dir.join("plate.msh")).unwrap();
     let model = dir.join("m.toml");
-    std::fs::write(&model, "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.003\n\n[solver]\nmodes = 8\n").unwrap();
+    std::fs::write(
+        &model,
+        "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\n\n[material]\nyoung_pa \
+         = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = \
+         0.003\n\n[solver]\nmodes = 8\n",
+    )
+    .unwrap();
     let (code, out, err) = lamdyn(&["modes", model.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("35 nodes, 24 MITC4 elements"), "{out}");
     // The file holds 4-node quadrilaterals: MITC9 is refused with the Gmsh setting that helps.
-    std::fs::write(&model, "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\nelement = \"mitc9\"\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.003\n").unwrap();
+    std::fs::write(
+        &model,
+        "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\nelement = \
+         \"mitc9\"\n\n[material]\nyoung_pa = 70e9\npoisson = \
+         0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.003\n",
+    )
+    .unwrap();
     let (code, _, err) = lamdyn(&["modes", model.to_str().unwrap()]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("Mesh.ElementOrder = 2"), "{err}");
@@ -148,7 +163,9 @@ fn bad_models_name_the_field() {
         std::fs::write(&p, text).unwrap();
         p.to_str().unwrap().to_string()
     };
-    let good = "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = 10\nelements_y = 8\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n";
+    let good = "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = \
+                10\nelements_y = 8\n\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = \
+                2500.0\nthickness_m = 0.004\n";
     let plate = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../lamdyn-fem/testdata/gmsh/plate-v41.msh");
     std::fs::copy(plate, dir.join("plate.msh")).unwrap();
@@ -171,7 +188,9 @@ fn bad_models_name_the_field() {
         (
             write(
                 "span.toml",
-                "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\nunit = \"mm\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
+                "[mesh]\nkind = \"gmsh\"\nfile = \"plate.msh\"\nunit = \
+                 \"mm\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = \
+                 2500.0\nthickness_m = 0.004\n",
             ),
             "mesh: span = 0.0003 m is outside [5e-3, 1e2]: lengths are in m",
         ),
@@ -203,14 +222,17 @@ fn bad_models_name_the_field() {
         (
             write(
                 "msh.toml",
-                "[mesh]\nkind = \"gmsh\"\nfile = \"none.msh\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
+                "[mesh]\nkind = \"gmsh\"\nfile = \"none.msh\"\n[material]\nyoung_pa = \
+                 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
             ),
             "none.msh': No such file",
         ),
         (
             write(
                 "unit.toml",
-                "[mesh]\nkind = \"gmsh\"\nfile = \"none.msh\"\nunit = \"inch\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2500.0\nthickness_m = 0.004\n",
+                "[mesh]\nkind = \"gmsh\"\nfile = \"none.msh\"\nunit = \
+                 \"inch\"\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = \
+                 2500.0\nthickness_m = 0.004\n",
             ),
             "mesh: unit = inch must be \"m\" or \"mm\"",
         ),
@@ -218,7 +240,8 @@ fn bad_models_name_the_field() {
             write(
                 "support.toml",
                 &format!(
-                    "{good}[[supports]]\npoint_m = [3.0, 0.0, 0.0]\ntranslational_n_per_m = [0.0, 0.0, 1.0]\n"
+                    "{good}[[supports]]\npoint_m = [3.0, 0.0, 0.0]\ntranslational_n_per_m = [0.0, \
+                     0.0, 1.0]\n"
                 ),
             ),
             "supports[0]: point_m = [3, 0, 0] must lie on the mesh: nearest node",
