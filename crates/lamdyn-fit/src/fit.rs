@@ -788,7 +788,8 @@ fn sandwich_covariance(j: &Mat<f64>, r: &[f64], p: usize) -> Option<Mat<f64>> {
             })
             .sum()
     };
-    // A leverage of one (a residual that alone fixes a parameter) is capped: its weight stays finite.
+    // A leverage of one (a residual that alone fixes a parameter) is capped: its weight stays
+    // finite.
     let jr = Mat::from_fn(m, p, |i, k| {
         j[(i, k)] * r[i] / (1.0 - leverage(i).min(0.99))
     });

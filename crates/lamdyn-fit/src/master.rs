@@ -281,9 +281,9 @@ fn starts(points: &[CorePoint], s: &MasterSettings) -> Vec<Vec<f64>> {
 /// Fits the master curve to cores identified at several temperatures (module docs).
 ///
 /// # Errors
-/// [`FitError::Inconsistent`] for non-positive or non-finite points, too few temperatures or points,
-/// a fit that finds no parameters where the model is defined, or a singular JᵀJ (a parameter
-/// the data do not determine: say which by the correlation of a neighbouring fit).
+/// [`FitError::Inconsistent`] for non-positive or non-finite points, too few temperatures or
+/// points, a fit that finds no parameters where the model is defined, or a singular JᵀJ (a
+/// parameter the data do not determine: say which by the correlation of a neighbouring fit).
 pub fn fit_master_curve(
     points: &[CorePoint],
     settings: &MasterSettings,

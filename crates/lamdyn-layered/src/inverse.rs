@@ -299,8 +299,9 @@ impl LayeredInverse {
     /// builds the reduced basis of `modes` modes at each of [`BASIS_RATIOS`] times G_ref.
     ///
     /// # Errors
-    /// [`LayeredError::Invalid`] for a stack without a core layer or without a face, faces with different
-    /// loss factors, or a non-positive size; [`LayeredError::Solver`] from the eigen solves.
+    /// [`LayeredError::Invalid`] for a stack without a core layer or without a face, faces with
+    /// different loss factors, or a non-positive size; [`LayeredError::Solver`] from the eigen
+    /// solves.
     pub fn build(
         plate: &LayeredPlate,
         elements: [usize; 2],

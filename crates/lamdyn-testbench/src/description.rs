@@ -13,8 +13,8 @@
 //! and line; non-physical values are errors naming the field.
 //!
 //! **Core scale.** The core is assembled with the real shear modulus G_a = Re G*(2π f_a) at the
-//! basis's first reference frequency f_a (Young's modulus 2 G_a (1 + ν)); the FRFs use
-//! s(ω) = G*(ω)/G_a ([`lamdyn_layered::reduced`]). A `young_law` core is scaled the same way by E*(ω)/E_a.
+//! basis's first reference frequency f_a (Young's modulus 2 G_a (1 + ν)); the FRFs use s(ω) =
+//! G*(ω)/G_a ([`lamdyn_layered::reduced`]). A `young_law` core is scaled the same way by E*(ω)/E_a.
 
 use crate::error::BenchError;
 use crate::impact::{HitSettings, Hits, ImpactTest, Support, simulate, simulate_hits};

@@ -25,7 +25,8 @@ pub enum Command {
     Core(CoreArgs),
     /// ASTM E756-05 beam method: resonances of a beam test -> modulus and loss factor per mode.
     E756(E756Args),
-    /// Free (or supported) vibration modes of a shell model: MITC4 or MITC9 FE, shift-invert Lanczos.
+    /// Free (or supported) vibration modes of a shell model: MITC4 or MITC9 FE, shift-invert
+    /// Lanczos.
     Modes(ModesArgs),
     /// Fit the laminate's effective modulus law E*(f) to measured FRFs through the FE model.
     Fit(FitArgs),

@@ -202,22 +202,21 @@ fn through_thickness_eigenvalue(
         .filter(|l| (l - at).norm() <= 0.01 * at.norm())
 }
 
-/// The second order of the inputs' effect on a mode's core, per input: ∂²ln x/∂(ln θ_j)² for
-/// x = G' and η (the "inputs beyond first order" of [`LayeredBand`]). Each input j with a prior
-/// s_j below the wide prior (the wide ones are re-linearised by [`super::law::fit_law`] instead) is moved
-/// by ±s_j on the coarsest model (once for all modes, [`MovedBySd`]) and the mode's coarse
-/// eigenvalue inverted there: the second
-/// difference d_j = ln x₊ + ln x₋ − 2 ln x₀ gives d_j/s_j². On a glass laminate the core found
-/// is far from linear in the faces: on the small test laminate a 1 % face modulus moves G' at
-/// its 103 Hz mode by −10.9 % to first order with a second difference of −3.8 % (η: −26.7 %
-/// and +8.0 %), and with the faces drawn from their priors the first-order points missed the
-/// truth by up to 2.5 % in G' where their other sources said 0.4 %. The joint law fit models
-/// this term through one curvature along the inputs' combined shift
-/// ([`lamdyn_fit::joint::shared_curvature`]: the differences of the face inputs are one
-/// curvature times their e_j², and summed input by input without the cross terms they moved
-/// the points further from the truth than the first order alone); the per-mode band takes
-/// its root mean square over the priors ([`second_order_sd`]) as a source. An input whose
-/// moved inversion fails gets zero.
+/// The second order of the inputs' effect on a mode's core, per input: ∂²ln x/∂(ln θ_j)² for x = G'
+/// and η (the "inputs beyond first order" of [`LayeredBand`]). Each input j with a prior s_j below
+/// the wide prior (the wide ones are re-linearised by [`super::law::fit_law`] instead) is moved by
+/// ±s_j on the coarsest model (once for all modes, [`MovedBySd`]) and the mode's coarse eigenvalue
+/// inverted there: the second difference d_j = ln x₊ + ln x₋ − 2 ln x₀ gives d_j/s_j². On a glass
+/// laminate the core found is far from linear in the faces: on the small test laminate a 1 % face
+/// modulus moves G' at its 103 Hz mode by −10.9 % to first order with a second difference of −3.8 %
+/// (η: −26.7 % and +8.0 %), and with the faces drawn from their priors the first-order points
+/// missed the truth by up to 2.5 % in G' where their other sources said 0.4 %. The joint law fit
+/// models this term through one curvature along the inputs' combined shift
+/// ([`lamdyn_fit::joint::shared_curvature`]: the differences of the face inputs are one curvature
+/// times their e_j², and summed input by input without the cross terms they moved the points
+/// further from the truth than the first order alone); the per-mode band takes its root mean square
+/// over the priors ([`second_order_sd`]) as a source. An input whose moved inversion fails gets
+/// zero.
 fn second_order(
     moved: &MovedBySd,
     sens: &ModeSensitivity,

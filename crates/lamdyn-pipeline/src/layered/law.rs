@@ -95,17 +95,16 @@ pub(super) fn lowest_akaike(
 /// favours is chosen on the modes' own noise (`Weights::Shape`) and fitted again with the
 /// inputs beyond second order as each point's noise too (`Weights::Law`).
 ///
-/// With the `coarsest` model and an input with a wide prior ([`LawTuning::wide_prior`]: the supports')
-/// the fit is re-linearised (Gauss–Newton on the inputs): the sensitivities are first order
-/// at the nominal inputs, and an input the modes pin far from nominal (a support's stiffness
-/// known to 20 % moves G' by 2–6 times its own change on a mode mixed with the bounce) leaves
-/// that linearisation behind. So the coarsest model is moved to the inputs the fit found
-/// ([`LayeredInverse::with_inputs_moved`]), each mode's coarse eigenvalue is inverted there
-/// and its sensitivities taken there; the mode's point
-/// moves by the ratio of the two coarse solutions, and the fit runs again with the priors
-/// still about nominal ([`InputPrior::at`]), until the inputs move by less than 5 % of their
-/// prior sd (at most [`LawTuning::relinearisations`] times; a mode the moved model cannot match ends
-/// the iteration at the last fit).
+/// With the `coarsest` model and an input with a wide prior ([`LawTuning::wide_prior`]: the
+/// supports') the fit is re-linearised (Gauss–Newton on the inputs): the sensitivities are first
+/// order at the nominal inputs, and an input the modes pin far from nominal (a support's stiffness
+/// known to 20 % moves G' by 2–6 times its own change on a mode mixed with the bounce) leaves that
+/// linearisation behind. So the coarsest model is moved to the inputs the fit found
+/// ([`LayeredInverse::with_inputs_moved`]), each mode's coarse eigenvalue is inverted there and its
+/// sensitivities taken there; the mode's point moves by the ratio of the two coarse solutions, and
+/// the fit runs again with the priors still about nominal ([`InputPrior::at`]), until the inputs
+/// move by less than 5 % of their prior sd (at most [`LawTuning::relinearisations`] times; a mode
+/// the moved model cannot match ends the iteration at the last fit).
 pub fn fit_law(
     core_law: CoreLawChoice,
     tuning: &LawTuning,
@@ -167,11 +166,11 @@ pub(super) enum Weights {
 }
 
 /// How far (ln stiffness, ln damping) the joint law moved the supports of `setup` from the job
-/// file's, when it moved the supports' stiffness or damping significantly: by more
-/// than [`LawTuning::supports_rerun`] and beyond its 95 % interval about the job's value. The mesh ladder
-/// then runs again there ([`LayeredSetup::at_supports`]): re-linearising the fit on the coarsest model
-/// cannot bring back a mode the ladder lost at the job's supports (the mixed modes of a part
-/// on foam lie elsewhere when the foam is 20 % stiffer).
+/// file's, when it moved the supports' stiffness or damping significantly: by more than
+/// [`LawTuning::supports_rerun`] and beyond its 95 % interval about the job's value. The mesh
+/// ladder then runs again there ([`LayeredSetup::at_supports`]): re-linearising the fit on the
+/// coarsest model cannot bring back a mode the ladder lost at the job's supports (the mixed modes
+/// of a part on foam lie elsewhere when the foam is 20 % stiffer).
 pub fn supports_found(
     setup: &LayeredSetup,
     law: Option<&std::result::Result<CoreLawFit, FitError>>,

@@ -510,11 +510,11 @@ fn auto_keeps_the_law_the_modes_favour() {
     assert!(core_laws(crate::job::CoreLawChoice::None).is_empty());
 }
 
-/// The ladder runs again at the supports the law found only when it moved them beyond
-/// both [`LawTuning::supports_rerun`] and their 95 % interval: points whose supports are 15 % stiffer
-/// than the job says (effects of −3 to −1 on ln G', noise 0.1 %) give the job with every
-/// spring times e^0.15 (to the fit's accuracy) and the dashpots as they were; at 1 % they
-/// give none, and a free part never.
+/// The ladder runs again at the supports the law found only when it moved them beyond both
+/// [`LawTuning::supports_rerun`] and their 95 % interval: points whose supports are 15 % stiffer
+/// than the job says (effects of −3 to −1 on ln G', noise 0.1 %) give the job with every spring
+/// times e^0.15 (to the fit's accuracy) and the dashpots as they were; at 1 % they give none, and a
+/// free part never.
 #[test]
 fn the_ladder_reruns_at_supports_found_far_off() {
     let priors = vec![

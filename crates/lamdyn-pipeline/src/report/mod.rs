@@ -903,7 +903,8 @@ fn law_parameters(html: &mut HtmlReport, law: &CoreLawFit) {
 /// `core_law.csv`: the law and its band on 60 lines over the modes.
 fn law_csv(law: &CoreLawFit) -> String {
     let mut csv = String::from(
-        "f_hz,storage_pa,storage_lo_pa,storage_hi_pa,loss_factor,loss_factor_lo,loss_factor_hi,main_source_storage,main_source_loss_factor\n",
+        "f_hz,storage_pa,storage_lo_pa,storage_hi_pa,loss_factor,loss_factor_lo,loss_factor_hi,\
+         main_source_storage,main_source_loss_factor\n",
     );
     for p in law.curve(60) {
         let _ = writeln!(
@@ -925,7 +926,8 @@ fn law_csv(law: &CoreLawFit) -> String {
 
 fn curve_csv(r: &ChainResult) -> String {
     let mut s = String::from(
-        "f_hz,e_storage_pa,e_loss_factor,phi_abs,g_paper_storage_pa,g_paper_loss_factor,g_exact_storage_pa,g_exact_loss_factor,causality_paper,causality_exact\n",
+        "f_hz,e_storage_pa,e_loss_factor,phi_abs,g_paper_storage_pa,g_paper_loss_factor,\
+         g_exact_storage_pa,g_exact_loss_factor,causality_paper,causality_exact\n",
     );
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
     for (k, p) in r.curve.iter().enumerate() {
@@ -1343,7 +1345,8 @@ fn parameter_table(fit: &FitResult) -> (Vec<Vec<String>>, String) {
 
 fn table3(r: &ChainResult) -> (Vec<Vec<String>>, String) {
     let mut csv = String::from(
-        "f_measured_hz,f_fitted_hz,f_error,amplitude_measured,amplitude_fitted,amplitude_error,damping_ratio_measured,damping_ratio_fitted,damping_ratio_error\n",
+        "f_measured_hz,f_fitted_hz,f_error,amplitude_measured,amplitude_fitted,amplitude_error,\
+         damping_ratio_measured,damping_ratio_fitted,damping_ratio_error\n",
     );
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
     let rows = r
@@ -1381,7 +1384,8 @@ fn table3(r: &ChainResult) -> (Vec<Vec<String>>, String) {
 /// rows and as `ema_modes.csv`.
 fn ema_table(r: &ChainResult) -> (Vec<Vec<String>>, String) {
     let mut csv = String::from(
-        "mode,f_hz,f_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_count,frac_drop,verdict,in_chain\n",
+        "mode,f_hz,f_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_count,frac_drop,\
+         verdict,in_chain\n",
     );
     let numbered = r.ema.modes.iter().map(|m| (m, true));
     let aside = r.ema.set_aside.iter().map(|m| (m, false));

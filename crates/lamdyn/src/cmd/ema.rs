@@ -595,7 +595,8 @@ fn write_results(
 ) -> Result<()> {
     use lamdyn_report::ema::{cmif_chart, stabilization_chart};
     let mut modes = String::from(
-        "mode,freq_hz,freq_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_poles,pick,frac_drop,verdict,pole,diagram_freq_hz,diagram_damping_ratio\n",
+        "mode,freq_hz,freq_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_poles,\
+         pick,frac_drop,verdict,pole,diagram_freq_hz,diagram_damping_ratio\n",
     );
     let sd = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for (k, m) in r.modes.iter().enumerate() {
