@@ -1060,6 +1060,18 @@ fn read_truth(path: &Path) -> Result<Truth> {
     })
 }
 
+/// Whether the paper's route, when it `ran`, fitted its free shell model to a part that the
+/// layered model sets on supports (`[[inverse.supports]]`): its E_eff at the modes coupled to
+/// them is not the laminate's.
+fn free_shell_model_on_supports(config: &RunConfig, ran: bool) -> Option<String> {
+    let supports = config
+        .layered
+        .setup
+        .as_ref()
+        .map_or(0, |s| s.job_supports.len());
+    (ran && supports > 0).then(|| text::free_shell_model_on_supports(supports))
+}
+
 fn collect_warnings(
     config: &RunConfig,
     measured: &Measured,
@@ -1074,6 +1086,7 @@ fn collect_warnings(
     if config.sandwich.stack.is_none() && u.options.samples > 0 {
         out.push(text::monte_carlo_skipped(u.stack.layers.len()));
     }
+    out.extend(free_shell_model_on_supports(config, fit.is_some()));
     let min_coherence = config.measurement.section.min_coherence;
     if let Some(c) = &measured.min_coherence {
         let names = measured.set.responses();
@@ -1303,6 +1316,43 @@ pub fn check_job_path(p: &Path) -> Result<()> {
 mod tests {
     use super::*;
     use lamdyn_layered::convergence::ConvergedMode;
+
+    /// A part on supports whose paper's route ran on the free shell model is told so; a free
+    /// part, or a run without the paper's route, is not.
+    #[test]
+    fn the_free_shell_model_on_a_supported_part_is_named() {
+        let dir = std::env::temp_dir().join(format!("lamdyn-free-shell-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("m.toml"),
+            "[mesh]\nkind = \"rectangle\"\nlength_x_m = 0.5\nlength_y_m = 0.4\nelements_x = 4\n\
+             elements_y = 4\n[material]\nyoung_pa = 70e9\npoisson = 0.22\ndensity_kg_m3 = 2400.0\n\
+             thickness_m = 3e-3\n",
+        )
+        .unwrap();
+        let job = |supports: &str| -> Job {
+            let text = format!(
+                "[measurement]\nchannels = \"c.csv\"\nfrf = \"f.csv\"\n[model]\nfile = \"m.toml\"\n\
+                 {supports}\
+                 [[stack.layers]]\nthickness_m = 1e-3\ndensity_kg_m3 = 2500.0\npoisson = 0.22\n\
+                 young_pa = 70e9\n\
+                 [[stack.layers]]\nthickness_m = 1e-3\ndensity_kg_m3 = 1070.0\npoisson = 0.49\n\
+                 [[stack.layers]]\nthickness_m = 1e-3\ndensity_kg_m3 = 2500.0\npoisson = 0.22\n\
+                 young_pa = 70e9\n"
+            );
+            toml::from_str(&text).unwrap()
+        };
+        let path = dir.join("job.toml");
+        let one =
+            "[[inverse.supports]]\nxy_fraction = [0.1, 0.1]\nstiffness_n_m = [1.0, 1.0, 4.0]\n";
+        let supported = RunConfig::resolve(&job(&one.repeat(2)), &path).unwrap();
+        let warning = free_shell_model_on_supports(&supported, true).unwrap();
+        assert!(warning.contains("rests on 2 supports"), "{warning}");
+        assert!(free_shell_model_on_supports(&supported, false).is_none());
+        let free = RunConfig::resolve(&job(""), &path).unwrap();
+        assert!(free_shell_model_on_supports(&free, true).is_none());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     fn point(freq_hz: f64, rank: usize) -> CorePoint {
         let g = Complex64::new(5e6, 2e6);

@@ -26,6 +26,17 @@ pub fn paper_route_failed(why: &str) -> String {
     )
 }
 
+/// The paper's route ran on a free shell model while the layered model rests on `supports`
+/// supports.
+pub fn free_shell_model_on_supports(supports: usize) -> String {
+    format!(
+        "fit: the paper's route fits a free shell model (K*(w) = s(w) K0 holds without \
+         supports) while the part rests on {supports} supports ([[inverse.supports]], taken by \
+         the layered model alone): at modes coupled to the supports its E_eff, and the paper's \
+         and the exact G*, are not the core's; read the layered and the FRF-fit columns there"
+    )
+}
+
 /// The Monte Carlo of the paper's route skipped on a stack of `layers` layers.
 pub fn monte_carlo_skipped(layers: usize) -> String {
     format!(
