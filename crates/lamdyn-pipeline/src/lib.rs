@@ -5,6 +5,7 @@
 //!
 //! | stage | what | module, crate |
 //! |---|---|---|
+//! | job | the job resolved once: each stage's configuration, defaults applied, model file read | `config` |
 //! | measurement | FRFs from CSV/UFF, or H1 from hammer-hit time files (coherence) | [`measurement`], lamdyn-frf, lamdyn-ema |
 //! | ema | stabilization diagram, poles, damping, shapes, CMIF (paper §2.1) | lamdyn-ema |
 //! | model | the FE model's real modes projected on the channels (paper eqs. 3–4) | lamdyn-fem, lamdyn-fit |
@@ -33,7 +34,8 @@
 //! ```
 //!
 //! - [`Job`] ([`job`]): the job file (TOML, SI units), read and checked before any work.
-//! - [`run_job`]: the chain; [`ChainResult`] ([`result`]) holds every stage's
+//! - [`run_job`]: the chain, on the job resolved once into each stage's configuration (stage
+//!   "job": the stages never read the [`Job`]); [`ChainResult`] ([`result`]) holds every stage's
 //!   result, [`CorePoint`] ([`chain`]) the core found at one frequency by every route, with its
 //!   band ([`band`]).
 //! - [`report::build`]: the report's files; [`OutputDir`] writes them without destroying
