@@ -160,6 +160,18 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result
     Ok(Outcome::Done)
 }
 
+/// The columns of `lamdyn modes --converge`.
+fn converge_columns() -> Vec<Column> {
+    vec![
+        Column::new("mode", "mode", "", Fmt::Fixed(0)),
+        Column::new("freq_hz", "f", "Hz", Fmt::Fixed(5)),
+        Column::new("rigid", "rigid", "", Fmt::Fixed(0)),
+        Column::new("extrapolated_hz", "f extrapolated", "Hz", Fmt::Fixed(5)),
+        Column::new("error_estimate", "est. error", "", Fmt::Sci(2)),
+        Column::new("order", "order", "", Fmt::Fixed(2)),
+    ]
+}
+
 /// `lamdyn modes --converge TOL`: the per-mode error estimate over refined meshes.
 #[allow(clippy::too_many_arguments)]
 fn converge(
@@ -188,17 +200,7 @@ fn converge(
     )
     .with_context(|| format!("--converge on {source}"))?;
     progress.finish();
-    let mut report = Report::new(
-        "modes",
-        vec![
-            Column::new("mode", "mode", "", Fmt::Fixed(0)),
-            Column::new("freq_hz", "f", "Hz", Fmt::Fixed(5)),
-            Column::new("rigid", "rigid", "", Fmt::Fixed(0)),
-            Column::new("extrapolated_hz", "f extrapolated", "Hz", Fmt::Fixed(5)),
-            Column::new("error_estimate", "est. error", "", Fmt::Sci(2)),
-            Column::new("order", "order", "", Fmt::Fixed(2)),
-        ],
-    );
+    let mut report = Report::new("modes", converge_columns());
     report.input("model", source.to_string());
     report.input(
         "mesh",
