@@ -24,11 +24,12 @@
 //! use lamdyn_fem::assembly::Assembly;
 //! use lamdyn_fem::eigen::{solve_modes, ModalParams, Silent};
 //!
-//! // NAFEMS FV12 free square plate on a coarse mesh: 6 rigid modes, then 1.622 Hz (Kirchhoff). let
-//! mesh = RectangleSpec::flat(10.0, 10.0, 12, 12).build().unwrap(); let steel = ShellMaterial {
-//! young_pa: 200e9, poisson: 0.3, density_kg_m3: 8000.0, thickness_m: 0.05 }; let asm =
-//! Assembly::new(&mesh, &steel, &[]).unwrap(); let sol = solve_modes(&asm, &ModalParams::lowest(7),
-//! &Silent).unwrap(); assert!(sol.modes[..6].iter().all(|m| m.rigid));
+//! // NAFEMS FV12 free square plate on a coarse mesh: 6 rigid modes, then 1.622 Hz (Kirchhoff).
+//! let mesh = RectangleSpec::flat(10.0, 10.0, 12, 12).build().unwrap();
+//! let steel = ShellMaterial { young_pa: 200e9, poisson: 0.3, density_kg_m3: 8000.0, thickness_m: 0.05 };
+//! let asm = Assembly::new(&mesh, &steel, &[]).unwrap();
+//! let sol = solve_modes(&asm, &ModalParams::lowest(7), &Silent).unwrap();
+//! assert!(sol.modes[..6].iter().all(|m| m.rigid));
 //! assert!((sol.modes[6].freq_hz / 1.622 - 1.0).abs() < 0.02);
 //! ```
 

@@ -2,9 +2,8 @@
 //! (0.25–80 Hz at 0.25 Hz, 81 points × 3 directions, 1 % complex noise) are fitted back.
 //!
 //! ```text
-//! cargo run --release -p lamdyn-fit --example recovery -- one [eq7|zener|per_mode]
-//! [rms|log_rms|complex] [seed] cargo run --release -p lamdyn-fit --example recovery -- study
-//! [seeds]
+//! cargo run --release -p lamdyn-fit --example recovery -- one [eq7|zener|per_mode] [rms|log_rms|complex] [seed]
+//! cargo run --release -p lamdyn-fit --example recovery -- study [seeds]
 //! ```
 //!
 //! RECOVERY_MESH=mitc4 runs either on 24 × 24 MITC4 instead of the case's default mesh.

@@ -13,8 +13,7 @@
 //! ([`ModePoint::second_order`]), to second order along the inputs' combined first-order shift
 //! u_k = Σ_j e_kj δ_j (the sum over the inputs whose c_kj is given):
 //!
-//! ln x_true,k = ln x_k + Σ_j e_kj δ_j − u_k + g(u_k),  g(u) = (e^{κ_k u} − 1)/κ_k = u + ½ κ_k u² +
-//! …,
+//! ln x_true,k = ln x_k + Σ_j e_kj δ_j − u_k + g(u_k),  g(u) = (e^{κ_k u} − 1)/κ_k = u + ½ κ_k u² + …,
 //!
 //! with one curvature κ_k per mode and part fitted to the diagonal, c_kj ≈ κ_k e_kj²
 //! ([`shared_curvature`]). The core found on a glass laminate is far from linear in the faces

@@ -4,8 +4,7 @@
 //! K0 φ_r = λ_r M φ_r, φ_rᵀ M φ_s = δ_rs — the receptance of eq. 3 is diagonal in the modal
 //! basis for every ω and every trial modulus:
 //!
-//! H(ω) = (−ω² M + s K0)⁻¹ = Σ_r φ_r φ_rᵀ / (λ_r s(ω) − ω²)       (all modes, rigid ones with λ =
-//! 0)
+//! H(ω) = (−ω² M + s K0)⁻¹ = Σ_r φ_r φ_rᵀ / (λ_r s(ω) − ω²)       (all modes, rigid ones with λ = 0)
 //!
 //! Kept modes r ≤ m are summed exactly. The omitted ones (λ ≫ ω²) are added as a residual
 //! flexibility from two static solves with the factorization of K − σM (σ < 0, the modal

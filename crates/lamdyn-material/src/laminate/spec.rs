@@ -12,9 +12,12 @@
 //! young_pa = 70e9
 //! loss_factor = 0.0                 # optional, with young_pa or shear_pa
 //!
-//! [[layers]] name = "PVB" thickness_m = 0.42e-3 density_kg_m3 = 1070.0 poisson = 0.49 shear_law =
-//! { kind = "fractional_zener", g0_pa = 3.504e5, g_inf_pa = 3.062e9, tau_s = 8.23e-9, alpha = 0.675
-//! }
+//! [[layers]]
+//! name = "PVB"
+//! thickness_m = 0.42e-3
+//! density_kg_m3 = 1070.0
+//! poisson = 0.49
+//! shear_law = { kind = "fractional_zener", g0_pa = 3.504e5, g_inf_pa = 3.062e9, tau_s = 8.23e-9, alpha = 0.675 }
 //! ```
 //!
 //! Each layer gives its Poisson ratio and one modulus: `young_pa`, `shear_pa`, `young_law` or

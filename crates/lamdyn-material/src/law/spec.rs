@@ -1,8 +1,7 @@
 //! Serialisable law descriptions for TOML and JSON inputs.
 //!
 //! ```toml
-//! shear_law = { kind = "fractional_zener", g0_pa = 3.504e5, g_inf_pa = 3.062e9, tau_s = 8.23e-9,
-//! alpha = 0.675 }
+//! shear_law = { kind = "fractional_zener", g0_pa = 3.504e5, g_inf_pa = 3.062e9, tau_s = 8.23e-9, alpha = 0.675 }
 //! ```
 //!
 //! Field names carry their SI unit. Unknown fields are rejected by the deserialiser, and
