@@ -148,11 +148,7 @@ pub fn reasons(modes: &[Mode], set_aside: &[Mode], modal: &[CorePoint]) -> Vec<W
 /// straight line in ln f through the modes' ln c, fitted by weighted Theil–Sen (the weighted
 /// median of the pairwise slopes, pair weights w_i w_j, then the weighted median intercept [Sen
 /// 1968; Jaeckel 1972]: one mode the pole route matched to the wrong model mode does not bend
-/// it), held beyond the modes. A mode whose converged G' falls below a lower mode's by more
-/// than a factor [`PASSIVE_FALL`] is left out first ([`passive_chain`]): a passive core's G'
-/// does not fall with frequency, so such a mode sits on another model mode's branch, where
-/// its |S| (of that branch) can outweigh every right one by 20 to 40 times and draw the line
-/// to its own c. Its uncertainty: the modes' ladder half-widths (their grid
+/// it), held beyond the modes. Its uncertainty: the modes' ladder half-widths (their grid
 /// convergence index) with a quarter of |ln c| for the first order and the interpolation, as a
 /// weighted mean over the modes, and the modes' robust scatter about the line (1.4826 × their
 /// weighted median absolute residual), in quadrature.
@@ -172,42 +168,6 @@ pub struct DiscretizationCorrection {
     /// The correction's relative standard deviation in (G', η): the modes' own, weighted, with
     /// the scatter about the line.
     pub rel_sd: [f64; 2],
-    /// The converged modes left out, Hz: their G' falls with frequency ([`passive_chain`]).
-    pub left_out_hz: Vec<f64>,
-}
-
-/// The largest fall of G' from one mode to a higher one that a mode on the right branch shows
-/// (a pole's scatter, a close pair's): beyond it the higher mode is on another branch (the
-/// wrongly matched modes of the foam roof's virtual tests came out at 7–11 % of their
-/// neighbours' G').
-pub const PASSIVE_FALL: f64 = 1.5;
-
-/// Which of the modes, in increasing frequency with converged storage moduli `storage_pa`,
-/// form the longest chain in which G' never falls by more than a factor [`PASSIVE_FALL`] from
-/// one mode to the next (the first such chain; every mode when none falls).
-pub fn passive_chain(storage_pa: &[f64]) -> Vec<bool> {
-    let n = storage_pa.len();
-    let mut length = vec![1usize; n];
-    let mut before: Vec<Option<usize>> = vec![None; n];
-    for i in 0..n {
-        for j in 0..i {
-            if storage_pa[i] * PASSIVE_FALL >= storage_pa[j] && length[j] + 1 > length[i] {
-                length[i] = length[j] + 1;
-                before[i] = Some(j);
-            }
-        }
-    }
-    let mut keep = vec![false; n];
-    let longest = (0..n).fold(None, |best: Option<usize>, i| match best {
-        Some(b) if length[b] >= length[i] => Some(b),
-        _ => Some(i),
-    });
-    let mut at = longest;
-    while let Some(i) = at {
-        keep[i] = true;
-        at = before[i];
-    }
-    keep
 }
 
 /// Fraction of the correction |ln c| taken as its uncertainty between modes (module docs of
@@ -224,8 +184,6 @@ struct ModeCorrection {
     weight: f64,
     /// Its relative standard deviations of G' and η.
     sd: [f64; 2],
-    /// The converged G', Pa.
-    storage_pa: f64,
 }
 
 impl DiscretizationCorrection {
@@ -265,15 +223,9 @@ impl DiscretizationCorrection {
                 y: ln,
                 weight,
                 sd,
-                storage_pa: c.core_shear_pa.re,
             });
         }
         points.sort_by(|a, b| a.x.total_cmp(&b.x));
-        let storage: Vec<f64> = points.iter().map(|p| p.storage_pa).collect();
-        let mut keep = passive_chain(&storage).into_iter();
-        let (points, left_out): (Vec<ModeCorrection>, Vec<ModeCorrection>) = points
-            .into_iter()
-            .partition(|_| keep.next().unwrap_or(true));
         let part = |pick: fn(Complex64) -> f64| {
             let pts: Vec<[f64; 3]> = points.iter().map(|p| [p.x, pick(p.y), p.weight]).collect();
             weighted_theil_sen(&pts)
@@ -300,7 +252,6 @@ impl DiscretizationCorrection {
             modes: points.iter().map(|p| (p.x.exp(), p.y.exp())).collect(),
             line,
             rel_sd,
-            left_out_hz: left_out.iter().map(|p| p.x.exp()).collect(),
         }
     }
 
@@ -577,7 +528,7 @@ impl FrfOutcome {
                         100.0 * applied[1],
                         100.0 * own[0],
                         100.0 * own[1],
-                    ) + &left_out_of_the_correction(&r.correction.left_out_hz)
+                    )
                 };
                 format!(
                     "{role}; {}{}; model {}{}; {correction}; basis {:.1} s, fit {:.1} s",
@@ -596,19 +547,6 @@ impl FrfOutcome {
     pub fn answer(&self) -> Option<&FrfRoute> {
         self.route().filter(|r| r.is_the_answer())
     }
-}
-
-/// The modes left out of the mesh correction, as a clause of the FRF fit's line.
-fn left_out_of_the_correction(left_out_hz: &[f64]) -> String {
-    if left_out_hz.is_empty() {
-        return String::new();
-    }
-    let hz: Vec<String> = left_out_hz.iter().map(|f| format!("{f:.2}")).collect();
-    format!(
-        ", the mode(s) at {} Hz left out (their G' falls with frequency: matched to another \
-         model mode)",
-        hz.join(", ")
-    )
 }
 
 /// "; inputs found: face modulus +0.06 % (sd 0.98 %, prior 1.00 %), ...; with them held, G'
@@ -813,58 +751,5 @@ pub(crate) mod tests {
         assert!(bent.rel_sd[0] > corr.rel_sd[0]);
         let none = DiscretizationCorrection::from_ladder(&[at(10.0)], 0);
         assert_eq!(none.factor(10.0), Complex64::new(1.0, 0.0));
-    }
-
-    /// A mode matched to another model mode's branch (G' a tenth of its neighbours', S five
-    /// times theirs) is left out of the correction and named; the right ones hold the line.
-    #[test]
-    fn a_mode_on_another_branch_is_left_out_of_the_correction() {
-        let mode = |freq_hz: f64, storage_pa: f64, ln_c: f64, s: f64| {
-            let g = Complex64::new(storage_pa, 0.5 * storage_pa);
-            let mut c = ConvergedMode::exact(g * ln_c.exp(), g, 0);
-            c.sensitivity = Complex64::new(s, 0.0);
-            CorePoint {
-                layered_convergence: Some(c),
-                ..at(freq_hz)
-            }
-        };
-        let right = |f: f64, g: f64| mode(f, g, 0.02, 1.0);
-        let modes = [
-            right(16.0, 13e6),
-            right(20.0, 14e6),
-            right(31.0, 16.7e6),
-            mode(47.0, 1.8e6, 0.005, 5.0),
-            right(67.0, 22.7e6),
-        ];
-        let corr = DiscretizationCorrection::from_ladder(&modes, 0);
-        assert!(
-            corr.left_out_hz.len() == 1 && (corr.left_out_hz[0] - 47.0).abs() < 1e-9,
-            "{corr:?}"
-        );
-        assert_eq!(corr.modes.len(), 4);
-        for f in [16.0, 47.0, 67.0] {
-            assert!((corr.factor(f).re.ln() - 0.02).abs() < 1e-9, "{corr:?}");
-        }
-        // Kept, it draws the line to itself.
-        let mut all = modes.clone();
-        all[3] = mode(47.0, 15e6, 0.005, 5.0);
-        let drawn = DiscretizationCorrection::from_ladder(&all, 0);
-        assert!(drawn.left_out_hz.is_empty());
-        assert!(drawn.factor(47.0).re.ln() < 0.01, "{drawn:?}");
-    }
-
-    /// The chain keeps every mode when G' rises or falls within the factor, and leaves out the
-    /// modes that fall beyond it wherever they are.
-    #[test]
-    fn the_passive_chain_leaves_out_falls_beyond_the_factor() {
-        assert_eq!(passive_chain(&[10.0, 9.0, 11.0]), vec![true; 3]);
-        let middle = passive_chain(&[13.0, 14.0, 14.0, 16.0, 16.7, 1.8, 1.3, 22.7]);
-        assert_eq!(
-            middle,
-            vec![true, true, true, true, true, false, false, true]
-        );
-        let last = passive_chain(&[12.8, 14.0, 14.0, 15.9, 16.2, 19.4, 20.7, 1.48]);
-        assert_eq!(last, [vec![true; 7], vec![false]].concat());
-        assert!(passive_chain(&[]).is_empty());
     }
 }

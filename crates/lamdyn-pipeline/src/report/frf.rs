@@ -218,7 +218,6 @@ pub(super) fn json(r: &ChainResult) -> serde_json::Value {
             "storage_applied": applied,
             "storage_level_error": own,
             "rel_sd": route.correction.rel_sd,
-            "left_out_hz": route.correction.left_out_hz,
         },
         "curve": curve,
     })
