@@ -52,8 +52,9 @@ impl RunConfig {
     /// model's plan (a Gmsh mesh) or core layer cannot be had.
     pub fn resolve(job: &Job, job_path: &Path) -> Result<Self> {
         let base = base_of(job_path);
+        let model = job.model_file(&base)?;
         let layered = match job.inverse.layered {
-            true => Some(LayeredSetup::resolve(job, &base)?),
+            true => Some(LayeredSetup::resolve(job, &model)?),
             false => None,
         };
         Ok(Self {
@@ -65,7 +66,7 @@ impl RunConfig {
             },
             ema: EmaConfig::of(job),
             model: ModelConfig {
-                file: job.model_file(&base)?,
+                file: model,
                 modes: job.model.modes,
                 residual: job.model.residual,
                 tolerance_m: job.measurement.tolerance_m,

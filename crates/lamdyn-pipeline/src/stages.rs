@@ -1,13 +1,12 @@
 //! The chain of `lamdyn run` and `lamdyn demo`, one stage after the other ([`run_job`]; the
-//! table of stages is in the [crate docs](crate)): measurement, EMA, model, fit, inverse setup,
-//! inverse, layered inverse, uncertainty, truth.
+//! table of stages is in the [crate docs](crate)): job (the configuration), measurement, EMA,
+//! model, fit, inverse, layered inverse, uncertainty, truth.
 //!
 //! The slow results (model, EMA, layered model) are cached keyed by their inputs
 //! ([`crate::cache`]). Every stage's error is a [`PipelineError::Stage`] naming it.
 
 use crate::cache::{Cache, Key};
 use crate::chain::{CorePoint, NoSandwichInverse, StageTime, Truth, nearest_within};
-use crate::config::MAX_DAMPING_ALONE;
 use crate::config::{
     EmaConfig, LayeredConfig, ModelConfig, PaperFitConfig, RunConfig, SandwichConfig,
 };
@@ -395,9 +394,6 @@ struct LayeredRoute {
     line: Option<String>,
     /// The law over all modes.
     law: LawResult,
-    /// The setup as the job gives it, supports included: the FRF fit fits the supports itself
-    /// under their priors, and does not take the ones the pole route's law found.
-    setup: Option<layered::LayeredSetup>,
     /// The ladder's levels (elements, dofs) of its last run.
     levels: Vec<([usize; 2], usize)>,
 }
@@ -414,8 +410,8 @@ fn layered_route(
 ) -> Result<LayeredRoute> {
     let spinner = t.spinner;
     let (mut line, mut coarsest, mut levels) = (None, None, Vec::new());
-    let setup = config.setup.clone();
-    if let Some(s) = &setup {
+    let setup = config.setup.as_ref();
+    if let Some(s) = setup {
         let outcome = t.stage("layered inverse", || {
             let outcome = layered::run(s, data, modal, cache, spinner)?;
             let cached = outcome.all_cached;
@@ -425,23 +421,14 @@ fn layered_route(
         levels = outcome.levels;
     }
     let law = t.stage("core law", || {
-        let tuning = setup
-            .as_ref()
-            .map(|s| s.tuning.law.clone())
-            .unwrap_or_default();
+        let tuning = setup.map(|s| s.tuning.law.clone()).unwrap_or_default();
         let law = layered::fit_law(config.core_law, &tuning, modal, coarsest.as_ref());
         Ok((law, false))
     })?;
-    let Some((setup, at)) = setup
-        .as_ref()
-        .and_then(|s| Some((s, layered::supports_found(s, law.as_ref())?)))
+    let Some((setup, at)) =
+        setup.and_then(|s| Some((s, layered::supports_found(s, law.as_ref())?)))
     else {
-        return Ok(LayeredRoute {
-            line,
-            law,
-            setup,
-            levels,
-        });
+        return Ok(LayeredRoute { line, law, levels });
     };
     let moved = setup.at_supports(at);
     let again = t.stage("layered inverse at the supports found", || {
@@ -458,7 +445,6 @@ fn layered_route(
     Ok(LayeredRoute {
         line,
         law,
-        setup: Some(setup.clone()),
         levels: again.levels,
     })
 }
@@ -474,7 +460,9 @@ fn frf_fit_stage(
     modal: &[CorePoint],
 ) -> FrfOutcome {
     let (law, levels) = (route.law.as_ref(), route.levels.as_slice());
-    let Some(setup) = &route.setup else {
+    // The setup as the job gives it, supports included: the FRF fit fits the supports itself
+    // under their priors, and does not take the ones the pole route's law found.
+    let Some(setup) = &config.layered.setup else {
         return FrfOutcome::NotRun("the layered route is off (inverse.layered = false)");
     };
     let ema_band_hz = config.ema.band_hz;
@@ -1157,7 +1145,10 @@ fn collect_warnings(
     }
     out.extend(shared_layered_modes(modal));
     out.extend(falling_layered_storage(modal));
-    out.extend(poles_beyond_the_ema(&ema.modes));
+    out.extend(poles_beyond_the_ema(
+        &ema.modes,
+        config.layered.max_damping_alone,
+    ));
     for (name, v) in ["paper", "exact"].iter().zip(causality) {
         let bad = v
             .iter()
@@ -1258,7 +1249,7 @@ fn falling_layered_storage(modal: &[CorePoint]) -> Vec<String> {
 }
 
 /// The poles whose values an EMA cannot be trusted to give to the accuracy a core needs: poles
-/// damped more than [`MAX_DAMPING_ALONE`], and neighbouring poles that overlap, closer than the
+/// damped more than `max_damping` ([`crate::config::MAX_DAMPING_ALONE`] by default), and neighbouring poles that overlap, closer than the
 /// sum of their half-power half-widths, |f₂ − f₁| < ζ₁f₁ + ζ₂f₂. Both move every inverse's G*
 /// at those modes by more than the pole's scatter says, the layered one most (d ln f / d ln G
 /// is a few per cent on a stiff interlayer). Measured: the in-band foam roof's pair at 20.1 and
@@ -1267,9 +1258,9 @@ fn falling_layered_storage(modal: &[CorePoint]) -> Vec<String> {
 /// in η; the soft-core panel's poles at ζ 16–22 % 104–224 % in G'. On the demo roof, the
 /// in-band roof's other modes and the sandwich's single modes the nearest neighbours lie two
 /// or more half-widths apart.
-fn poles_beyond_the_ema(modes: &[lamdyn_ema::identify::Mode]) -> Vec<String> {
+fn poles_beyond_the_ema(modes: &[lamdyn_ema::identify::Mode], max_damping: f64) -> Vec<String> {
     let mut out = Vec::new();
-    let damped = damped_beyond(modes, MAX_DAMPING_ALONE);
+    let damped = damped_beyond(modes, max_damping);
     if !damped.is_empty() {
         out.push(format!(
             "EMA: {} of {} poles are damped more than {:.0} % ({}): an EMA's poles of such modes \
@@ -1278,7 +1269,7 @@ fn poles_beyond_the_ema(modes: &[lamdyn_ema::identify::Mode]) -> Vec<String> {
              ones there before trusting G*",
             damped.len(),
             modes.len(),
-            100.0 * MAX_DAMPING_ALONE,
+            100.0 * max_damping,
             damped.join(", ")
         ));
     }
@@ -1315,6 +1306,7 @@ pub fn check_job_path(p: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::MAX_DAMPING_ALONE;
     use lamdyn_layered::convergence::ConvergedMode;
 
     /// A part on supports whose paper's route ran on the free shell model is told so; a free
@@ -1452,7 +1444,7 @@ mod tests {
             mode(31.2930, 0.0627),
             mode(130.0, 0.163),
         ];
-        let w = poles_beyond_the_ema(&in_band);
+        let w = poles_beyond_the_ema(&in_band, MAX_DAMPING_ALONE);
         assert_eq!(w.len(), 2, "{w:?}");
         assert!(w[0].contains("1 of 6 poles") && w[0].contains("130.0 Hz (16.3 %)"));
         assert!(w[1].contains("20.09 Hz and 20.45 Hz") && w[1].contains("0.17 of"));
@@ -1463,7 +1455,7 @@ mod tests {
             mode(50.99, 0.0123),
             mode(64.26, 0.0173),
         ];
-        assert!(poles_beyond_the_ema(&demo_roof).is_empty());
+        assert!(poles_beyond_the_ema(&demo_roof, MAX_DAMPING_ALONE).is_empty());
     }
 
     /// Two poles 3 % apart on one model mode are named; distinct modes, and two fit peaks

@@ -23,7 +23,6 @@ use lamdyn_layered::sensitivity::Input;
 use lamdyn_layered::supports::PointSupport;
 use lamdyn_material::laminate::StackSpec;
 use num_complex::Complex64;
-use std::path::Path;
 
 /// The layered stage's configuration: what it takes from the job, resolved once.
 #[derive(Debug, Clone)]
@@ -53,12 +52,12 @@ pub struct LayeredSetup {
 }
 
 impl LayeredSetup {
-    /// The setup of `job`, whose paths are relative to `base`.
+    /// The setup of `job` on its model `model` (as read: [`Job::model_file`]).
     ///
     /// # Errors
     /// The model's plan cannot be read (a Gmsh file), or the stack has no core layer.
-    pub fn resolve(job: &Job, base: &Path) -> Result<Self> {
-        let plan = plan(job, base)?;
+    pub fn resolve(job: &Job, model: &ModelFile) -> Result<Self> {
+        let plan = plan(job, model)?;
         let start = match &plan {
             Plan::Rectangle { .. } => job.inverse.layered_elements,
             Plan::Surface(_) => [job.inverse.layered_subdivisions; 2],
@@ -164,8 +163,8 @@ pub fn targets(ema: &EmaResult, modal: &[CorePoint]) -> Vec<ModeTarget> {
 
 /// The plan of the job's model for the layered model: a rectangle model's plan, radii and
 /// `inverse.layered_edge_grading`, or a Gmsh model's mid-surface mesh (read with its unit).
-fn plan(job: &Job, base: &Path) -> Result<Plan> {
-    let ModelFile { spec, dir, label } = job.model_file(base)?;
+fn plan(job: &Job, model: &ModelFile) -> Result<Plan> {
+    let ModelFile { spec, dir, label } = model;
     Ok(match &spec.mesh {
         MeshSpec::Rectangle(r) => Plan::Rectangle {
             plan_m: [r.length_x_m, r.length_y_m],
@@ -174,7 +173,7 @@ fn plan(job: &Job, base: &Path) -> Result<Plan> {
         },
         MeshSpec::Gmsh { .. } => {
             let (mesh, _) = spec
-                .build(&dir)
+                .build(dir)
                 .with_context(|| format!("invalid model {label}"))?;
             Plan::Surface(Box::new(mesh))
         }
