@@ -1,9 +1,11 @@
 //! Direct solution of the paper's eq. 3 at one frequency, the independent check of the modal
-//! synthesis: (−ω² M + s(ω) K0 + K_s) x = q with faer's sparse LU (complex), the pattern
-//! analysed once.
+//! synthesis: (−ω² M + s(ω) K0 + K_s + iω C_s) x = q with faer's sparse LU (complex), the
+//! pattern analysed once. K_s holds the assembly's node springs and the grounded supports
+//! given to [`DirectSolver::with_supports`], C_s their dashpots.
 
 use crate::error::FitError;
 use crate::probe::Probe;
+use crate::supports::GroundedSupport;
 use faer::Mat;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
@@ -19,6 +21,8 @@ pub struct DirectSolver<'a> {
     lu_symbolic: SymbolicLu<usize>,
     mass_on_k: Vec<f64>,
     springs_on_k: Vec<f64>,
+    /// The grounded supports' K_s and C_s on K0's pattern, if any.
+    supports_on_k: Option<[Vec<f64>; 2]>,
 }
 
 impl<'a> DirectSolver<'a> {
@@ -54,7 +58,41 @@ impl<'a> DirectSolver<'a> {
             lu_symbolic,
             mass_on_k,
             springs_on_k,
+            supports_on_k: None,
         })
+    }
+
+    /// The solver with grounded `supports` added: K_s = Σ k b bᵀ, C_s = Σ c b bᵀ.
+    ///
+    /// # Errors
+    /// [`FitError::Inconsistent`] when a support couples two dofs outside K0's pattern (its
+    /// probe spans more than one element) or acts on a dof the model does not have.
+    pub fn with_supports(mut self, supports: &[GroundedSupport]) -> Result<Self, FitError> {
+        let nnz = self.asm.stiffness.val().len();
+        let (mut k, mut c) = (vec![0.0; nnz], vec![0.0; nnz]);
+        let n = self.asm.n_dofs();
+        for (i, s) in supports.iter().enumerate() {
+            if let Some((d, _)) = s.probe.entries().iter().find(|(d, _)| *d >= n) {
+                return Err(crate::error::inconsistent(
+                    "direct solver's supports",
+                    format!("support {i} acts on dof {d}; the model has {n}"),
+                ));
+            }
+            for &(a, wa) in s.probe.entries() {
+                for &(b, wb) in s.probe.entries() {
+                    let p = self.asm.pattern.position(a, b).ok_or_else(|| {
+                        crate::error::inconsistent(
+                            "direct solver's supports",
+                            format!("support {i} couples dofs {a} and {b}, outside K0's pattern"),
+                        )
+                    })?;
+                    k[p] += s.stiffness_n_m * wa * wb;
+                    c[p] += s.damping_n_s_m * wa * wb;
+                }
+            }
+        }
+        self.supports_on_k = Some([k, c]);
+        Ok(self)
     }
 
     /// Receptances (m/N) of `responses` to unit forces at `references` at ω (rad/s) with
@@ -81,7 +119,14 @@ impl<'a> DirectSolver<'a> {
             .iter()
             .zip(&self.mass_on_k)
             .zip(&self.springs_on_k)
-            .map(|((k, m), ks)| s * k + ks - w2 * m)
+            .enumerate()
+            .map(|(p, ((k, m), ks))| {
+                let a = s * k + ks - w2 * m;
+                match &self.supports_on_k {
+                    None => a,
+                    Some([sk, sc]) => a + Complex64::new(sk[p], omega * sc[p]),
+                }
+            })
             .collect();
         let a = SparseColMat::new(self.symbolic.clone(), vals);
         let lu = Lu::try_new_with_symbolic(self.lu_symbolic.clone(), a.as_ref())

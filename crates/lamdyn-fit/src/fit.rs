@@ -270,15 +270,7 @@ impl FitResult {
 
 /// Elastic FE frequencies (Hz) at E_ref, increasing.
 pub(crate) fn elastic_hz(model: &ModalModel) -> Vec<f64> {
-    let top = model.eigenvalues().iter().cloned().fold(0.0, f64::max);
-    let mut f: Vec<f64> = model
-        .eigenvalues()
-        .iter()
-        .filter(|l| **l > 1e-6 * top)
-        .map(|l| l.sqrt() / (2.0 * PI))
-        .collect();
-    f.sort_by(f64::total_cmp);
-    f
+    model.elastic_hz()
 }
 
 /// The stiffness scale E/E_ref suggested by the first measured peak: (f_exp/f_num)² against the
@@ -324,6 +316,10 @@ pub(crate) fn match_modes(peaks: &[Peak], fe_hz: &[f64]) -> Vec<f64> {
 /// phase (loss factor tan(2 asin ζ) ≈ 2ζ). Exact for poles of that model. `poles`:
 /// (natural frequency in Hz, damping ratio), increasing in frequency. Empty when the model has
 /// no elastic mode or there are no poles.
+///
+/// With supports (which do not scale with the modulus) the FE frequencies are the supported
+/// part's and the modulus is the root of det(s Λ + K̃ + p C̃ + p² I) = 0 nearest that first
+/// estimate ([`crate::supports`]), exact for poles of the supported model.
 pub fn pole_moduli(model: &ModalModel, poles: &[(f64, f64)]) -> Vec<Complex64> {
     let fe = elastic_hz(model);
     if fe.is_empty() || poles.is_empty() {
@@ -342,9 +338,23 @@ pub fn pole_moduli(model: &ModalModel, poles: &[(f64, f64)]) -> Vec<Complex64> {
         .zip(poles)
         .map(|(f_fe, &(f, zeta))| {
             let magnitude = model.e_ref_pa() * (f / f_fe).powi(2);
-            Complex64::from_polar(magnitude, 2.0 * zeta.clamp(0.0, 1.0).asin())
+            let free = Complex64::from_polar(magnitude, 2.0 * zeta.clamp(0.0, 1.0).asin());
+            supported_root(model, free, f, zeta).unwrap_or(free)
         })
         .collect()
+}
+
+/// The modulus (Pa) of a supported model's pole (f Hz, ζ) nearest `start` in |ln(E/start)|;
+/// `None` for a free model or when no finite root exists.
+fn supported_root(model: &ModalModel, start: Complex64, f: f64, zeta: f64) -> Option<Complex64> {
+    let z = zeta.clamp(0.0, 1.0);
+    let pole = 2.0 * PI * f * Complex64::new(-z, (1.0 - z * z).sqrt());
+    let e_ref = model.e_ref_pa();
+    model
+        .supported_pole_scales(pole)?
+        .into_iter()
+        .map(|s| s * e_ref)
+        .min_by(|a, b| (a / start).ln().norm().total_cmp(&(b / start).ln().norm()))
 }
 
 /// Fits the law of `settings` to `measured` through `model`, then checks the result against

@@ -8,6 +8,7 @@
 //! |---|---|
 //! | [`probe`] | sensor and hammer channels mapped to FE nodes |
 //! | [`synthesis`] | exact modal FRF synthesis with a residual (static) term, fast RMS |
+//! | [`supports`] | grounded springs and dashpots of the part, projected on the modes |
 //! | [`direct`] | direct complex solves with faer's sparse LU (the independent check) |
 //! | [`misfit`] | RMS (eqs. 2, 10), log-RMS and complex misfits over a band |
 //! | [`spline`] | not-a-knot cubic spline (the per-mode law's interpolation) |
@@ -40,6 +41,7 @@ pub mod peaks;
 pub mod probe;
 pub mod spline;
 mod start;
+pub mod supports;
 pub mod synthesis;
 pub mod synthetic;
 

@@ -20,9 +20,14 @@
 //! whose error is O((ω²/λ_{m+1})²) relative to the omitted part. Everything is projected on the
 //! response probes C = Pᵀ Φ and the forces F = Φᵀ Q once; a line then costs O(n_resp·m·n_ref), and
 //! the RMS over responses O(m²) per line through the Gram matrix of the projected terms.
+//!
+//! **Supports** (springs and dashpots that do not scale with the modulus,
+//! [`crate::supports`]) couple the modes: the kept modes' coordinates then solve one dense
+//! m × m system per line, Z(ω) q = F, and H = C q plus the same residual terms.
 
 use crate::error::{FitError, inconsistent};
 use crate::probe::Probe;
+use crate::supports::{GroundedSupport, ModalSupports};
 use faer::Mat;
 use faer::sparse::SparseColMatRef;
 use lamdyn_fem::assembly::Assembly;
@@ -33,8 +38,17 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// First bytes of a cached [`ModalModel`] (format version 1).
+/// The share of a supported mode's strain energy in the laminate below which it is the
+/// supports' own mode (bounce, rocking: 8–12 % on the bench's roof on four blocks, whose first
+/// elastic mode mixed with them keeps 41 %).
+pub const SUPPORT_SHARE: f64 = 0.2;
+
+/// First bytes of a cached free [`ModalModel`] (format version 1).
 const CACHE_MAGIC: &[u8] = b"lamdyn modal model v1\n";
+
+/// First bytes of a cached [`ModalModel`] with supports (version 2: version 1's values, then
+/// the supports' K̃ and C̃).
+const CACHE_MAGIC_SUPPORTED: &[u8] = b"lamdyn modal model v2\n";
 
 /// The residual flexibility of the omitted modes.
 #[derive(Debug, Clone)]
@@ -51,6 +65,8 @@ pub struct ModalModel {
     c: Mat<f64>,
     f: Mat<f64>,
     residual: Option<Residual>,
+    /// The supports in the modal basis; `None`: a free part (diagonal synthesis).
+    supports: Option<ModalSupports>,
     e_ref_pa: f64,
     /// Estimated signed relative error of each mode's frequency from the discretization
     /// (f_model = f_converged (1 + δ)); empty when not estimated. Not cached.
@@ -72,9 +88,9 @@ impl ModalModel {
     /// residual terms.
     ///
     /// # Errors
-    /// [`FitError::Inconsistent`] when the model has elastic supports (they do not scale with
-    /// the modulus, so real modes of K0 no longer diagonalize K*(ω): exclude their frequency
-    /// bands instead) or shapes of the wrong size; factorization errors.
+    /// [`FitError::Inconsistent`] when the assembly has springs (the modes must be the free
+    /// part's, K0 alone: give the supports to [`ModalModel::supported`]) or shapes of the
+    /// wrong size; factorization errors.
     pub fn new(
         asm: &Assembly,
         sol: &ModalSolution,
@@ -83,12 +99,32 @@ impl ModalModel {
         e_ref_pa: f64,
         residual: ResidualTerm,
     ) -> Result<Self, FitError> {
+        Self::supported(asm, sol, responses, references, e_ref_pa, residual, &[])
+    }
+
+    /// [`ModalModel::new`] for a part on grounded `supports` ([`crate::supports`]): the basis
+    /// is the free modes of `sol` with the supports' static shapes (Rayleigh–Ritz), and the
+    /// supports couple its coordinates at every line. No supports: [`ModalModel::new`].
+    ///
+    /// # Errors
+    /// As [`ModalModel::new`]; a support acting on a dof the model does not have, or with a
+    /// negative or non-finite stiffness or damping.
+    pub fn supported(
+        asm: &Assembly,
+        sol: &ModalSolution,
+        responses: &[Probe],
+        references: &[Probe],
+        e_ref_pa: f64,
+        residual: ResidualTerm,
+        supports: &[GroundedSupport],
+    ) -> Result<Self, FitError> {
         if !asm.springs.is_empty() {
             return Err(inconsistent(
                 "modal synthesis",
                 format!(
-                    "the model has {} support springs; K*(w) = s(w) K0 needs a free model: exclude \
-                     the supports' frequency bands from the misfit instead",
+                    "the assembly has {} support springs; the modal basis must be the free \
+                     part's modes (K0 alone), with the supports given to \
+                     ModalModel::supported",
                     asm.springs.len()
                 ),
             ));
@@ -103,13 +139,21 @@ impl ModalModel {
                 ),
             ));
         }
-        let m = sol.modes.len();
-        let lambda: Vec<f64> = sol.modes.iter().map(|md| md.eigenvalue).collect();
+        let augmented;
+        let (lambda, shapes) = if supports.is_empty() {
+            let lambda: Vec<f64> = sol.modes.iter().map(|md| md.eigenvalue).collect();
+            (lambda, sol.shapes.as_ref())
+        } else {
+            let (lambda, shapes) = crate::supports::ritz_basis(asm, sol, supports)?;
+            augmented = shapes;
+            (lambda, augmented.as_ref())
+        };
+        let m = lambda.len();
         let c = Mat::from_fn(responses.len(), m, |i, r| {
-            responses[i].dot(|d| sol.shapes[(d, r)])
+            responses[i].dot(|d| shapes[(d, r)])
         });
         let f = Mat::from_fn(m, references.len(), |r, j| {
-            references[j].dot(|d| sol.shapes[(d, r)])
+            references[j].dot(|d| shapes[(d, r)])
         });
         let residual = match residual {
             ResidualTerm::None => None,
@@ -123,14 +167,24 @@ impl ModalModel {
                 references,
             )?),
         };
+        let supports = match supports.is_empty() {
+            true => None,
+            false => Some(ModalSupports::project(shapes, supports)?),
+        };
         Ok(Self {
             lambda,
             c,
             f,
             residual,
+            supports,
             e_ref_pa,
             freq_error: Vec::new(),
         })
+    }
+
+    /// Whether the model has supports (its modes coupled through them).
+    pub fn has_supports(&self) -> bool {
+        self.supports.is_some()
     }
 
     /// The model as bytes for a cache file: a magic line, then little-endian u64 sizes and f64
@@ -139,7 +193,11 @@ impl ModalModel {
     pub fn to_cache_bytes(&self) -> Vec<u8> {
         let (nr, nf) = self.shape();
         let m = self.lambda.len();
-        let mut out = CACHE_MAGIC.to_vec();
+        let magic = match self.supports {
+            None => CACHE_MAGIC,
+            Some(_) => CACHE_MAGIC_SUPPORTED,
+        };
+        let mut out = magic.to_vec();
         for v in [m, nr, nf, usize::from(self.residual.is_some())] {
             out.extend_from_slice(&(v as u64).to_le_bytes());
         }
@@ -156,6 +214,10 @@ impl ModalModel {
             mat(&r.r1, &mut put);
             mat(&r.r2, &mut put);
         }
+        if let Some(sup) = &self.supports {
+            mat(&sup.stiffness, &mut put);
+            mat(&sup.damping, &mut put);
+        }
         out
     }
 
@@ -165,9 +227,15 @@ impl ModalModel {
     /// [`FitError::Inconsistent`] for another format, a truncated file or non-finite values.
     pub fn from_cache_bytes(bytes: &[u8]) -> Result<Self, FitError> {
         let bad = |why: &str| inconsistent("modal model cache", why.into());
-        let body = bytes
-            .strip_prefix(CACHE_MAGIC)
-            .ok_or_else(|| bad("not a lamdyn modal model cache (version 1)"))?;
+        let (body, supported) = match bytes.strip_prefix(CACHE_MAGIC) {
+            Some(body) => (body, false),
+            None => (
+                bytes
+                    .strip_prefix(CACHE_MAGIC_SUPPORTED)
+                    .ok_or_else(|| bad("not a lamdyn modal model cache (version 1 or 2)"))?,
+                true,
+            ),
+        };
         let mut words = body
             .chunks_exact(8)
             .map(|c| <[u8; 8]>::try_from(c).unwrap_or_default());
@@ -176,7 +244,12 @@ impl ModalModel {
             usize::try_from(u64::from_le_bytes(w)).map_err(|_| bad("size too large"))
         };
         let (m, nr, nf, has_residual) = (size()?, size()?, size()?, size()?);
-        let n_values = 1 + m + nr * m + m * nf + has_residual * (1 + 2 * nr * nf);
+        let n_values = 1
+            + m
+            + nr * m
+            + m * nf
+            + has_residual * (1 + 2 * nr * nf)
+            + usize::from(supported) * 2 * m * m;
         if body.len() != 8 * (4 + n_values) || has_residual > 1 {
             return Err(bad("size does not match its header"));
         }
@@ -203,11 +276,16 @@ impl ModalModel {
             r1: mat(take(nr * nf), nr, nf),
             r2: mat(take(nr * nf), nr, nf),
         });
+        let supports = supported.then(|| ModalSupports {
+            stiffness: mat(take(m * m), m, m),
+            damping: mat(take(m * m), m, m),
+        });
         Ok(Self {
             lambda,
             c,
             f,
             residual,
+            supports,
             e_ref_pa,
             freq_error: Vec::new(),
         })
@@ -271,6 +349,59 @@ impl ModalModel {
         &self.lambda
     }
 
+    /// Elastic frequencies (Hz) at E_ref, increasing: the modes with λ above 1e-6 of the
+    /// highest (not rigid-body modes). With supports: the undamped modes of Λ + K̃ that also
+    /// have at least [`SUPPORT_SHARE`] of their strain energy in the laminate (modes mixed with
+    /// the supports included); the others are the supports' own modes (bounce and rocking),
+    /// which barely scale with the modulus.
+    pub fn elastic_hz(&self) -> Vec<f64> {
+        let hz = |l: f64| l.sqrt() / (2.0 * PI);
+        let top = self.lambda.iter().cloned().fold(0.0, f64::max);
+        let mut f: Vec<f64> = match &self.supports {
+            None => self
+                .lambda
+                .iter()
+                .filter(|l| **l > 1e-6 * top)
+                .map(|l| hz(*l))
+                .collect(),
+            Some(supports) => supports
+                .undamped(&self.lambda)
+                .unwrap_or_default()
+                .into_iter()
+                .filter(|&(l, laminate)| l > 1e-6 * top && laminate >= SUPPORT_SHARE)
+                .map(|(l, _)| hz(l))
+                .collect(),
+        };
+        f.sort_by(f64::total_cmp);
+        f
+    }
+
+    /// The supports' own modes (Hz, increasing): the undamped modes of Λ + K̃ at E_ref, not
+    /// rigid, with less than [`SUPPORT_SHARE`] of their strain energy in the laminate; empty
+    /// for a free model.
+    pub fn support_hz(&self) -> Vec<f64> {
+        let Some(supports) = &self.supports else {
+            return Vec::new();
+        };
+        let top = self.lambda.iter().cloned().fold(0.0, f64::max);
+        let mut f: Vec<f64> = supports
+            .undamped(&self.lambda)
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|&(l, laminate)| l > 1e-6 * top && laminate < SUPPORT_SHARE)
+            .map(|(l, _)| l.sqrt() / (2.0 * PI))
+            .collect();
+        f.sort_by(f64::total_cmp);
+        f
+    }
+
+    /// With supports, every modulus scale s = E*/E_ref at which the model has the pole `pole`
+    /// (Laplace variable, rad/s; [`crate::supports`]); `None` for a free model.
+    pub fn supported_pole_scales(&self, pole: Complex64) -> Option<Vec<Complex64>> {
+        let supports = self.supports.as_ref()?;
+        Some(supports.pole_scales(&self.lambda, pole))
+    }
+
     /// Number of responses and references.
     pub fn shape(&self) -> (usize, usize) {
         (self.c.nrows(), self.f.ncols())
@@ -281,15 +412,47 @@ impl ModalModel {
         out.clear();
         let w2 = omega * omega;
         out.extend(self.lambda.iter().map(|l| 1.0 / (l * s - w2)));
-        if let Some(r) = &self.residual {
-            out.push(1.0 / s);
-            out.push(-(s * r.sigma - w2) / (s * s));
+        out.extend(self.residual_coefficients(omega, s).into_iter().flatten());
+    }
+
+    /// The residual terms' coefficients 1/s and −(sσ − ω²)/s² at (ω, s), if the model has them.
+    fn residual_coefficients(&self, omega: f64, s: Complex64) -> Option<[Complex64; 2]> {
+        let r = self.residual.as_ref()?;
+        Some([1.0 / s, -(s * r.sigma - omega * omega) / (s * s)])
+    }
+
+    /// Receptances with supports: the kept modes' coordinates Z(ω)⁻¹F ([`crate::supports`]),
+    /// then C q plus the residual terms; row-major n_resp × n_ref.
+    fn supported_receptance(
+        &self,
+        supports: &ModalSupports,
+        omega: f64,
+        s: Complex64,
+    ) -> Vec<Complex64> {
+        let (nr, nf) = self.shape();
+        let q = supports.solve(&self.lambda, omega, s, self.f.as_ref());
+        let residual = self.residual_coefficients(omega, s);
+        let mut h = Vec::with_capacity(nr * nf);
+        for i in 0..nr {
+            for j in 0..nf {
+                let mut acc: Complex64 = (0..self.lambda.len())
+                    .map(|r| q[(r, j)] * self.c[(i, r)])
+                    .sum();
+                if let (Some(res), Some([g1, g2])) = (&self.residual, residual) {
+                    acc += g1 * res.r1[(i, j)] + g2 * res.r2[(i, j)];
+                }
+                h.push(acc);
+            }
         }
+        h
     }
 
     /// Receptances (m/N) of all responses to all references at ω (rad/s) and s = E*(ω)/E_ref:
     /// row-major n_resp × n_ref.
     pub fn receptance(&self, omega: f64, s: Complex64) -> Vec<Complex64> {
+        if let Some(supports) = &self.supports {
+            return self.supported_receptance(supports, omega, s);
+        }
         let (nr, nf) = self.shape();
         let mut g = Vec::with_capacity(self.lambda.len() + 2);
         self.coefficients(omega, s, &mut g);
@@ -361,12 +524,16 @@ impl ModalModel {
     }
 
     /// A fast evaluator of the RMS receptance over the responses for reference `j`.
+    /// Without supports the forces are folded into the Gram matrix (the terms C_ir F_rj);
+    /// with them the terms are C's columns and the coefficients the coordinates q_j.
     pub fn rms_evaluator(&self, j: usize) -> RmsEvaluator {
         let m = self.lambda.len();
         let extra = if self.residual.is_some() { 2 } else { 0 };
         let nr = self.c.nrows();
+        let folded = self.supports.is_none();
         let a = Mat::from_fn(nr, m + extra, |i, k| match (k < m, &self.residual) {
-            (true, _) => self.c[(i, k)] * self.f[(k, j)],
+            (true, _) if folded => self.c[(i, k)] * self.f[(k, j)],
+            (true, _) => self.c[(i, k)],
             (false, Some(res)) => {
                 if k == m {
                     res.r1[(i, j)]
@@ -381,24 +548,41 @@ impl ModalModel {
             model: self.clone(),
             gram,
             n_responses: nr,
+            reference: j,
         }
     }
 }
 
 /// RMS over responses of the receptance to one reference, by the Gram matrix of the projected
-/// terms: rms²(ω) = gᴴ G g / N with g the coefficient functions at (ω, s).
+/// terms: rms²(ω) = gᴴ G g / N with g the coefficient functions at (ω, s) (with supports: the
+/// kept modes' coordinates for the reference, then the residual terms' coefficients).
 #[derive(Debug, Clone)]
 pub struct RmsEvaluator {
     model: ModalModel,
     gram: Mat<f64>,
     n_responses: usize,
+    reference: usize,
 }
 
 impl RmsEvaluator {
     /// RMS receptance (m/N) at ω (rad/s) for s = E*(ω)/E_ref.
     pub fn rms(&self, omega: f64, s: Complex64) -> f64 {
         let mut g = Vec::new();
-        self.model.coefficients(omega, s, &mut g);
+        match &self.model.supports {
+            None => self.model.coefficients(omega, s, &mut g),
+            Some(supports) => {
+                let j = self.reference;
+                let forces = self.model.f.as_ref().subcols(j, 1);
+                let q = supports.solve(&self.model.lambda, omega, s, forces);
+                g.extend((0..q.nrows()).map(|r| q[(r, 0)]));
+                g.extend(
+                    self.model
+                        .residual_coefficients(omega, s)
+                        .into_iter()
+                        .flatten(),
+                );
+            }
+        }
         // G is real symmetric: gᴴGg = Σ_a G_aa |g_a|² + 2 Σ_{a<b} G_ab Re(ḡ_a g_b).
         let k = g.len();
         let mut acc = 0.0;

@@ -7,5 +7,6 @@ mod it {
     mod misfit;
     mod recovery;
     mod sensors;
+    mod supports;
     mod synthesis;
 }

@@ -73,6 +73,16 @@ impl PointSupport {
     }
 }
 
+impl PointSupport {
+    /// The plan points (x, y in m) the support acts at on a plan spanning `lo` to `hi`: its
+    /// point, or its patch's grid ([`PATCH_POINTS`]), each carrying an equal share.
+    pub fn plan_points(&self, lo: [f64; 2], hi: [f64; 2]) -> Vec<[f64; 2]> {
+        let [fx, fy] = self.xy_fraction;
+        let centre = [lo[0] + fx * (hi[0] - lo[0]), lo[1] + fy * (hi[1] - lo[1])];
+        patch_points(centre, self.patch_m)
+    }
+}
+
 /// The plan's extent of `mesh` (its bottom surface): lowest and highest x and y, m.
 fn plan_extent(mesh: &HexMesh) -> ([f64; 2], [f64; 2]) {
     mesh.bottom.iter().fold(
@@ -117,9 +127,7 @@ pub fn support_terms(
     let mut terms = Vec::new();
     for (i, s) in supports.iter().enumerate() {
         s.check(i)?;
-        let [fx, fy] = s.xy_fraction;
-        let centre = [lo[0] + fx * (hi[0] - lo[0]), lo[1] + fy * (hi[1] - lo[1])];
-        let points = patch_points(centre, s.patch_m);
+        let points = s.plan_points(lo, hi);
         let share = 1.0 / points.len() as f64;
         for [x, y] in points {
             let face = bottom_point(mesh, [x, y]).ok_or_else(|| {

@@ -16,6 +16,7 @@ use lamdyn_ema::identify::{EmaSettings, PoleEstimator};
 use lamdyn_fit::fit::{Covariance, LawKind};
 use lamdyn_fit::misfit::MisfitSpec;
 use lamdyn_fit::probe::SensorMapping;
+use lamdyn_layered::supports::PointSupport;
 use lamdyn_material::laminate::{
     CoreShearFormula, FaceBending, FaceShear, Kinematics, PaperInverseOptions, SandwichStack,
     StackSpec,
@@ -71,6 +72,7 @@ impl RunConfig {
                 residual: job.model.residual,
                 tolerance_m: job.measurement.tolerance_m,
                 sensor_mapping: job.measurement.sensor_mapping,
+                supports: job.inverse.supports.iter().map(|s| s.to_point()).collect(),
             },
             paper_fit: PaperFitConfig {
                 law: job.fit.law,
@@ -193,6 +195,9 @@ pub struct ModelConfig {
     pub tolerance_m: f64,
     /// How the channels' points map onto the model.
     pub sensor_mapping: SensorMapping,
+    /// The supports the part rests on (`[[inverse.supports]]`, the layered model's too); the
+    /// model file's node springs are added to them.
+    pub supports: Vec<PointSupport>,
 }
 
 /// The paper's effective-modulus fit.

@@ -18,6 +18,7 @@ use lamdyn_fem::model::ModelSpec;
 use lamdyn_fit::fit::{Covariance, FitSettings, LawKind, Pole};
 use lamdyn_fit::misfit::MisfitSpec;
 use lamdyn_fit::probe::{SensorPlacement, placement_line, probes_with};
+use lamdyn_fit::supports::GroundedSupport;
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_frf::FrfSet;
 use lamdyn_material::law::ViscoelasticLaw;
@@ -182,14 +183,15 @@ pub struct FitProblem {
     pub notes: Vec<String>,
 }
 
-/// The modal model of a free shell model at the channels of `set`: mesh, assembly, the lowest
-/// `modes` modes, each channel placed on the mesh as `placement` says, and the static
-/// residual term when `residual` (paper eq. 4: K*(ω) = s(ω) K0). Returns the model and a line
-/// describing it; `name` names the model and `source` the measurement in messages.
+/// The modal model of a shell model at the channels of `set`: mesh, assembly, the lowest
+/// `modes` free modes, each channel placed on the mesh as `placement` says, and the static
+/// residual term when `residual` (paper eq. 4: K*(ω) = s(ω) K0); the model file's node
+/// springs, which do not scale with the modulus, couple the modes
+/// ([`lamdyn_fit::supports`]). Returns the model and a line describing it; `name` names the
+/// model and `source` the measurement in messages.
 ///
 /// # Errors
-/// An invalid model, fewer than 7 modes, elastic supports (the scaling holds for a free model
-/// only), channels off the mesh, and the solver's failures.
+/// An invalid model, fewer than 7 modes, channels off the mesh, and the solver's failures.
 #[allow(clippy::too_many_arguments)]
 pub fn modal_model(
     spec: &ModelSpec,
@@ -202,13 +204,6 @@ pub fn modal_model(
     residual: bool,
     progress: &dyn Reporter,
 ) -> Result<(ModalModel, String)> {
-    if !spec.supports.is_empty() {
-        crate::bail!(
-            "model: {name} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: \
-             remove them and exclude their resonance bands with fit.misfit.exclude_hz",
-            spec.supports.len()
-        );
-    }
     if modes < 7 {
         crate::bail!(
             "model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode"
@@ -222,7 +217,11 @@ pub fn modal_model(
         crate::bail!("measurement.tolerance_m: {tolerance_m} must be a positive length in m");
     }
     let invalid = || format!("invalid model {name}");
-    let (mesh, _) = spec.build(base).with_context(invalid)?;
+    let (mesh, springs) = spec.build(base).with_context(invalid)?;
+    let supports: Vec<GroundedSupport> = springs
+        .iter()
+        .flat_map(GroundedSupport::from_node_spring)
+        .collect();
     let asm = Assembly::new(&mesh, &spec.material, &[]).with_context(invalid)?;
     let channels = || format!("channels of {source}");
     let resp = probes_with(&mesh, set.responses(), tolerance_m, mapping).with_context(channels)?;
@@ -234,8 +233,9 @@ pub fn modal_model(
     } else {
         ResidualTerm::None
     };
-    let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, term)?;
-    let line = format!(
+    let young = spec.material.young_pa;
+    let model = ModalModel::supported(&asm, &sol, &resp, &refs, young, term, &supports)?;
+    let mut line = format!(
         "{name}: {} nodes, {} {}, {modes} modes{}, E_ref = {:.4e} Pa; {}",
         mesh.nodes().len(),
         mesh.n_elements(),
@@ -244,6 +244,14 @@ pub fn modal_model(
         spec.material.young_pa,
         placement_line(mapping, &[resp.as_slice(), refs.as_slice()].concat())
     );
+    if !supports.is_empty() {
+        line.push_str(&crate::text::shell_model_on_supports(
+            0,
+            springs.len(),
+            model.eigenvalues().len() - sol.modes.len(),
+            &model.support_hz(),
+        ));
+    }
     Ok((model, line))
 }
 
@@ -301,7 +309,8 @@ pub fn with_discretization_error(
     top_hz: f64,
     progress: &dyn Reporter,
 ) -> Result<(ModalModel, String)> {
-    let (mesh, springs) = spec.build(base)?;
+    // The estimate is of the free modes the basis starts from: the supports stay out.
+    let (mesh, _) = spec.build(base)?;
     let n_all = model.eigenvalues().len();
     let within = model
         .eigenvalues()
@@ -315,7 +324,7 @@ pub fn with_discretization_error(
         &mesh,
         surface.as_deref(),
         &spec.material,
-        &springs,
+        &[],
         n_est,
         &AsProgress(progress),
     )?;

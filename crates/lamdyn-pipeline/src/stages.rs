@@ -19,16 +19,19 @@ use crate::{AsProgress, PipelineError, Reporter};
 use crate::{bail, err};
 use crate::{layered, text, uncertainty};
 use lamdyn_ema::identify::{EmaResult, identify_with};
-use lamdyn_fem::assembly::Assembly;
+use lamdyn_fem::assembly::{Assembly, NodeSpring};
 use lamdyn_fem::eigen::{ModalParams, solve_modes};
+use lamdyn_fem::mesh::Mesh;
 use lamdyn_fem::model::MeshSpec;
 use lamdyn_fit::FitError;
 use lamdyn_fit::fit::{FitResult, FitSettings, fit};
 use lamdyn_fit::misfit::Objective;
 use lamdyn_fit::modes::{PeakComparison, compare_peaks};
 use lamdyn_fit::probe::{placement_line, probes_with};
+use lamdyn_fit::supports::GroundedSupport;
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_frf::{Channel, FrfSet};
+use lamdyn_layered::supports::PointSupport;
 use lamdyn_material::MaterialError;
 use lamdyn_material::causality::{CausalityParams, CausalityVerdict};
 use lamdyn_material::laminate::paper_inverse;
@@ -703,13 +706,6 @@ fn build_model(
         dir: spec_dir,
         label,
     } = &config.file;
-    if !spec.supports.is_empty() {
-        bail!(
-            "model: {label} has {} elastic supports; K*(w) = s(w) K0 holds for a free model only: \
-             remove them and keep the support resonances out of the fit band",
-            spec.supports.len()
-        );
-    }
     let modes = config.modes.unwrap_or(spec.solver.modes);
     if modes < 7 {
         bail!("model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode");
@@ -728,6 +724,9 @@ fn build_model(
     }
     key = channels_key(key, set.responses());
     key = channels_key(key, set.references());
+    if !config.supports.is_empty() {
+        key = key.bytes(format!("{:?}", config.supports).as_bytes());
+    }
     let line = |n_nodes: String, n_el: String| {
         format!(
             "{label}: {n_nodes} nodes, {n_el} elements, {modes} modes{}, E_ref = {:.4e} Pa, h = \
@@ -749,9 +748,11 @@ fn build_model(
             }
         }
     }
-    let (mesh, _) = spec
+    let (mesh, node_springs) = spec
         .build(spec_dir)
         .with_context(|| format!("invalid model {label}"))?;
+    let supports = shell_supports(&mesh, &node_springs, &config.supports)
+        .with_context(|| format!("the part's supports on model {label}"))?;
     let asm = Assembly::new(&mesh, &spec.material, &[])
         .with_context(|| format!("invalid model {label}"))?;
     let mapping = config.sensor_mapping;
@@ -768,8 +769,9 @@ fn build_model(
     } else {
         ResidualTerm::None
     };
-    let model = ModalModel::new(&asm, &sol, &resp, &refs, spec.material.young_pa, residual)?;
-    let text = format!(
+    let young = spec.material.young_pa;
+    let model = ModalModel::supported(&asm, &sol, &resp, &refs, young, residual, &supports)?;
+    let mut text = format!(
         "{}; {}",
         line(
             mesh.nodes().len().to_string(),
@@ -777,8 +779,37 @@ fn build_model(
         ),
         placement_line(mapping, &[resp.as_slice(), refs.as_slice()].concat())
     );
+    if !supports.is_empty() {
+        text.push_str(&text::shell_model_on_supports(
+            config.supports.len(),
+            node_springs.len(),
+            model.eigenvalues().len() - sol.modes.len(),
+            &model.support_hz(),
+        ));
+    }
     cache.put("model", key, &pack_model(&text, &model.to_cache_bytes()))?;
     Ok(((model, text), false))
+}
+
+/// The part's supports on the shell model: `[[inverse.supports]]` placed on its plan and the
+/// model file's node springs ([`GroundedSupport`]).
+fn shell_supports(
+    mesh: &Mesh,
+    node_springs: &[NodeSpring],
+    supports: &[PointSupport],
+) -> Result<Vec<GroundedSupport>> {
+    let mut out = GroundedSupport::on_plan(mesh, supports)?;
+    let groups = out.iter().map(|s| s.group + 1).max().unwrap_or(0);
+    for s in node_springs
+        .iter()
+        .flat_map(GroundedSupport::from_node_spring)
+    {
+        out.push(GroundedSupport {
+            group: groups + s.group,
+            ..s
+        });
+    }
+    Ok(out)
 }
 
 /// A cache entry of the shell model: its description line (mesh size, sensor placement),
@@ -1048,18 +1079,6 @@ fn read_truth(path: &Path) -> Result<Truth> {
     })
 }
 
-/// Whether the paper's route, when it `ran`, fitted its free shell model to a part that the
-/// layered model sets on supports (`[[inverse.supports]]`): its E_eff at the modes coupled to
-/// them is not the laminate's.
-fn free_shell_model_on_supports(config: &RunConfig, ran: bool) -> Option<String> {
-    let supports = config
-        .layered
-        .setup
-        .as_ref()
-        .map_or(0, |s| s.job_supports.len());
-    (ran && supports > 0).then(|| text::free_shell_model_on_supports(supports))
-}
-
 fn collect_warnings(
     config: &RunConfig,
     measured: &Measured,
@@ -1074,7 +1093,6 @@ fn collect_warnings(
     if config.sandwich.stack.is_none() && u.options.samples > 0 {
         out.push(text::monte_carlo_skipped(u.stack.layers.len()));
     }
-    out.extend(free_shell_model_on_supports(config, fit.is_some()));
     let min_coherence = config.measurement.section.min_coherence;
     if let Some(c) = &measured.min_coherence {
         let names = measured.set.responses();
@@ -1309,10 +1327,10 @@ mod tests {
     use crate::config::MAX_DAMPING_ALONE;
     use lamdyn_layered::convergence::ConvergedMode;
 
-    /// A part on supports whose paper's route ran on the free shell model is told so; a free
-    /// part, or a run without the paper's route, is not.
+    /// The part's supports (`[[inverse.supports]]`) reach the shell model: one group per
+    /// support and axis with a stiffness, the model file's node springs after them.
     #[test]
-    fn the_free_shell_model_on_a_supported_part_is_named() {
+    fn the_shell_model_takes_the_parts_supports() {
         let dir = std::env::temp_dir().join(format!("lamdyn-free-shell-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(
@@ -1338,11 +1356,26 @@ mod tests {
         let one =
             "[[inverse.supports]]\nxy_fraction = [0.1, 0.1]\nstiffness_n_m = [1.0, 1.0, 4.0]\n";
         let supported = RunConfig::resolve(&job(&one.repeat(2)), &path).unwrap();
-        let warning = free_shell_model_on_supports(&supported, true).unwrap();
-        assert!(warning.contains("rests on 2 supports"), "{warning}");
-        assert!(free_shell_model_on_supports(&supported, false).is_none());
         let free = RunConfig::resolve(&job(""), &path).unwrap();
-        assert!(free_shell_model_on_supports(&free, true).is_none());
+        assert_eq!(supported.model.supports.len(), 2);
+        assert!(free.model.supports.is_empty());
+        let (mesh, _) = supported.model.file.spec.build(&dir).unwrap();
+        let spring = NodeSpring {
+            node: 3,
+            translational_n_per_m: [0.0, 0.0, 5.0],
+            rotational_nm_per_rad: [0.0; 3],
+        };
+        let on_shell = shell_supports(&mesh, &[spring], &supported.model.supports).unwrap();
+        let groups: Vec<usize> = on_shell.iter().map(|s| s.group).collect();
+        // The node spring's group after the six of the supports: 6 + (6 node + dof).
+        assert_eq!(groups, [0, 1, 2, 3, 4, 5, 6 + 6 * 3 + 2]);
+        let normal: f64 = on_shell
+            .iter()
+            .filter(|s| s.group % 3 == 2 && s.group < 6)
+            .map(|s| s.stiffness_n_m)
+            .sum();
+        assert_eq!(normal, 8.0);
+        assert_eq!(on_shell[6].probe.entries(), [(6 * 3 + 2, 1.0)]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -26,14 +26,22 @@ pub fn paper_route_failed(why: &str) -> String {
     )
 }
 
-/// The paper's route ran on a free shell model while the layered model rests on `supports`
-/// supports.
-pub fn free_shell_model_on_supports(supports: usize) -> String {
+/// The shell model's supports, appended to its line: `on_plan` of `[[inverse.supports]]`,
+/// `node_springs` of the model file, `shapes` static shapes added to its basis, the supports'
+/// own modes at `support_hz` (at E_ref; [`lamdyn_fit::synthesis::SUPPORT_SHARE`]).
+pub fn shell_model_on_supports(
+    on_plan: usize,
+    node_springs: usize,
+    shapes: usize,
+    support_hz: &[f64],
+) -> String {
+    let modes: Vec<String> = support_hz.iter().map(|f| format!("{f:.2}")).collect();
     format!(
-        "fit: the paper's route fits a free shell model (K*(w) = s(w) K0 holds without \
-         supports) while the part rests on {supports} supports ([[inverse.supports]], taken by \
-         the layered model alone): at modes coupled to the supports its E_eff, and the paper's \
-         and the exact G*, are not the core's; read the layered and the FRF-fit columns there"
+        "; on {on_plan} supports ([[inverse.supports]]) and {node_springs} node springs (model \
+         file), {shapes} static shapes added to the basis; the supports' own modes (under \
+         {:.0} % of their strain energy in the laminate) at [{}] Hz",
+        100.0 * lamdyn_fit::synthesis::SUPPORT_SHARE,
+        modes.join(", ")
     )
 }
 

@@ -56,3 +56,16 @@ pub fn model(
     )
     .unwrap()
 }
+
+/// The fast RMS evaluator of `m` for reference 0 equals the RMS of its receptances over the
+/// responses, to rounding, at lines below, among and above the modes.
+pub fn assert_rms_evaluator_exact(m: &ModalModel) {
+    let ev = m.rms_evaluator(0);
+    for f in [3.0, 16.0, 41.0, 120.0] {
+        let w = 2.0 * std::f64::consts::PI * f;
+        let s = num_complex::Complex64::new(0.97, 0.004);
+        let h = m.receptance(w, s);
+        let direct = (h.iter().map(|v| v.norm_sqr()).sum::<f64>() / h.len() as f64).sqrt();
+        assert!((ev.rms(w, s) / direct - 1.0).abs() < 1e-12, "{f} Hz");
+    }
+}

@@ -24,7 +24,7 @@ fn inconsistent_inputs() {
         "{e}"
     );
     assert!(e.ends_with("(sensor off the mesh?)"), "{e}");
-    // Supports: synthesis needs a free model.
+    // Supports: the basis must be the free part's, the supports given beside it.
     let sprung = Assembly::new(
         &mesh,
         &GLASS,
@@ -46,7 +46,7 @@ fn inconsistent_inputs() {
     .unwrap_err()
     .to_string();
     assert!(
-        e.starts_with("modal synthesis: the model has 1 support springs"),
+        e.starts_with("modal synthesis: the assembly has 1 support springs"),
         "{e}"
     );
     let m = model(&asm, &sol, &mesh, &responses, &refs, ResidualTerm::None);

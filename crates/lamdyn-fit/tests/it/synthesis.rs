@@ -125,14 +125,7 @@ fn rms_evaluator_equals_rms_of_the_frfs() {
     let refs = hammer(&mesh);
     let (asm, sol) = solve(&mesh, 20);
     let m = model(&asm, &sol, &mesh, &responses, &refs, ResidualTerm::Static);
-    let ev = m.rms_evaluator(0);
-    for f in [3.0, 16.0, 41.0, 120.0] {
-        let w = 2.0 * PI * f;
-        let s = Complex64::new(0.97, 0.004);
-        let h = m.receptance(w, s);
-        let direct = (h.iter().map(|v| v.norm_sqr()).sum::<f64>() / h.len() as f64).sqrt();
-        assert!((ev.rms(w, s) / direct - 1.0).abs() < 1e-12, "{f} Hz");
-    }
+    assert_rms_evaluator_exact(&m);
 }
 
 /// A cached model reads back bit for bit; a truncated or foreign file is refused.

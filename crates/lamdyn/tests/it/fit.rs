@@ -216,14 +216,18 @@ fn bad_inputs_give_clear_errors() {
     let sub = dir.join("key");
     std::fs::create_dir_all(&sub).unwrap();
     cases.push((job_with(&sub, &[], "moduls = 3"), "moduls"));
-    // A model with supports.
-    let model = std::fs::read_to_string(base.join("model.toml")).unwrap()
-        + "\n[[supports]]\npoint_m = [0.0, 0.0, 0.0]\ntranslational_n_per_m = [0.0, 0.0, 1e4]\n";
-    let sub = dir.join("supports");
+    // A model's support off the mesh.
+    let spring = |point: &str| {
+        std::fs::read_to_string(base.join("model.toml")).unwrap()
+            + &format!(
+                "\n[[supports]]\npoint_m = {point}\ntranslational_n_per_m = [0.0, 0.0, 1e4]\n"
+            )
+    };
+    let sub = dir.join("support-off");
     std::fs::create_dir_all(&sub).unwrap();
     cases.push((
-        job_with(&sub, &[("model.toml", model)], ""),
-        "exclude their resonance bands",
+        job_with(&sub, &[("model.toml", spring("[5.0, 5.0, 0.0]"))], ""),
+        "point_m",
     ));
     // Frequencies x1000 used to fit to E0 = 1.48e16 Pa with exit 0.
     let khz: Vec<String> = frf
@@ -253,6 +257,13 @@ fn bad_inputs_give_clear_errors() {
         assert_eq!(code, 2, "{job}: {out}");
         assert!(err.contains(needle), "{job}: expected {needle:?} in {err}");
     }
+    // A model on a node spring is fitted with the spring coupling its modes.
+    let sub = dir.join("supports");
+    std::fs::create_dir_all(&sub).unwrap();
+    let job = job_with(&sub, &[("model.toml", spring("[0.0, 0.0, 0.0]"))], "");
+    let (code, out, err) = lamdyn(&["fit", &job]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("and 1 node springs (model file)"), "{out}");
     let (code, _, err) = lamdyn(&["fit", "--example", "paper-plate", "--noise", "NaN"]);
     assert_eq!(code, 2);
     assert!(err.contains("noise"), "{err}");
