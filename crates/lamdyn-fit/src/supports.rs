@@ -12,7 +12,7 @@
 //!
 //! **The basis.** A support on a thin plate is stiff beside the plate's own static stiffness at
 //! its point (a foam block under 4 mm glass), so the plate deforms locally around it, a shape
-//! the free modes converge to slowly (2 % off in the FRFs with 30 modes on the tests' plate).
+//! the free modes converge to slowly (measured in docs/fit.md, "Supports").
 //! The basis is therefore the free modes plus one static shape per support group g
 //! (a support and axis): x_g = (K0 − σM)⁻¹ f_g, f_g = Σ_{b ∈ g} w_b b with w_b the term's
 //! stiffness (its damping where it has none), the force pattern of the group moved rigidly.
@@ -220,7 +220,9 @@ impl ModalSupports {
         })
     }
 
-    /// The modal coordinates Z(ω)⁻¹ F (m × columns of `forces`).
+    /// The modal coordinates Z(ω)⁻¹ F (m × columns of `forces`): LU with partial pivoting,
+    /// sequential, so that the sums are the same on any thread count (the lines are the
+    /// parallel work).
     pub(crate) fn solve(
         &self,
         lambda: &[f64],
@@ -228,12 +230,30 @@ impl ModalSupports {
         s: Complex64,
         forces: MatRef<'_, f64>,
     ) -> Mat<c64> {
-        let rhs = Mat::from_fn(forces.nrows(), forces.ncols(), |r, j| {
+        use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+        use faer::linalg::lu::partial_pivoting::{factor, solve};
+        let m = lambda.len();
+        let mut lu = self.dynamic_stiffness(lambda, omega, s);
+        let mut rhs = Mat::from_fn(forces.nrows(), forces.ncols(), |r, j| {
             c64::new(forces[(r, j)], 0.0)
         });
-        self.dynamic_stiffness(lambda, omega, s)
-            .partial_piv_lu()
-            .solve(&rhs)
+        let (mut perm, mut perm_inv) = (vec![0usize; m], vec![0usize; m]);
+        let par = faer::Par::Seq;
+        let mut mem = MemBuffer::new(StackReq::any_of(&[
+            factor::lu_in_place_scratch::<usize, c64>(m, m, par, Default::default()),
+            solve::solve_in_place_scratch::<usize, c64>(m, rhs.ncols(), par),
+        ]));
+        let stack = MemStack::new(&mut mem);
+        let (_, row_perm) = factor::lu_in_place(
+            lu.as_mut(),
+            &mut perm,
+            &mut perm_inv,
+            par,
+            stack,
+            Default::default(),
+        );
+        solve::solve_in_place(lu.as_ref(), lu.as_ref(), row_perm, rhs.as_mut(), par, stack);
+        rhs
     }
 
     /// The undamped modes at s = 1: eigenvalues of Λ + K̃ (rad²/s², increasing) and each
