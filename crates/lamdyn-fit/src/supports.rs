@@ -36,7 +36,6 @@
 
 use crate::error::{FitError, inconsistent};
 use crate::probe::Probe;
-use faer::linalg::solvers::Solve;
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef, c64};
 use lamdyn_fem::assembly::{Assembly, NodeSpring};
@@ -230,30 +229,10 @@ impl ModalSupports {
         s: Complex64,
         forces: MatRef<'_, f64>,
     ) -> Mat<c64> {
-        use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-        use faer::linalg::lu::partial_pivoting::{factor, solve};
-        let m = lambda.len();
-        let mut lu = self.dynamic_stiffness(lambda, omega, s);
-        let mut rhs = Mat::from_fn(forces.nrows(), forces.ncols(), |r, j| {
+        let rhs = Mat::from_fn(forces.nrows(), forces.ncols(), |r, j| {
             c64::new(forces[(r, j)], 0.0)
         });
-        let (mut perm, mut perm_inv) = (vec![0usize; m], vec![0usize; m]);
-        let par = faer::Par::Seq;
-        let mut mem = MemBuffer::new(StackReq::any_of(&[
-            factor::lu_in_place_scratch::<usize, c64>(m, m, par, Default::default()),
-            solve::solve_in_place_scratch::<usize, c64>(m, rhs.ncols(), par),
-        ]));
-        let stack = MemStack::new(&mut mem);
-        let (_, row_perm) = factor::lu_in_place(
-            lu.as_mut(),
-            &mut perm,
-            &mut perm_inv,
-            par,
-            stack,
-            Default::default(),
-        );
-        solve::solve_in_place(lu.as_ref(), lu.as_ref(), row_perm, rhs.as_mut(), par, stack);
-        rhs
+        solve_sequential(self.dynamic_stiffness(lambda, omega, s), rhs)
     }
 
     /// The undamped modes at s = 1: eigenvalues of Λ + K̃ (rad²/s², increasing) and each
@@ -290,18 +269,43 @@ impl ModalSupports {
         let lam = Mat::from_fn(m, m, |a, b| {
             c64::new(if a == b { -lambda[a] } else { 0.0 }, 0.0)
         });
-        let t = r.partial_piv_lu().solve(&lam);
+        let t = solve_sequential(r, lam);
         if (0..m).any(|a| (0..m).any(|b| !(t[(a, b)].re.is_finite() && t[(a, b)].im.is_finite()))) {
             return Vec::new();
         }
         let top = lambda.iter().cloned().fold(0.0, f64::max);
-        let floor = 1e-9 * top / pole.norm_sqr();
+        // Rigid rows give ν at rounding, about 2e-16 top/|p|²; a genuine ν is λ_r/|p|².
+        let floor = 1e-12 * top / pole.norm_sqr();
         lamdyn_layered::seq::eigenvalues(t.as_ref())
             .into_iter()
             .filter(|nu| nu.norm() > floor)
             .map(|nu| 1.0 / nu)
             .collect()
     }
+}
+
+/// A⁻¹ B by LU with partial pivoting, sequential: the same bits on any thread count.
+fn solve_sequential(mut a: Mat<c64>, mut b: Mat<c64>) -> Mat<c64> {
+    use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+    use faer::linalg::lu::partial_pivoting::{factor, solve};
+    let m = a.nrows();
+    let (mut perm, mut perm_inv) = (vec![0usize; m], vec![0usize; m]);
+    let par = faer::Par::Seq;
+    let mut mem = MemBuffer::new(StackReq::any_of(&[
+        factor::lu_in_place_scratch::<usize, c64>(m, m, par, Default::default()),
+        solve::solve_in_place_scratch::<usize, c64>(m, b.ncols(), par),
+    ]));
+    let stack = MemStack::new(&mut mem);
+    let (_, row_perm) = factor::lu_in_place(
+        a.as_mut(),
+        &mut perm,
+        &mut perm_inv,
+        par,
+        stack,
+        Default::default(),
+    );
+    solve::solve_in_place(a.as_ref(), a.as_ref(), row_perm, b.as_mut(), par, stack);
+    b
 }
 
 /// Relative size (in the M-norm) below which a static shape adds nothing new to the basis.

@@ -357,6 +357,7 @@ impl ModalModel {
     pub fn elastic_hz(&self) -> Vec<f64> {
         let hz = |l: f64| l.sqrt() / (2.0 * PI);
         let top = self.lambda.iter().cloned().fold(0.0, f64::max);
+        let floor = self.rigid_floor();
         let mut f: Vec<f64> = match &self.supports {
             None => self
                 .lambda
@@ -368,7 +369,7 @@ impl ModalModel {
                 .undamped(&self.lambda)
                 .unwrap_or_default()
                 .into_iter()
-                .filter(|&(l, laminate)| l > 1e-6 * top && laminate >= SUPPORT_SHARE)
+                .filter(|&(l, laminate)| l > floor && laminate >= SUPPORT_SHARE)
                 .map(|(l, _)| hz(l))
                 .collect(),
         };
@@ -383,16 +384,25 @@ impl ModalModel {
         let Some(supports) = &self.supports else {
             return Vec::new();
         };
-        let top = self.lambda.iter().cloned().fold(0.0, f64::max);
+        let floor = self.rigid_floor();
         let mut f: Vec<f64> = supports
             .undamped(&self.lambda)
             .unwrap_or_default()
             .into_iter()
-            .filter(|&(l, laminate)| l > 1e-6 * top && laminate < SUPPORT_SHARE)
+            .filter(|&(l, laminate)| l > floor && laminate < SUPPORT_SHARE)
             .map(|(l, _)| l.sqrt() / (2.0 * PI))
             .collect();
         f.sort_by(f64::total_cmp);
         f
+    }
+
+    /// The eigenvalue (rad²/s²) below which a supported model's mode is rigid: 1e-6 of the
+    /// median eigenvalue. Not of the highest, as a free model's rule: the supports' static
+    /// shapes can have Rayleigh quotients far above the band (a point spring's local dent).
+    fn rigid_floor(&self) -> f64 {
+        let mut l: Vec<f64> = self.lambda.iter().copied().filter(|l| *l > 0.0).collect();
+        l.sort_by(f64::total_cmp);
+        l.get(l.len() / 2).map_or(0.0, |median| 1e-6 * median)
     }
 
     /// With supports, every modulus scale s = E*/E_ref at which the model has the pole `pole`
