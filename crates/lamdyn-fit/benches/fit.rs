@@ -15,7 +15,6 @@ use lamdyn_fit::misfit::{MisfitKind, MisfitSpec, Objective};
 use lamdyn_fit::supports::GroundedSupport;
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
 use lamdyn_fit::synthetic::PaperPlateCase;
-use lamdyn_layered::supports::PointSupport;
 use lamdyn_material::law::{PaperEq7Law, ViscoelasticLaw};
 use std::time::Duration;
 
@@ -88,18 +87,10 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-/// The case's plate on four 5 × 5 cm foam blocks near its corners (20 kN/m and 20 N s/m
-/// normal, 5 kN/m in plane each).
+/// The case's plate on four foam blocks near its corners
+/// ([`lamdyn_fit::synthetic::corner_foam_blocks`]).
 fn supported_model(case: &lamdyn_fit::synthetic::SyntheticCase) -> ModalModel {
-    let blocks: Vec<PointSupport> = [[0.15, 0.15], [0.85, 0.15], [0.85, 0.85], [0.15, 0.85]]
-        .into_iter()
-        .map(|xy_fraction| PointSupport {
-            xy_fraction,
-            stiffness_n_m: [5e3, 5e3, 2e4],
-            damping_n_s_m: [0.0, 0.0, 20.0],
-            patch_m: [0.05, 0.05],
-        })
-        .collect();
+    let blocks = lamdyn_fit::synthetic::corner_foam_blocks();
     let supports = GroundedSupport::on_plan(&case.mesh, &blocks).expect("supports");
     let modes = case.model.eigenvalues().len();
     let sol = solve_modes(&case.assembly, &ModalParams::lowest(modes), &Silent).expect("modes");

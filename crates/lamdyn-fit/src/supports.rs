@@ -36,11 +36,10 @@
 
 use crate::error::{FitError, inconsistent};
 use crate::probe::Probe;
-use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef, c64};
 use lamdyn_fem::assembly::{Assembly, NodeSpring};
 use lamdyn_fem::eigen::ModalSolution;
-use lamdyn_fem::eigen::factor::FactorPlan;
+use lamdyn_fem::eigen::factor::LltFactor;
 use lamdyn_fem::mesh::{Locator, Mesh};
 use lamdyn_fem::sparse::symmetric_matmul;
 use lamdyn_layered::supports::PointSupport;
@@ -320,10 +319,12 @@ pub(crate) fn ritz_basis(
     asm: &Assembly,
     sol: &ModalSolution,
     supports: &[GroundedSupport],
+    factor: &LltFactor<'_>,
 ) -> Result<(Vec<f64>, Mat<f64>), FitError> {
     let n = asm.n_dofs();
     let phi = sol.shapes.as_ref();
-    let mut x = static_shapes(asm, sol.info.shift, supports)?;
+    let mut x = group_forces(n, supports);
+    factor.solve_in_place(x.as_mut());
     let mut mx = Mat::zeros(n, x.ncols());
     symmetric_matmul(asm.mass.as_ref(), x.as_ref(), mx.as_mut());
     let seq = lamdyn_layered::seq::mul;
@@ -362,17 +363,13 @@ pub(crate) fn ritz_basis(
     Ok((lambda, seq(v.as_ref(), evd.U())))
 }
 
-/// x_g = (K0 − σM)⁻¹ f_g for each support group (module docs), n × groups.
-fn static_shapes(
-    asm: &Assembly,
-    sigma: f64,
-    supports: &[GroundedSupport],
-) -> Result<Mat<f64>, FitError> {
+/// The force patterns f_g of the support groups (module docs), n × groups: the static shapes
+/// once solved with K0 − σM.
+fn group_forces(n: usize, supports: &[GroundedSupport]) -> Mat<f64> {
     let mut groups: BTreeMap<usize, Vec<&GroundedSupport>> = BTreeMap::new();
     for s in supports {
         groups.entry(s.group).or_default().push(s);
     }
-    let n = asm.n_dofs();
     let mut f = Mat::zeros(n, groups.len());
     for (j, members) in groups.values().enumerate() {
         let stiff = members.iter().any(|s| s.stiffness_n_m > 0.0);
@@ -389,13 +386,5 @@ fn static_shapes(
             }
         }
     }
-    let plan = FactorPlan::new(&asm.pattern)?;
-    let shifted = asm.shifted_values(asm.stiffness.val(), sigma);
-    let factor = plan.llt(
-        SparseColMatRef::new(asm.stiffness.symbolic(), &shifted),
-        sigma,
-        groups.len(),
-    )?;
-    factor.solve_in_place(f.as_mut());
-    Ok(f)
+    f
 }

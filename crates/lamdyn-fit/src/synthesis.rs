@@ -32,7 +32,7 @@ use faer::Mat;
 use faer::sparse::SparseColMatRef;
 use lamdyn_fem::assembly::Assembly;
 use lamdyn_fem::eigen::ModalSolution;
-use lamdyn_fem::eigen::factor::FactorPlan;
+use lamdyn_fem::eigen::factor::{FactorPlan, LltFactor};
 use lamdyn_frf::{Channel, FrfSet, Quantity};
 use num_complex::Complex64;
 use rayon::prelude::*;
@@ -139,12 +139,22 @@ impl ModalModel {
                 ),
             ));
         }
+        let sigma = sol.info.shift;
+        let plan = match residual == ResidualTerm::Static || !supports.is_empty() {
+            true => Some(FactorPlan::new(&asm.pattern)?),
+            false => None,
+        };
+        let factor = match &plan {
+            Some(plan) => Some(shifted_factor(asm, plan, sigma, references.len())?),
+            None => None,
+        };
         let augmented;
         let (lambda, shapes) = if supports.is_empty() {
             let lambda: Vec<f64> = sol.modes.iter().map(|md| md.eigenvalue).collect();
             (lambda, sol.shapes.as_ref())
         } else {
-            let (lambda, shapes) = crate::supports::ritz_basis(asm, sol, supports)?;
+            let factor = factor.as_ref().expect("factored for supports");
+            let (lambda, shapes) = crate::supports::ritz_basis(asm, sol, supports, factor)?;
             augmented = shapes;
             (lambda, augmented.as_ref())
         };
@@ -159,7 +169,8 @@ impl ModalModel {
             ResidualTerm::None => None,
             ResidualTerm::Static => Some(residual_terms(
                 asm,
-                sol.info.shift,
+                factor.as_ref().expect("factored for the residual"),
+                sigma,
                 &lambda,
                 &c,
                 &f,
@@ -355,24 +366,16 @@ impl ModalModel {
     /// the supports included); the others are the supports' own modes (bounce and rocking),
     /// which barely scale with the modulus.
     pub fn elastic_hz(&self) -> Vec<f64> {
-        let hz = |l: f64| l.sqrt() / (2.0 * PI);
+        if self.supports.is_some() {
+            return self.supported_modes_hz(|laminate| laminate >= SUPPORT_SHARE);
+        }
         let top = self.lambda.iter().cloned().fold(0.0, f64::max);
-        let floor = self.rigid_floor();
-        let mut f: Vec<f64> = match &self.supports {
-            None => self
-                .lambda
-                .iter()
-                .filter(|l| **l > 1e-6 * top)
-                .map(|l| hz(*l))
-                .collect(),
-            Some(supports) => supports
-                .undamped(&self.lambda)
-                .unwrap_or_default()
-                .into_iter()
-                .filter(|&(l, laminate)| l > floor && laminate >= SUPPORT_SHARE)
-                .map(|(l, _)| hz(l))
-                .collect(),
-        };
+        let mut f: Vec<f64> = self
+            .lambda
+            .iter()
+            .filter(|l| **l > 1e-6 * top)
+            .map(|l| l.sqrt() / (2.0 * PI))
+            .collect();
         f.sort_by(f64::total_cmp);
         f
     }
@@ -381,6 +384,12 @@ impl ModalModel {
     /// rigid, with less than [`SUPPORT_SHARE`] of their strain energy in the laminate; empty
     /// for a free model.
     pub fn support_hz(&self) -> Vec<f64> {
+        self.supported_modes_hz(|laminate| laminate < SUPPORT_SHARE)
+    }
+
+    /// The undamped modes of Λ + K̃ at E_ref (Hz, increasing), not rigid, whose share of strain
+    /// energy in the laminate passes `keep`; empty for a free model.
+    fn supported_modes_hz(&self, keep: impl Fn(f64) -> bool) -> Vec<f64> {
         let Some(supports) = &self.supports else {
             return Vec::new();
         };
@@ -389,7 +398,7 @@ impl ModalModel {
             .undamped(&self.lambda)
             .unwrap_or_default()
             .into_iter()
-            .filter(|&(l, laminate)| l > floor && laminate < SUPPORT_SHARE)
+            .filter(|&(l, laminate)| l > floor && keep(laminate))
             .map(|(l, _)| l.sqrt() / (2.0 * PI))
             .collect();
         f.sort_by(f64::total_cmp);
@@ -610,9 +619,25 @@ impl RmsEvaluator {
     }
 }
 
+/// The LLᵀ factor of K0 − σM (σ the modal solver's shift) for `max_rhs` columns at a time,
+/// factored once per model: the residual terms and the supports' static shapes solve with it.
+pub(crate) fn shifted_factor<'p>(
+    asm: &Assembly,
+    plan: &'p FactorPlan,
+    sigma: f64,
+    max_rhs: usize,
+) -> Result<LltFactor<'p>, FitError> {
+    let k = asm.total_stiffness_values(1.0);
+    let shifted = asm.shifted_values(&k, sigma);
+    let a = SparseColMatRef::new(asm.stiffness.symbolic(), &shifted);
+    Ok(plan.llt(a, sigma, max_rhs)?)
+}
+
 /// R1 and R2 of the module doc, projected on the probes.
+#[allow(clippy::too_many_arguments)]
 fn residual_terms(
     asm: &Assembly,
+    factor: &LltFactor<'_>,
     sigma: f64,
     lambda: &[f64],
     c: &Mat<f64>,
@@ -621,14 +646,6 @@ fn residual_terms(
     references: &[Probe],
 ) -> Result<Residual, FitError> {
     let n = asm.n_dofs();
-    let plan = FactorPlan::new(&asm.pattern)?;
-    let k = asm.total_stiffness_values(1.0);
-    let shifted = asm.shifted_values(&k, sigma);
-    let factor = plan.llt(
-        SparseColMatRef::new(asm.stiffness.symbolic(), &shifted),
-        sigma,
-        references.len(),
-    )?;
     let mut x = Mat::from_fn(n, references.len(), |d, j| {
         references[j]
             .entries()

@@ -11,26 +11,10 @@ use lamdyn_fit::fit::pole_moduli;
 use lamdyn_fit::probe::Probe;
 use lamdyn_fit::supports::GroundedSupport;
 use lamdyn_fit::synthesis::{ModalModel, ResidualTerm};
-use lamdyn_fit::synthetic::triaxial_grid;
-use lamdyn_layered::supports::PointSupport;
+use lamdyn_fit::synthetic::{corner_foam_blocks, triaxial_grid};
 use lamdyn_material::law::{PaperEq7Law, ViscoelasticLaw};
 use num_complex::Complex64;
 use std::f64::consts::PI;
-
-/// Four foam blocks (5 × 5 cm) near the corners of the paper's plate: 20 kN/m and 20 N·s/m
-/// normal, 5 kN/m in plane each. The plate's 8.3 kg bounces on them at about 15 Hz, among
-/// its first elastic modes.
-fn foam_blocks() -> Vec<PointSupport> {
-    [[0.15, 0.15], [0.85, 0.15], [0.85, 0.85], [0.15, 0.85]]
-        .into_iter()
-        .map(|xy_fraction| PointSupport {
-            xy_fraction,
-            stiffness_n_m: [5e3, 5e3, 2e4],
-            damping_n_s_m: [0.0, 0.0, 20.0],
-            patch_m: [0.05, 0.05],
-        })
-        .collect()
-}
 
 /// A flat plate of the paper's glass on `n` × `n` elements, its lowest `modes` free modes,
 /// `grid` × `grid` triaxial responses and the hammer.
@@ -87,7 +71,7 @@ fn worst_error(model: &ModalModel, direct: &[Vec<Complex64>]) -> f64 {
 #[test]
 fn supported_synthesis_matches_direct_solves() {
     let case = Case::new(20, 30, 9);
-    let supports = GroundedSupport::on_plan(&case.mesh, &foam_blocks()).unwrap();
+    let supports = GroundedSupport::on_plan(&case.mesh, &corner_foam_blocks()).unwrap();
     let law = PaperEq7Law::paper_table2();
     let direct_solver = DirectSolver::new(&case.asm)
         .unwrap()
@@ -117,7 +101,7 @@ fn supported_synthesis_matches_direct_solves() {
 #[test]
 fn supported_rms_evaluator_equals_rms_of_the_frfs() {
     let case = Case::new(12, 20, 5);
-    let supports = GroundedSupport::on_plan(&case.mesh, &foam_blocks()).unwrap();
+    let supports = GroundedSupport::on_plan(&case.mesh, &corner_foam_blocks()).unwrap();
     assert_rms_evaluator_exact(&case.model(&supports));
 }
 
@@ -126,7 +110,7 @@ fn supported_rms_evaluator_equals_rms_of_the_frfs() {
 #[test]
 fn a_patch_on_the_plan_keeps_its_totals() {
     let mesh = plate(12);
-    let blocks = foam_blocks();
+    let blocks = corner_foam_blocks();
     let supports = GroundedSupport::on_plan(&mesh, &blocks[..1]).unwrap();
     for axis in 0..3 {
         let along = |d: usize| if d % 6 == axis { 1.0 } else { 0.0 };
@@ -221,7 +205,7 @@ fn pole_moduli_recover_the_supported_parts_modulus() {
 #[test]
 fn a_supported_cache_round_trips_exactly() {
     let case = Case::new(8, 16, 3);
-    let supports = GroundedSupport::on_plan(&case.mesh, &foam_blocks()).unwrap();
+    let supports = GroundedSupport::on_plan(&case.mesh, &corner_foam_blocks()).unwrap();
     let m = case.model(&supports);
     let bytes = m.to_cache_bytes();
     assert!(bytes.starts_with(b"lamdyn modal model v2\n"));
