@@ -597,7 +597,8 @@ pub(crate) mod tests {
     use crate::chain::NoSandwichInverse;
     use lamdyn_layered::convergence::ConvergedMode;
 
-    fn at(freq_hz: f64) -> CorePoint {
+    /// A modal point at `freq_hz` without any route's result.
+    pub(crate) fn at(freq_hz: f64) -> CorePoint {
         CorePoint {
             freq_hz,
             e_eff_pa: None,

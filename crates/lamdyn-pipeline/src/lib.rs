@@ -75,6 +75,7 @@ mod stages;
 mod stats;
 mod text;
 pub mod uncertainty;
+mod warnings;
 
 pub use error::{PipelineError, Result};
 

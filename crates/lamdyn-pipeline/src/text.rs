@@ -1,7 +1,12 @@
-//! The pipeline's user-facing sentences that take values: messages, progress lines and the
-//! layered stage's line, in one place so that the code stays within the formatter's width and
-//! the wording can be read and changed together. A leaf: it formats values, it computes
-//! nothing.
+//! The pipeline's user-facing sentences that take values: the run's warnings
+//! ([`crate::warnings`]), progress lines, and the layered and FRF routes' lines, in one place so
+//! that the code stays within the formatter's width and the wording can be read and changed
+//! together. A leaf: it formats values, it computes nothing.
+//!
+//! What is not here, by design: an error's message stays with the check that raises it (the
+//! job's field it names is checked beside it), a domain type's own label with its type
+//! ([`crate::band::BandSource`], [`crate::frf_route::WhyFrfFit`]), and the report's prose in
+//! [`crate::report`], the module whose output it is.
 
 use crate::band::BandSource;
 use num_complex::Complex64;
@@ -199,6 +204,282 @@ fn pair_label(pair_hz: [f64; 2]) -> String {
     format!(
         "the overlapping pair at {:.2} / {:.2} Hz",
         pair_hz[0], pair_hz[1]
+    )
+}
+
+/// A response `name` with its lowest coherence `gamma2` in the fit band.
+pub fn response_with_coherence(name: &str, gamma2: f64) -> String {
+    format!("{name} ({gamma2:.2})")
+}
+
+/// The responses `poor` (at most six named) below `min_coherence`, of `responses`.
+pub fn poor_coherence(min_coherence: f64, poor: &[String], responses: usize) -> String {
+    format!(
+        "poor coherence (below {}) in the fit band at {} of {} responses: {}{}",
+        min_coherence,
+        poor.len(),
+        responses,
+        poor.iter().take(6).cloned().collect::<Vec<_>>().join(", "),
+        if poor.len() > 6 { ", ..." } else { "" }
+    )
+}
+
+/// A pole the job rejects as a support resonance (`ema.reject_hz`).
+pub fn support_resonance_rejected(freq_hz: f64, zeta: f64) -> String {
+    format!(
+        "EMA: pole at {freq_hz:.3} Hz (zeta {:.2} %) rejected as a support resonance \
+         (ema.reject_hz)",
+        100.0 * zeta
+    )
+}
+
+/// A pole set aside from the inverses as a smear over a cluster of modes.
+pub fn smear_set_aside(freq_hz: f64, zeta: f64, mpc: f64) -> String {
+    format!(
+        "EMA: pole at {freq_hz:.3} Hz (zeta {:.2} %, MPC {mpc:.2}) set aside from the inverses: \
+         one pole over a cluster of modes (ema.keep_smears = true keeps it)",
+        100.0 * zeta
+    )
+}
+
+/// A frequency the job names (`--near-hz`, `ema.near_hz`) without a stable pole near it.
+pub fn no_stable_pole_near(freq_hz: f64) -> String {
+    format!("EMA: no stable pole near {freq_hz:.3} Hz")
+}
+
+/// The EMA's own warning `w`.
+pub fn from_the_ema(w: &str) -> String {
+    format!("EMA: {w}")
+}
+
+/// A mode where the paper's |φ| is beyond its validity.
+pub fn phi_beyond_validity(freq_hz: f64, phi: f64) -> String {
+    use lamdyn_material::laminate::PHI_ACCURACY_LIMIT;
+    format!(
+        "{freq_hz:.2} Hz: |phi| = {phi:.3} > {PHI_ACCURACY_LIMIT}: the paper's inverse is beyond \
+         its ~1 % validity; prefer the exact inverse"
+    )
+}
+
+/// A mode without the `name` inverse's core, and why.
+pub fn no_inverse(freq_hz: f64, name: &str, why: &str) -> String {
+    format!("{freq_hz:.2} Hz: no {name} inverse: {why}")
+}
+
+/// The `name` inverse's G*(f) that fails the Kramers–Kronig check at `bad` of `lines`.
+pub fn not_causal(name: &str, bad: usize, lines: usize) -> String {
+    format!("the {name} inverse's G*(f) fails the Kramers-Kronig check at {bad} of {lines} lines")
+}
+
+/// An EMA mode without an RMS peak in the paper's fit.
+pub fn no_rms_peak(freq_hz: f64) -> String {
+    format!(
+        "EMA mode at {freq_hz:.3} Hz has no RMS peak in the fit (weakly excited, a close pair, or \
+         a mode the shell model lacks): the paper's and the exact inverse read the fitted law \
+         there, the layered inverse its pole"
+    )
+}
+
+/// The paper's fit whose best start did not converge, and why.
+pub fn fit_not_converged(reason: &str) -> String {
+    format!("fit: the best start did not converge ({reason})")
+}
+
+/// Two poles (Hz) the layered inverse matched to one elastic mode (0-based `rank`).
+pub fn one_layered_mode_for_two_poles(poles_hz: [f64; 2], rank: usize) -> String {
+    format!(
+        "layered inverse: the poles at {:.2} Hz and {:.2} Hz both matched the model's elastic \
+         mode {} (at their own G*): one of them may sit on a neighbouring mode's branch (a close \
+         pair); check the mode shapes, or the law's residuals at those two modes",
+        poles_hz[0],
+        poles_hz[1],
+        rank + 1
+    )
+}
+
+/// A layered G' (Pa) that falls between two modes (Hz) beyond their bands.
+pub fn layered_storage_falls(freqs_hz: [f64; 2], storage_pa: [f64; 2]) -> String {
+    format!(
+        "layered inverse: G' falls from {:.4} MPa at {:.2} Hz to {:.4} MPa at {:.2} Hz ({:+.1} \
+         %), beyond both modes' bands: a passive core's storage modulus does not fall with \
+         frequency, so one of the two poles is matched to a neighbouring mode of the model or is \
+         not a true pole; check the mode shapes and the core's shear_pa start",
+        storage_pa[0] / 1e6,
+        freqs_hz[0],
+        storage_pa[1] / 1e6,
+        freqs_hz[1],
+        100.0 * (storage_pa[1] / storage_pa[0] - 1.0)
+    )
+}
+
+/// A pole as "f Hz (ζ %)".
+pub fn pole_with_damping(freq_hz: f64, zeta: f64) -> String {
+    format!("{freq_hz:.1} Hz ({:.1} %)", 100.0 * zeta)
+}
+
+/// The poles `damped` (as [`pole_with_damping`]) of `poles`, damped beyond `max_damping`.
+pub fn damped_poles(damped: &[String], poles: usize, max_damping: f64) -> String {
+    format!(
+        "EMA: {} of {poles} poles are damped more than {:.0} % ({}): an EMA's poles of such \
+         modes can be far off (a core 30 times softer than the damped sandwich's, zeta 16-22 %, \
+         came out 104-224 % off in G' from its poles); compare the model's FRFs with the \
+         measured ones there before trusting G*",
+        damped.len(),
+        100.0 * max_damping,
+        damped.join(", ")
+    )
+}
+
+/// Two poles (Hz) `apart_hz` apart, `share` of their half-power half-widths.
+pub fn overlapping_poles(poles_hz: [f64; 2], apart_hz: f64, share: f64) -> String {
+    format!(
+        "EMA: the poles at {:.2} Hz and {:.2} Hz overlap ({apart_hz:.3} Hz apart, {share:.2} of \
+         their half-power half-widths): an EMA moves the poles of such a pair by more than their \
+         scatter shows (the in-band foam roof's pair at 20.1 / 20.5 Hz: G* 16-24 % off from \
+         noise-free FRFs), so G* from each pole alone is less certain than its band: the layered \
+         route fits such a pair to the FRFs around it with both poles tied to its model instead \
+         (its line says how that went)",
+        poles_hz[0], poles_hz[1]
+    )
+}
+
+/// Why the layered route cannot go on from the poles alone without the paper's fit: the poles
+/// `damped` (as [`pole_with_damping`], at most four named) of `poles`, beyond `max_damping`.
+pub fn poles_alone_refused(damped: &[String], poles: usize, max_damping: f64) -> String {
+    format!(
+        "the paper's route failed, and the layered route cannot go on from the poles alone: {} of \
+         {poles} poles are damped more than {:.0} % ({}{}), where the EMA's poles are not to be \
+         trusted without a fit to the FRFs (inverse.frf_fit = \"never\")",
+        damped.len(),
+        100.0 * max_damping,
+        damped
+            .iter()
+            .take(4)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", "),
+        if damped.len() > 4 { ", ..." } else { "" }
+    )
+}
+
+/// Progress: the EMA of response group `g` (0-based) of `groups`, with `n` responses.
+pub fn ema_group(g: usize, groups: usize, n: usize) -> String {
+    format!(
+        "stage 'ema by response group': group {} of {groups} ({n} responses)",
+        g + 1
+    )
+}
+
+/// Progress: the EMA with the stabilization diagram up to `order`.
+pub fn ema_order(order: usize) -> String {
+    format!("stage 'ema at other model orders': highest order {order}")
+}
+
+/// Progress: the EMA without hit `k` (0-based) of `hits`.
+pub fn ema_without_hit(k: usize, hits: usize) -> String {
+    format!(
+        "stage 'ema without each hit': without hit {} of {hits}",
+        k + 1
+    )
+}
+
+/// Why the FRF fit did not run under `inverse.frf_fit = "auto"`.
+pub const POLE_ROUTE_HOLDS: &str = "the modes are light and separated and each has a layered \
+    core: the pole route holds (inverse.frf_fit = \"always\" runs the FRF fit beside it)";
+
+/// What the FRF fit's model line says ([`frf_model_line`]).
+pub struct FrfModelLine<'a> {
+    /// The ladder level's label.
+    pub level: &'a str,
+    /// Basis vectors.
+    pub basis_size: usize,
+    /// The basis's reference modulus, Pa.
+    pub g_ref: f64,
+    /// The basis's moduli over `g_ref`.
+    pub ratios: [f64; 2],
+    /// Times the basis was built again about the fitted law.
+    pub recentred: usize,
+    /// The fitted law's G' range (Pa) where it still leaves the basis's range.
+    pub outside: Option<[f64; 2]>,
+    /// One line in `step` fitted.
+    pub step: usize,
+    /// The lines kept per half-power half-width of the narrowest pole.
+    pub per_half_width: f64,
+    /// The inputs fitted under their priors.
+    pub inputs: &'a [&'a str],
+}
+
+/// The FRF fit's model line.
+pub fn frf_model_line(l: &FrfModelLine) -> String {
+    let recentred = if l.recentred > 0 {
+        format!(", built again about the fitted law {} time(s)", l.recentred)
+    } else {
+        String::new()
+    };
+    let thinned = if l.step > 1 {
+        format!(
+            "; one line in {} ({} per half-power half-width of the narrowest pole)",
+            l.step, l.per_half_width
+        )
+    } else {
+        String::new()
+    };
+    let outside = match l.outside {
+        Some([lo, hi]) => {
+            format!("; the fitted law (G' {lo:.3e}-{hi:.3e} Pa) still leaves the basis's range")
+        }
+        None => String::new(),
+    };
+    format!(
+        "C3D20 {} ({} basis vectors at G_ref {:.4e} Pa x [{:.2}, {:.2}]{recentred}{outside})\
+         {thinned}, inputs under their priors: {}",
+        l.level,
+        l.basis_size,
+        l.g_ref,
+        l.ratios[0],
+        l.ratios[1],
+        l.inputs.join(", ")
+    )
+}
+
+/// Progress: the fitted law's G' (Pa) leaves the FRF fit's basis, which is built again.
+pub fn frf_basis_again(lo: f64, hi: f64) -> String {
+    format!(
+        "FRF fit: the fitted law (G' {lo:.3e}-{hi:.3e} Pa) leaves the basis's range; the basis \
+         again about it"
+    )
+}
+
+/// Progress: the FRF fit's `law` fitted from the `first` law's curve, to compare.
+pub fn frf_other_law(law: &str, first: &str) -> String {
+    format!("FRF fit: {law} from the {first} curve, to compare")
+}
+
+/// Progress: the FRF fit's `law` on `basis_size` vectors over `band_hz`.
+pub fn frf_fitting(law: &str, basis_size: usize, band_hz: [f64; 2]) -> String {
+    format!(
+        "FRF fit: {law} on {basis_size} basis vectors over {:.1}-{:.1} Hz",
+        band_hz[0], band_hz[1]
+    )
+}
+
+/// Progress: the `first` law did not settle; the fractional Zener law instead.
+pub fn frf_law_fallback(first: &str) -> String {
+    format!("FRF fit: {first} did not settle; fractional_zener")
+}
+
+/// Progress: the FRF fit's layered model on `level`, read at the channels and references.
+pub fn frf_model_read(level: &str, channels: usize, references: usize) -> String {
+    format!(
+        "FRF fit: layered model {level} read at {channels} channel(s), {references} reference(s)"
+    )
+}
+
+/// Progress: the basis holds the model to `held_hz`, below the band's `top_hz`; `modes` next.
+pub fn frf_more_modes(held_hz: f64, top_hz: f64, modes: usize) -> String {
+    format!(
+        "FRF fit: the basis holds {held_hz:.1} Hz of the band's {top_hz:.1} Hz; again with \
+         {modes} modes"
     )
 }
 

@@ -572,19 +572,50 @@ pub struct ModesArgs {
 }
 
 /// Parses `NXxNY`.
-fn parse_elements(s: &str) -> Result<(usize, usize), String> {
+fn parse_elements(s: &str) -> Result<(usize, usize), ArgValueError> {
     let (a, b) = s
         .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected NXxNY such as 40x40, got '{s}'"))?;
+        .ok_or_else(|| ArgValueError::NotElements(s.to_string()))?;
     let n = |t: &str| {
         t.trim()
             .parse::<usize>()
             .ok()
             .filter(|n| (1..=2000).contains(n))
-            .ok_or_else(|| format!("'{t}' is not a count in 1..=2000"))
+            .ok_or_else(|| ArgValueError::NotACount(t.to_string()))
     };
     Ok((n(a)?, n(b)?))
 }
+
+/// Why a command-line value was refused (clap shows it after the flag's name).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ArgValueError {
+    /// The text is not a number.
+    NotANumber(String),
+    /// The number is NaN or infinite.
+    NotFinite(String),
+    /// `NXxNY` without its `x`.
+    NotElements(String),
+    /// An element count outside 1..=2000.
+    NotACount(String),
+    /// `E0,MU,T0,C` with this many numbers.
+    NotFourNumbers(usize),
+}
+
+impl std::fmt::Display for ArgValueError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotANumber(s) => write!(f, "'{s}' is not a number"),
+            Self::NotFinite(s) => write!(f, "'{s}' is not a finite number"),
+            Self::NotElements(s) => write!(f, "expected NXxNY such as 40x40, got '{s}'"),
+            Self::NotACount(s) => write!(f, "'{s}' is not a count in 1..=2000"),
+            Self::NotFourNumbers(n) => {
+                write!(f, "expected four numbers E0_PA,MU_S,T0_S,C_PA_S, got {n}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for ArgValueError {}
 
 /// Output format flags shared by the commands.
 #[derive(Debug, Args, Clone, Copy)]
@@ -783,26 +814,23 @@ pub enum E756Config {
 }
 
 /// Parses a finite number (no NaN, no infinity).
-pub fn finite(s: &str) -> Result<f64, String> {
+pub fn finite(s: &str) -> Result<f64, ArgValueError> {
     let v: f64 = s
         .trim()
         .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
+        .map_err(|_| ArgValueError::NotANumber(s.to_string()))?;
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(format!("'{s}' is not a finite number"))
+        Err(ArgValueError::NotFinite(s.to_string()))
     }
 }
 
 /// Parses `E0,MU,T0,C`.
-fn parse_eq7(s: &str) -> Result<Eq7Params, String> {
+fn parse_eq7(s: &str) -> Result<Eq7Params, ArgValueError> {
     let parts: Vec<&str> = s.split(',').collect();
     if parts.len() != 4 {
-        return Err(format!(
-            "expected four numbers E0_PA,MU_S,T0_S,C_PA_S, got {}",
-            parts.len()
-        ));
+        return Err(ArgValueError::NotFourNumbers(parts.len()));
     }
     let mut p = [0.0; 4];
     for (slot, part) in p.iter_mut().zip(parts) {
@@ -822,9 +850,10 @@ mod tests {
     #[test]
     fn finite_refuses_nan_inf_and_words() {
         assert_eq!(finite("1e3"), Ok(1e3));
-        assert_eq!(finite("NaN"), Err("'NaN' is not a finite number".into()));
-        assert_eq!(finite("inf"), Err("'inf' is not a finite number".into()));
-        assert_eq!(finite("ten"), Err("'ten' is not a number".into()));
+        let refused = |s: &str| finite(s).unwrap_err().to_string();
+        assert_eq!(refused("NaN"), "'NaN' is not a finite number");
+        assert_eq!(refused("inf"), "'inf' is not a finite number");
+        assert_eq!(refused("ten"), "'ten' is not a number");
     }
 
     #[test]
@@ -833,11 +862,13 @@ mod tests {
         assert!(
             parse_eq7("1,2,3")
                 .unwrap_err()
+                .to_string()
                 .contains("expected four numbers")
         );
         assert!(
             parse_eq7("1,2,x,4")
                 .unwrap_err()
+                .to_string()
                 .contains("'x' is not a number")
         );
     }

@@ -16,6 +16,7 @@ use crate::chain::CorePoint;
 use crate::error::{Context, Result};
 use crate::frf_route::{DiscretizationCorrection, FrfCurve, FrfRoute, LawsCompared, WhyFrfFit};
 use crate::job::CoreLawChoice;
+use crate::text;
 use lamdyn_fit::FitError;
 use lamdyn_fit::frf_fit::{
     CoreFrfModel, FrfFit, FrfFitSettings, FrfLaw, InputPrior, compare_laws, fit_core_to_frfs,
@@ -158,34 +159,19 @@ pub fn fit_to_frfs(
             let once = FitOnce { fit, ..once };
             let curves = shown_curves(&once.model, &once.fit, full)?;
             let inputs: Vec<&str> = once.model.model.inputs().iter().map(|i| i.name()).collect();
-            let recentred = if round > 0 {
-                format!(", built again about the fitted law {round} time(s)")
-            } else {
-                String::new()
-            };
-            let thinned = if step > 1 {
-                format!(
-                    "; one line in {step} ({LINES_PER_HALF_WIDTH} per half-power half-width of the \
-                     narrowest pole)"
-                )
-            } else {
-                String::new()
-            };
-            let outside = if held {
-                String::new()
-            } else {
-                format!("; the fitted law (G' {lo:.3e}-{hi:.3e} Pa) still leaves the basis's range")
+            let line = text::FrfModelLine {
+                level: &setup.plate.plan.level_label(level),
+                basis_size: once.model.model.basis_size(),
+                g_ref,
+                ratios: [ratios[0], ratios[1]],
+                recentred: round,
+                outside: (!held).then_some([lo, hi]),
+                step,
+                per_half_width: LINES_PER_HALF_WIDTH,
+                inputs: &inputs,
             };
             return Ok(FrfRoute {
-                model_line: format!(
-                    "C3D20 {} ({} basis vectors at G_ref {g_ref:.4e} Pa x [{:.2}, \
-                     {:.2}]{recentred}{outside}){thinned}, inputs under their priors: {}",
-                    setup.plate.plan.level_label(level),
-                    once.model.model.basis_size(),
-                    ratios[0],
-                    ratios[1],
-                    inputs.join(", ")
-                ),
+                model_line: text::frf_model_line(&line),
                 correction,
                 fit: once.fit,
                 why,
@@ -195,10 +181,7 @@ pub fn fit_to_frfs(
             });
         }
         round += 1;
-        spinner.stage(&format!(
-            "FRF fit: the fitted law (G' {lo:.3e}-{hi:.3e} Pa) leaves the basis's range; the basis \
-             again about it"
-        ));
+        spinner.stage(&text::frf_basis_again(lo, hi));
         g_ref = (lo * hi).sqrt();
         ratios = bracket(lo, hi, g_ref);
         let fitted = once.fit;
@@ -331,11 +314,7 @@ fn other_law(
         return (once.fit.clone(), once.laws.clone(), 0.0);
     }
     let law = FrfLaw::FractionalZener;
-    spinner.stage(&format!(
-        "FRF fit: {} from the {} curve, to compare",
-        law.name(),
-        once.fit.law.name()
-    ));
+    spinner.stage(&text::frf_other_law(law.name(), once.fit.law.name()));
     let t = Instant::now();
     let first = &once.fit;
     let curve = |w: f64| first.modulus(w / (2.0 * PI));
@@ -427,12 +406,10 @@ fn fit_once(
     let law = first_law(setup.core_law, band_hz);
     let mut settings = FrfFitSettings::over(band_hz);
     settings.inputs = priors;
-    spinner.stage(&format!(
-        "FRF fit: {} on {} basis vectors over {:.1}-{:.1} Hz",
+    spinner.stage(&text::frf_fitting(
         law.name(),
         model.model.basis_size(),
-        band_hz[0],
-        band_hz[1]
+        band_hz,
     ));
     let t = Instant::now();
     let first_name = law.name();
@@ -445,9 +422,7 @@ fn fit_once(
                 name: first_name,
                 error: e.to_string(),
             };
-            spinner.stage(&format!(
-                "FRF fit: {first_name} did not settle; fractional_zener"
-            ));
+            spinner.stage(&text::frf_law_fallback(first_name));
             let fit = fit_core_to_frfs(
                 &model,
                 set,
@@ -483,11 +458,10 @@ fn observed_model(
 ) -> Result<(ObservedModel, f64)> {
     let set = input.set;
     let (sensors, references) = (points(set.responses()), points(set.references()));
-    spinner.stage(&format!(
-        "FRF fit: layered model {} read at {} channel(s), {} reference(s)",
-        setup.plate.plan.level_label(level),
+    spinner.stage(&text::frf_model_read(
+        &setup.plate.plan.level_label(level),
         sensors.len(),
-        references.len()
+        references.len(),
     ));
     let build = |basis: &FrfBasis| {
         let model = ObservedModel::build(
@@ -512,10 +486,7 @@ fn observed_model(
             modes: (wanted as usize).clamp(basis.modes + 1, MAX_FRF_MODES),
             ..basis.clone()
         };
-        spinner.stage(&format!(
-            "FRF fit: the basis holds {held_hz:.1} Hz of the band's {:.1} Hz; again with {} modes",
-            input.band_hz[1], more.modes
-        ));
+        spinner.stage(&text::frf_more_modes(held_hz, input.band_hz[1], more.modes));
         (model, held_hz) = build(&more)?;
     }
     Ok((model, held_hz))

@@ -9,6 +9,7 @@ use crate::examples;
 use crate::grid;
 use crate::table::{Cell, Column, Fmt, Report};
 use anyhow::{Context, Result, bail};
+use lamdyn_material::MaterialError;
 use lamdyn_material::causality::{CausalityParams, CausalityVerdict, verdicts_where_known};
 use lamdyn_material::laminate::{
     CoreEstimate, CoreShearFormula, FaceBending, FaceShear, PHI_ACCURACY_LIMIT,
@@ -38,8 +39,8 @@ struct CoreConfig {
 struct CoreLine {
     freq_hz: f64,
     e_eff_pa: Complex64,
-    paper: Result<CoreEstimate, String>,
-    exact: Result<ExactCoreEstimate, String>,
+    paper: Result<CoreEstimate, MaterialError>,
+    exact: Result<ExactCoreEstimate, MaterialError>,
     paper_causality: Option<CausalityVerdict>,
     exact_causality: Option<CausalityVerdict>,
 }
@@ -50,10 +51,10 @@ struct CoreLineJson<'a> {
     freq_hz: f64,
     e_eff_pa: Complex64,
     paper: Option<&'a CoreEstimate>,
-    paper_error: Option<&'a str>,
+    paper_error: Option<String>,
     paper_causality: Option<CausalityVerdict>,
     exact: Option<&'a ExactCoreEstimate>,
-    exact_error: Option<&'a str>,
+    exact_error: Option<String>,
     exact_causality: Option<CausalityVerdict>,
 }
 
@@ -63,10 +64,10 @@ impl CoreLine {
             freq_hz: self.freq_hz,
             e_eff_pa: self.e_eff_pa,
             paper: self.paper.as_ref().ok(),
-            paper_error: self.paper.as_ref().err().map(String::as_str),
+            paper_error: self.paper.as_ref().err().map(MaterialError::to_string),
             paper_causality: self.paper_causality,
             exact: self.exact.as_ref().ok(),
-            exact_error: self.exact.as_ref().err().map(String::as_str),
+            exact_error: self.exact.as_ref().err().map(MaterialError::to_string),
             exact_causality: self.exact_causality,
         }
     }
@@ -83,10 +84,8 @@ pub fn run(args: &CoreArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             CoreLine {
                 freq_hz: f,
                 e_eff_pa: e,
-                paper: paper_inverse(&config.stack, w, e, &config.options)
-                    .map_err(|e| e.to_string()),
-                exact: exact_inverse(&config.stack, w, e, config.options.kinematics)
-                    .map_err(|e| e.to_string()),
+                paper: paper_inverse(&config.stack, w, e, &config.options),
+                exact: exact_inverse(&config.stack, w, e, config.options.kinematics),
                 paper_causality: None,
                 exact_causality: None,
             }
