@@ -18,7 +18,7 @@
 use crate::error::LayeredError;
 use crate::inverse::{LayeredPlate, PartModel};
 use crate::probe::SurfaceProbe;
-use crate::reduced::ReducedModel;
+use crate::reduced::{ModeError, ReducedModel};
 use crate::sensitivity::Input;
 use faer::linalg::solvers::Solve;
 use faer::{Mat, c64};
@@ -226,6 +226,15 @@ impl ObservedModel {
         core_scale: Complex64,
     ) -> Result<LineReceptance, LayeredError> {
         self.receptance_with_inputs(omega, core_scale, &[])
+    }
+
+    /// Takes each mode's mesh error out of the model
+    /// ([`ReducedModel::take_out_mode_errors`]); returns (α, β) per error, None where left.
+    pub fn take_out_mode_errors(&mut self, errors: &[ModeError]) -> Vec<Option<[f64; 2]>> {
+        let scales = self.model.take_out_mode_errors(errors);
+        let kc = self.model.core_matrix();
+        self.core = Mat::from_fn(kc.nrows(), kc.ncols(), |i, j| c64::new(kc[(i, j)], 0.0));
+        scales
     }
 
     /// The inputs whose changes [`Self::receptance_with_inputs`] takes, in order.

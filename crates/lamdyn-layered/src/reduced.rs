@@ -24,6 +24,10 @@
 //! dense complex solve per line. The direct route factors the sparse complex Z(ω) (faer's sparse
 //! LU) per line.
 
+mod mode_errors;
+
+pub use mode_errors::{ModeError, SCALE_LIMIT};
+
 use crate::error::LayeredError;
 use crate::sensitivity::{
     Input, PencilSupports, ReducedDerivative, pencil_eigenvalue_near, pencil_eigenvalues,
