@@ -929,8 +929,8 @@ fn roving_hammer_note(set: &FrfSet) -> Option<String> {
     (set.responses().len() == 1 && nf > 1).then(|| {
         format!(
             "one response and {nf} references (a roving-hammer test): the shapes, MPC, MPD and \
-             auto-MAC are over the references (by reciprocity, the residues of the response to each \
-             hammer point)"
+             auto-MAC are over the references (by reciprocity, the residues of the response to \
+             each hammer point)"
         )
     })
 }

@@ -303,7 +303,16 @@ fn dof_of(c: &Channel, index: usize) -> Result<Dof, UffError> {
     });
     let (node, direction) = match parsed {
         Some(v) => v,
-        None => (index as i64 + 1, axis_code(c.direction).ok_or_else(|| convert(format!("channel '{}': its direction {:?} is not along a global axis; UFF 58 needs a node and an axis", c.name, c.direction)))?),
+        None => {
+            let axis = axis_code(c.direction).ok_or_else(|| {
+                convert(format!(
+                    "channel '{}': its direction {:?} is not along a global axis; UFF 58 needs a \
+                     node and an axis",
+                    c.name, c.direction
+                ))
+            })?;
+            (index as i64 + 1, axis)
+        }
     };
     Ok(Dof {
         entity: "NONE".into(),

@@ -141,8 +141,8 @@ impl SandwichBeam {
             return Err(MaterialError::InvalidData {
                 context: format!("sandwich reduction, mode {mode}"),
                 reason: format!(
-                    "A = {a:.6}, B = {b:.6}: the data give a non-positive core modulus ({g1:.3e} Pa); \
-                     is f_sandwich above the shear-free limit and below the bonded one?"
+                    "A = {a:.6}, B = {b:.6}: the data give a non-positive core modulus ({g1:.3e} \
+                     Pa); is f_sandwich above the shear-free limit and below the bonded one?"
                 ),
             });
         }

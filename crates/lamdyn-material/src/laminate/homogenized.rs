@@ -159,8 +159,9 @@ impl fmt::Display for ModelWarning {
         match self {
             Self::PhiBeyondLimit { freq_hz, phi } => write!(
                 f,
-                "phi = {phi:.3} > {PHI_ACCURACY_LIMIT} at {freq_hz:.2} Hz: the paper's homogenization \
-                 is beyond its accuracy limit (B_K more than ~1 % off exact sandwich theory)"
+                "phi = {phi:.3} > {PHI_ACCURACY_LIMIT} at {freq_hz:.2} Hz: the paper's \
+                 homogenization is beyond its accuracy limit (B_K more than ~1 % off exact sandwich \
+                 theory)"
             ),
         }
     }
