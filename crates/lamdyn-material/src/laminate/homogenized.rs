@@ -160,8 +160,8 @@ impl fmt::Display for ModelWarning {
             Self::PhiBeyondLimit { freq_hz, phi } => write!(
                 f,
                 "phi = {phi:.3} > {PHI_ACCURACY_LIMIT} at {freq_hz:.2} Hz: the paper's \
-                 homogenization is beyond its accuracy limit (B_K more than ~1 % off exact sandwich \
-                 theory)"
+                 homogenization is beyond its accuracy limit (B_K more than ~1 % off exact \
+                 sandwich theory)"
             ),
         }
     }
