@@ -21,6 +21,10 @@ pub(crate) fn damped_beyond(modes: &[Mode], limit: f64) -> Vec<String> {
         .collect()
 }
 
+/// Appends the run's warnings to `out` (module docs): the Monte Carlo left out, poor coherence,
+/// the EMA's poles rejected, set aside or missing and its own warnings, the paper's fit, each
+/// mode's inverses that gave no core or |φ| beyond validity, the layered route's contradictions,
+/// the poles an EMA cannot be trusted to give, and the inverses' causality.
 pub(crate) fn collect_warnings(
     config: &RunConfig,
     measured: &Measured,
