@@ -24,7 +24,7 @@
 //! dense complex solve per line. The direct route factors the sparse complex Z(ω) (faer's sparse
 //! LU) per line.
 
-mod mode_errors;
+pub mod mode_errors;
 
 pub use mode_errors::{ModeError, SCALE_LIMIT};
 

@@ -50,7 +50,7 @@ pub const SCALE_LIMIT: f64 = 1.1;
 /// Passes of [`ReducedModel::take_out_mode_errors`]: the real mode y is the complex one's
 /// approximation (to the mode's loss), so one pass leaves about 5 % of the error (the small
 /// plate's modes at η ≈ 0.15); three leave 1e-11 (the tests).
-const PASSES: usize = 3;
+pub const PASSES: usize = 3;
 
 impl ReducedModel {
     /// Takes each mode's error out of the model ([module docs](self)), in [`PASSES`] passes of
