@@ -9,10 +9,10 @@
 //! pairs matched to the wrong modes (on an independent glass/acoustic-PVB plate with modal
 //! damping 6–15 % the per-mode answers were −17 … +113 % off in G'). The FRF fit needs no
 //! pole. The run takes it as the answer (`inverse.frf_fit = "auto"`) when any identified mode
-//! in the band is damped beyond [`DAMPED_ZETA`], when two neighbours' half-power bands overlap
-//! by more than [`OVERLAP_FACTOR`] of their spacing, when the EMA set a pole aside as a smear
-//! over a cluster (`lamdyn_ema::quality`), or when a mode got no layered core; else
-//! the pole route stays the answer and the FRF fit is not run. `"always"` runs it and takes it;
+//! in the band is damped beyond [`FrfRule::damped_zeta`], when two neighbours' half-power bands
+//! overlap by more than [`FrfRule::overlap_factor`] of their spacing, when the EMA set a pole
+//! aside as a smear over a cluster (`lamdyn_ema::quality`), or when a mode got no layered core;
+//! else the pole route stays the answer and the FRF fit is not run. `"always"` runs it and takes it;
 //! `"never"` does not run it.
 
 use crate::chain::CorePoint;
@@ -20,33 +20,28 @@ use lamdyn_ema::identify::Mode;
 use lamdyn_fit::frf_fit::{FrfFit, FrfLawPoint, LawComparison};
 use num_complex::Complex64;
 
-/// Modal damping ratio above which the pole route is not trusted (module docs): where the
-/// independent plate's poles began to fail (ζ 6–15 %), with a margin.
-pub const DAMPED_ZETA: f64 = 0.05;
-
-/// Modal overlap of two neighbours above which the pole route is not trusted: the sum of their
-/// half-power half-widths ζ_a f_a + ζ_b f_b over their spacing f_b − f_a (1: the half-power
-/// bands touch).
-pub const OVERLAP_FACTOR: f64 = 0.5;
-
 /// Why the FRF fit is the answer.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum WhyFrfFit {
     /// The job asks for it (`inverse.frf_fit = "always"`).
     Asked,
-    /// A mode damped beyond [`DAMPED_ZETA`].
+    /// A mode damped beyond the rule's limit ([`FrfRule::damped_zeta`]).
     Damped {
         /// Its frequency, Hz.
         freq_hz: f64,
         /// Its damping ratio.
         damping_ratio: f64,
+        /// The limit.
+        limit: f64,
     },
-    /// Two neighbours overlapping beyond [`OVERLAP_FACTOR`].
+    /// Two neighbours overlapping beyond the rule's limit ([`FrfRule::overlap_factor`]).
     Overlapping {
         /// Their frequencies, Hz.
         freqs_hz: [f64; 2],
         /// Their overlap (module docs).
         overlap: f64,
+        /// The limit.
+        limit: f64,
     },
     /// A pole the EMA set aside as a smear over a cluster of modes.
     Smear {
@@ -69,16 +64,21 @@ impl std::fmt::Display for WhyFrfFit {
             Self::Damped {
                 freq_hz,
                 damping_ratio,
+                limit,
             } => write!(
                 f,
                 "the mode at {freq_hz:.2} Hz is damped {:.1} % (above {:.0} %)",
                 100.0 * damping_ratio,
-                100.0 * DAMPED_ZETA
+                100.0 * limit
             ),
-            Self::Overlapping { freqs_hz, overlap } => write!(
+            Self::Overlapping {
+                freqs_hz,
+                overlap,
+                limit,
+            } => write!(
                 f,
                 "the modes at {:.2} and {:.2} Hz overlap (half-power half-widths {:.2} of their \
-                 spacing, above {OVERLAP_FACTOR})",
+                 spacing, above {limit})",
                 freqs_hz[0], freqs_hz[1], overlap
             ),
             Self::Smear { freq_hz, mpc } => write!(
@@ -93,17 +93,44 @@ impl std::fmt::Display for WhyFrfFit {
     }
 }
 
+/// The limits beyond which the pole route is not trusted (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrfRule {
+    /// A mode's damping ratio: default 0.05, where the independent plate's poles began to fail
+    /// (ζ 6–15 %), with a margin.
+    pub damped_zeta: f64,
+    /// Two neighbours' overlap, the sum of their half-power half-widths ζ_a f_a + ζ_b f_b over
+    /// their spacing f_b − f_a (1: the half-power bands touch): default 0.5.
+    pub overlap_factor: f64,
+}
+
+impl Default for FrfRule {
+    fn default() -> Self {
+        Self {
+            damped_zeta: 0.05,
+            overlap_factor: 0.5,
+        }
+    }
+}
+
 /// Why the identified `modes` (any order), the poles the EMA `set_aside` as smears and the
-/// pole route's `modal` points call for the FRF fit (module docs); empty: they do not.
-pub fn reasons(modes: &[Mode], set_aside: &[Mode], modal: &[CorePoint]) -> Vec<WhyFrfFit> {
+/// pole route's `modal` points call for the FRF fit under `rule` (module docs); empty: they do
+/// not.
+pub fn reasons(
+    modes: &[Mode],
+    set_aside: &[Mode],
+    modal: &[CorePoint],
+    rule: FrfRule,
+) -> Vec<WhyFrfFit> {
     let mut sorted: Vec<&Mode> = modes.iter().collect();
     sorted.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
     let mut why: Vec<WhyFrfFit> = sorted
         .iter()
-        .filter(|m| m.damping_ratio > DAMPED_ZETA)
+        .filter(|m| m.damping_ratio > rule.damped_zeta)
         .map(|m| WhyFrfFit::Damped {
             freq_hz: m.freq_hz,
             damping_ratio: m.damping_ratio,
+            limit: rule.damped_zeta,
         })
         .collect();
     for pair in sorted.windows(2) {
@@ -115,10 +142,11 @@ pub fn reasons(modes: &[Mode], set_aside: &[Mode], modal: &[CorePoint]) -> Vec<W
         } else {
             f64::INFINITY
         };
-        if overlap > OVERLAP_FACTOR {
+        if overlap > rule.overlap_factor {
             why.push(WhyFrfFit::Overlapping {
                 freqs_hz: [a.freq_hz, b.freq_hz],
                 overlap,
+                limit: rule.overlap_factor,
             });
         }
     }
@@ -639,20 +667,33 @@ pub(crate) mod tests {
     #[test]
     fn the_rule_names_damped_and_overlapping_modes() {
         let light = [mode(20.0, 0.01), mode(40.0, 0.02), mode(70.0, 0.01)];
-        assert!(reasons(&light, &[], &[]).is_empty());
+        let rule = FrfRule::default();
+        assert!(reasons(&light, &[], &[], rule).is_empty());
         let damped = [mode(20.0, 0.01), mode(40.0, 0.08)];
         assert_eq!(
-            reasons(&damped, &[], &[]),
+            reasons(&damped, &[], &[], rule),
             vec![WhyFrfFit::Damped {
                 freq_hz: 40.0,
-                damping_ratio: 0.08
+                damping_ratio: 0.08,
+                limit: 0.05
             }]
+        );
+        // A stricter rule, set by the tuning, names the lighter mode too.
+        let strict = FrfRule {
+            damped_zeta: 0.005,
+            ..rule
+        };
+        assert_eq!(reasons(&damped, &[], &[], strict).len(), 2);
+        assert!(
+            reasons(&damped, &[], &[], strict)[0]
+                .to_string()
+                .contains("above 0 %")
         );
         // 0.03 × 50 + 0.03 × 50 = 3 Hz of half-widths over 5 Hz: 0.6.
         let close = [mode(55.0, 0.03), mode(50.0, 0.03)];
-        let why = reasons(&close, &[], &[]);
+        let why = reasons(&close, &[], &[], rule);
         assert!(
-            matches!(why[..], [WhyFrfFit::Overlapping { freqs_hz, overlap }]
+            matches!(why[..], [WhyFrfFit::Overlapping { freqs_hz, overlap, .. }]
                 if freqs_hz == [50.0, 55.0] && (overlap - 0.63).abs() < 0.01),
             "{why:?}"
         );
@@ -662,7 +703,7 @@ pub(crate) mod tests {
             mpc: 0.1,
             ..mode(150.0, 0.04)
         };
-        let why = reasons(&light, &[smear], &[]);
+        let why = reasons(&light, &[smear], &[], rule);
         assert_eq!(
             why,
             vec![WhyFrfFit::Smear {

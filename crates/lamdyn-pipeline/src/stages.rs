@@ -470,7 +470,8 @@ fn frf_fit_stage(
     };
     let ema_band_hz = config.ema.band_hz;
     let config = &config.layered;
-    let mut why = frf_route::reasons(&data.ema.modes, &data.ema.set_aside, modal);
+    let rule = setup.tuning.frf_fit.rule;
+    let mut why = frf_route::reasons(&data.ema.modes, &data.ema.set_aside, modal, rule);
     match config.frf_fit {
         FrfFitChoice::Never => return FrfOutcome::NotRun("inverse.frf_fit = \"never\""),
         FrfFitChoice::Always => why.insert(0, WhyFrfFit::Asked),

@@ -1,5 +1,5 @@
 //! The layered stage's FRF fit: the core's law fitted to the measured FRFs through the layered
-//! model on the ladder's finest level up to [`FRF_MAX_DOFS`] ([`lamdyn_fit::frf_fit`]), the inputs
+//! model on the ladder's finest level up to [`FrfFitTuning::max_dofs`](super::tuning::FrfFitTuning::max_dofs) ([`lamdyn_fit::frf_fit`]), the inputs
 //! under the job's priors, on the converged scale: the level's model takes the law corrected by
 //! the ladder's mesh correction ([`crate::frf_route::DiscretizationCorrection`]).
 //!
@@ -44,21 +44,16 @@ pub struct FrfFitInput<'a> {
     /// The pole route's modal points (the ladder's corrections; the starts without a law).
     pub modal: &'a [CorePoint],
     /// The ladder's levels (elements, dofs), coarsest first: the fit takes the finest up to
-    /// [`FRF_MAX_DOFS`] (the coarsest when empty).
+    /// [`FrfFitTuning::max_dofs`](super::tuning::FrfFitTuning::max_dofs) (the coarsest when empty).
     pub levels: &'a [([usize; 2], usize)],
     /// The identified modes' half-power half-widths ζf (Hz): the lines are thinned to
-    /// [`LINES_PER_HALF_WIDTH`] per the narrowest ([`line_step`]).
+    /// [`FrfFitTuning::lines_per_half_width`](super::tuning::FrfFitTuning::lines_per_half_width) per the narrowest ([`line_step`]).
     pub half_widths_hz: Vec<f64>,
 }
 
-/// Lines the fit keeps per half-power half-width ζf of the narrowest identified mode: a damped
-/// part's 1 Hz lines over resonances 30 Hz wide carry the same information as every seventh
-/// of them at a seventh of the cost (each line is one LU; docs/fit.md).
-pub const LINES_PER_HALF_WIDTH: f64 = 4.0;
-
-/// Every how many lines the fit keeps: the narrowest half-width over [`LINES_PER_HALF_WIDTH`]
-/// line spacings, at least 1 (no modes: 1).
-pub fn line_step(half_widths_hz: &[f64], spacing_hz: f64) -> usize {
+/// Every how many lines the fit keeps: the narrowest half-width over `per_half_width` line
+/// spacings, at least 1 (no modes: 1).
+pub fn line_step(half_widths_hz: &[f64], spacing_hz: f64, per_half_width: f64) -> usize {
     let narrowest = half_widths_hz
         .iter()
         .copied()
@@ -67,7 +62,7 @@ pub fn line_step(half_widths_hz: &[f64], spacing_hz: f64) -> usize {
     if !(narrowest.is_finite() && spacing_hz > 0.0) {
         return 1;
     }
-    ((narrowest / (LINES_PER_HALF_WIDTH * spacing_hz)).floor() as usize).max(1)
+    ((narrowest / (per_half_width * spacing_hz)).floor() as usize).max(1)
 }
 
 /// `set` with every `step`-th line (all for 1).
@@ -92,21 +87,12 @@ fn thinned(set: &FrfSet, step: usize) -> Result<FrfSet> {
     )?)
 }
 
-/// The largest level (dofs) the FRF fit's model is built on. Its cost per line does not grow
-/// with the level (one LU of the reduced basis), its build does (the basis's eigen solves and
-/// the inputs' assemblies); a finer level leaves less for the ladder's correction to carry.
-pub const FRF_MAX_DOFS: usize = 60_000;
-
-/// The most modes per reference modulus the FRF fit's basis takes when the band needs more
-/// than `inverse.layered_modes` (the cost of a line grows with the cube of the basis).
-pub const MAX_FRF_MODES: usize = 90;
-
 /// Fits the core's law to the FRFs through `setup`'s layered model (module docs); `why` says
 /// why it is the answer (empty: it is beside the pole route).
 ///
 /// The basis brackets the start law; where the fitted law leaves what the basis holds (a start
 /// law far off: a pole route misled by supports or damping), the basis is built again about
-/// the fitted law and the fit run again from it, at most [`MAX_RECENTRES`] times.
+/// the fitted law and the fit run again from it, at most [`FrfFitTuning::max_recentres`](super::tuning::FrfFitTuning::max_recentres) times.
 ///
 /// # Errors
 /// A reference or channel not on the part, a basis that cannot be built, or the fit's own
@@ -123,7 +109,8 @@ pub fn fit_to_frfs(
     let (mut g_ref, mut ratios) = basis_moduli(setup, input);
     let f = input.set.freqs_hz();
     let spacing = if f.len() > 1 { f[1] - f[0] } else { 0.0 };
-    let step = line_step(&input.half_widths_hz, spacing);
+    let tuning = setup.tuning.frf_fit;
+    let step = line_step(&input.half_widths_hz, spacing, tuning.lines_per_half_width);
     let full = input.set;
     let set = thinned(full, step)?;
     let input = &FrfFitInput {
@@ -153,7 +140,7 @@ pub fn fit_to_frfs(
         times = [times[0] + once.times_s[0], times[1] + once.times_s[1]];
         let [lo, hi] = storage_range(&once.fit, &correction);
         let held = lo >= 0.8 * ratios[0] * g_ref && hi <= 1.25 * ratios[1] * g_ref;
-        if held || round == MAX_RECENTRES {
+        if held || round == tuning.max_recentres {
             let (fit, laws, other_s) = other_law(setup.core_law, &once, input.set, spinner);
             times[1] += other_s;
             let once = FitOnce { fit, ..once };
@@ -167,7 +154,7 @@ pub fn fit_to_frfs(
                 recentred: round,
                 outside: (!held).then_some([lo, hi]),
                 step,
-                per_half_width: LINES_PER_HALF_WIDTH,
+                per_half_width: tuning.lines_per_half_width,
                 inputs: &inputs,
             };
             return Ok(FrfRoute {
@@ -190,14 +177,14 @@ pub fn fit_to_frfs(
 }
 
 /// The level the fit's model is built on: the finest of the ladder's `levels` up to
-/// [`FRF_MAX_DOFS`] and `inverse.layered_max_dofs`; without levels (no ladder was built), the
+/// [`FrfFitTuning::max_dofs`](super::tuning::FrfFitTuning::max_dofs) and `inverse.layered_max_dofs`; without levels (no ladder was built), the
 /// coarsest, if it is within `inverse.layered_max_dofs`.
 ///
 /// # Errors
 /// The coarsest level above `inverse.layered_max_dofs` (the ladder refused it too), or a plan
 /// that cannot be meshed.
 fn fit_level(setup: &LayeredSetup, levels: &[([usize; 2], usize)]) -> Result<[usize; 2]> {
-    let cap = FRF_MAX_DOFS.min(setup.ladder.max_dofs);
+    let cap = setup.tuning.frf_fit.max_dofs.min(setup.ladder.max_dofs);
     if let Some(level) = levels
         .iter()
         .filter(|l| l.1 <= cap)
@@ -264,9 +251,6 @@ impl CoreFrfModel for OnConvergedScale {
         Ok(rec)
     }
 }
-
-/// Times the basis is built again about the fitted law ([`fit_to_frfs`]).
-pub const MAX_RECENTRES: usize = 2;
 
 /// One basis and one fit.
 struct FitOnce {
@@ -447,7 +431,7 @@ fn fit_once(
 
 /// The layered model on `level` read at the set's channels, its basis at `g_ref` ×
 /// `basis.ratios`, and the frequency (Hz) up to which the basis holds its modes; built again
-/// with more modes (up to [`MAX_FRF_MODES`]) when that falls below the band.
+/// with more modes (up to [`FrfFitTuning::max_modes`](super::tuning::FrfFitTuning::max_modes)) when that falls below the band.
 fn observed_model(
     setup: &LayeredSetup,
     input: &FrfFitInput,
@@ -479,11 +463,12 @@ fn observed_model(
     };
     let (mut model, mut held_hz) = build(basis)?;
     // A band beyond the basis: once more with the modes the band needs (a plate's modes are
-    // about evenly spaced in frequency), up to MAX_FRF_MODES.
-    if held_hz < input.band_hz[1] && basis.modes < MAX_FRF_MODES {
+    // about evenly spaced in frequency), up to the tuning's max_modes.
+    let max_modes = setup.tuning.frf_fit.max_modes;
+    if held_hz < input.band_hz[1] && basis.modes < max_modes {
         let wanted = (basis.modes as f64 * 1.15 * input.band_hz[1] / held_hz.max(1.0)).ceil();
         let more = FrfBasis {
-            modes: (wanted as usize).clamp(basis.modes + 1, MAX_FRF_MODES),
+            modes: (wanted as usize).clamp(basis.modes + 1, max_modes),
             ..basis.clone()
         };
         spinner.stage(&text::frf_more_modes(held_hz, input.band_hz[1], more.modes));
@@ -630,11 +615,11 @@ mod tests {
     /// every line.
     #[test]
     fn lines_are_thinned_to_four_per_half_width() {
-        assert_eq!(line_step(&[30.0, 45.0], 1.0), 7);
-        assert_eq!(line_step(&[1.5, 30.0], 0.5), 1);
-        assert_eq!(line_step(&[], 1.0), 1);
-        assert_eq!(line_step(&[f64::NAN, 0.0], 1.0), 1);
-        assert_eq!(line_step(&[30.0], 0.0), 1);
+        assert_eq!(line_step(&[30.0, 45.0], 1.0, 4.0), 7);
+        assert_eq!(line_step(&[1.5, 30.0], 0.5, 4.0), 1);
+        assert_eq!(line_step(&[], 1.0, 4.0), 1);
+        assert_eq!(line_step(&[f64::NAN, 0.0], 1.0, 4.0), 1);
+        assert_eq!(line_step(&[30.0], 0.0, 4.0), 1);
     }
 
     /// A thinned set keeps every step-th line of every curve.

@@ -2,6 +2,8 @@
 //! with their defaults and why each has its value ([`super::LayeredSetup::tuning`]; a job file
 //! does not set them yet).
 
+use crate::frf_route::FrfRule;
+
 /// The layered route's tuning.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct LayeredTuning {
@@ -9,6 +11,8 @@ pub struct LayeredTuning {
     pub law: LawTuning,
     /// The FRF fit of an overlapping pair.
     pub pair_fit: PairFitTuning,
+    /// The FRF fit of the whole band: when it is the answer, and its model's limits.
+    pub frf_fit: FrfFitTuning,
 }
 
 /// The joint law fit's tuning.
@@ -83,6 +87,42 @@ impl Default for PairFitTuning {
             half_widths: 3.0,
             other_half_widths: [2.0, 4.0],
             reach: std::f64::consts::LN_2,
+        }
+    }
+}
+
+/// The FRF fit's tuning: when the run takes it as the answer ([`crate::frf_route::reasons`])
+/// and its model's limits ([`super::fit_to_frfs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrfFitTuning {
+    /// When the run takes the fit as the answer (defaults: [`FrfRule::default`]).
+    pub rule: FrfRule,
+    /// Lines the fit keeps per half-power half-width ζf of the narrowest identified mode:
+    /// default 4. A damped part's 1 Hz lines over resonances 30 Hz wide carry the same
+    /// information as every seventh of them at a seventh of the cost (each line is one LU;
+    /// docs/fit.md).
+    pub lines_per_half_width: f64,
+    /// The largest level (dofs) the fit's model is built on: default 60 000. Its cost per line
+    /// does not grow with the level (one LU of the reduced basis), its build does (the basis's
+    /// eigen solves and the inputs' assemblies); a finer level leaves less for the ladder's
+    /// correction to carry.
+    pub max_dofs: usize,
+    /// The most modes per reference modulus the basis takes when the band needs more than
+    /// `inverse.layered_modes`: default 90 (the cost of a line grows with the cube of the
+    /// basis).
+    pub max_modes: usize,
+    /// Times the basis is built again about the fitted law: default 2.
+    pub max_recentres: usize,
+}
+
+impl Default for FrfFitTuning {
+    fn default() -> Self {
+        Self {
+            rule: FrfRule::default(),
+            lines_per_half_width: 4.0,
+            max_dofs: 60_000,
+            max_modes: 90,
+            max_recentres: 2,
         }
     }
 }
