@@ -12,8 +12,8 @@
 //! in the band is damped beyond [`FrfRule::damped_zeta`], when two neighbours' half-power bands
 //! overlap by more than [`FrfRule::overlap_factor`] of their spacing, when the EMA set a pole
 //! aside as a smear over a cluster (`lamdyn_ema::quality`), or when a mode got no layered core;
-//! else the pole route stays the answer and the FRF fit is not run. `"always"` runs it and takes it;
-//! `"never"` does not run it.
+//! else the pole route stays the answer and the FRF fit is not run. `"always"` runs it and
+//! takes it; `"never"` does not run it.
 
 use crate::chain::CorePoint;
 use lamdyn_ema::identify::Mode;

@@ -1,7 +1,8 @@
 //! The layered stage's FRF fit: the core's law fitted to the measured FRFs through the layered
-//! model on the ladder's finest level up to [`FrfFitTuning::max_dofs`](super::tuning::FrfFitTuning::max_dofs) ([`lamdyn_fit::frf_fit`]), the inputs
-//! under the job's priors, on the converged scale: the level's model takes the law corrected by
-//! the ladder's mesh correction ([`crate::frf_route::DiscretizationCorrection`]).
+//! model on the ladder's finest level up to [`FrfFitTuning::max_dofs`]
+//! ([`lamdyn_fit::frf_fit`]), the inputs under the job's priors, on the converged scale: the
+//! level's model takes the law corrected by the ladder's mesh correction
+//! ([`crate::frf_route::DiscretizationCorrection`]).
 //!
 //! The model is that level of the ladder read at every response channel and driven at
 //! every reference by the surface's shape functions ([`ObservedModel::build`]), on a basis of
@@ -11,6 +12,8 @@
 //! else from the best constant moduli of a grid.
 
 use super::setup::{LayeredSetup, basis_modulus, input_rel_sd};
+#[cfg(doc)]
+use super::tuning::FrfFitTuning;
 use crate::Reporter;
 use crate::chain::CorePoint;
 use crate::error::{Context, Result};
@@ -44,10 +47,10 @@ pub struct FrfFitInput<'a> {
     /// The pole route's modal points (the ladder's corrections; the starts without a law).
     pub modal: &'a [CorePoint],
     /// The ladder's levels (elements, dofs), coarsest first: the fit takes the finest up to
-    /// [`FrfFitTuning::max_dofs`](super::tuning::FrfFitTuning::max_dofs) (the coarsest when empty).
+    /// [`FrfFitTuning::max_dofs`] (the coarsest when empty).
     pub levels: &'a [([usize; 2], usize)],
     /// The identified modes' half-power half-widths ζf (Hz): the lines are thinned to
-    /// [`FrfFitTuning::lines_per_half_width`](super::tuning::FrfFitTuning::lines_per_half_width) per the narrowest ([`line_step`]).
+    /// [`FrfFitTuning::lines_per_half_width`] per the narrowest ([`line_step`]).
     pub half_widths_hz: Vec<f64>,
 }
 
@@ -92,7 +95,7 @@ fn thinned(set: &FrfSet, step: usize) -> Result<FrfSet> {
 ///
 /// The basis brackets the start law; where the fitted law leaves what the basis holds (a start
 /// law far off: a pole route misled by supports or damping), the basis is built again about
-/// the fitted law and the fit run again from it, at most [`FrfFitTuning::max_recentres`](super::tuning::FrfFitTuning::max_recentres) times.
+/// the fitted law and the fit run again from it, at most [`FrfFitTuning::max_recentres`] times.
 ///
 /// # Errors
 /// A reference or channel not on the part, a basis that cannot be built, or the fit's own
@@ -177,8 +180,8 @@ pub fn fit_to_frfs(
 }
 
 /// The level the fit's model is built on: the finest of the ladder's `levels` up to
-/// [`FrfFitTuning::max_dofs`](super::tuning::FrfFitTuning::max_dofs) and `inverse.layered_max_dofs`; without levels (no ladder was built), the
-/// coarsest, if it is within `inverse.layered_max_dofs`.
+/// [`FrfFitTuning::max_dofs`] and `inverse.layered_max_dofs`; without levels (no ladder was
+/// built), the coarsest, if it is within `inverse.layered_max_dofs`.
 ///
 /// # Errors
 /// The coarsest level above `inverse.layered_max_dofs` (the ladder refused it too), or a plan
@@ -431,7 +434,7 @@ fn fit_once(
 
 /// The layered model on `level` read at the set's channels, its basis at `g_ref` ×
 /// `basis.ratios`, and the frequency (Hz) up to which the basis holds its modes; built again
-/// with more modes (up to [`FrfFitTuning::max_modes`](super::tuning::FrfFitTuning::max_modes)) when that falls below the band.
+/// with more modes (up to [`FrfFitTuning::max_modes`]) when that falls below the band.
 fn observed_model(
     setup: &LayeredSetup,
     input: &FrfFitInput,
