@@ -137,8 +137,7 @@ impl ObservedModel {
         };
         let sensors_r = Mat::from_fn(sensors.len(), m, |i, k| row(&sensors[i], k));
         let loads = Mat::from_fn(m, references.len(), |k, j| row(&references[j], k));
-        let kc = model.core_matrix();
-        let core = Mat::from_fn(m, m, |i, j| c64::new(kc[(i, j)], 0.0));
+        let core = complex(model.core_matrix());
         let input_parts = (0..model.inputs().len())
             .map(|k| model.input_parts(k))
             .collect();
@@ -232,8 +231,7 @@ impl ObservedModel {
     /// ([`ReducedModel::take_out_mode_errors`]); returns (α, β) per error, None where left.
     pub fn take_out_mode_errors(&mut self, errors: &[ModeError]) -> Vec<Option<[f64; 2]>> {
         let scales = self.model.take_out_mode_errors(errors);
-        let kc = self.model.core_matrix();
-        self.core = Mat::from_fn(kc.nrows(), kc.ncols(), |i, j| c64::new(kc[(i, j)], 0.0));
+        self.core = complex(self.model.core_matrix());
         scales
     }
 
@@ -321,6 +319,11 @@ impl ObservedModel {
             dh_dinputs,
         })
     }
+}
+
+/// `a` as a complex matrix, for the products with complex vectors.
+fn complex(a: &Mat<f64>) -> Mat<c64> {
+    Mat::from_fn(a.nrows(), a.ncols(), |i, j| c64::new(a[(i, j)], 0.0))
 }
 
 #[cfg(test)]

@@ -207,6 +207,16 @@ fn pair_label(pair_hz: [f64; 2]) -> String {
     )
 }
 
+/// The first `n` of `items`, comma-separated, with ", ..." where there are more.
+fn first_of(items: &[String], n: usize) -> String {
+    let shown = items[..items.len().min(n)].join(", ");
+    if items.len() > n {
+        shown + ", ..."
+    } else {
+        shown
+    }
+}
+
 /// A response `name` with its lowest coherence `gamma2` in the fit band.
 pub fn response_with_coherence(name: &str, gamma2: f64) -> String {
     format!("{name} ({gamma2:.2})")
@@ -215,12 +225,11 @@ pub fn response_with_coherence(name: &str, gamma2: f64) -> String {
 /// The responses `poor` (at most six named) below `min_coherence`, of `responses`.
 pub fn poor_coherence(min_coherence: f64, poor: &[String], responses: usize) -> String {
     format!(
-        "poor coherence (below {}) in the fit band at {} of {} responses: {}{}",
+        "poor coherence (below {}) in the fit band at {} of {} responses: {}",
         min_coherence,
         poor.len(),
         responses,
-        poor.iter().take(6).cloned().collect::<Vec<_>>().join(", "),
-        if poor.len() > 6 { ", ..." } else { "" }
+        first_of(poor, 6)
     )
 }
 
@@ -348,17 +357,11 @@ pub fn overlapping_poles(poles_hz: [f64; 2], apart_hz: f64, share: f64) -> Strin
 pub fn poles_alone_refused(damped: &[String], poles: usize, max_damping: f64) -> String {
     format!(
         "the paper's route failed, and the layered route cannot go on from the poles alone: {} of \
-         {poles} poles are damped more than {:.0} % ({}{}), where the EMA's poles are not to be \
+         {poles} poles are damped more than {:.0} % ({}), where the EMA's poles are not to be \
          trusted without a fit to the FRFs (inverse.frf_fit = \"never\")",
         damped.len(),
         100.0 * max_damping,
-        damped
-            .iter()
-            .take(4)
-            .cloned()
-            .collect::<Vec<_>>()
-            .join(", "),
-        if damped.len() > 4 { ", ..." } else { "" }
+        first_of(damped, 4)
     )
 }
 
@@ -498,5 +501,16 @@ mod tests {
         ] {
             assert!(!s.contains("  "), "{s}");
         }
+    }
+
+    /// Lists name at most their first few items and say there are more.
+    #[test]
+    fn lists_name_their_first_items() {
+        let items: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
+        assert_eq!(first_of(&items, 2), "a, b, ...");
+        assert_eq!(first_of(&items, 3), "a, b, c");
+        assert!(poor_coherence(0.9, &items, 10).ends_with("at 3 of 10 responses: a, b, c"));
+        let five: Vec<String> = (1..=5).map(|k| k.to_string()).collect();
+        assert!(poles_alone_refused(&five, 9, 0.1).contains("(1, 2, 3, 4, ...), where"));
     }
 }

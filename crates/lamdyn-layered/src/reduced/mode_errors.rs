@@ -19,8 +19,7 @@
 //! other modes keep theirs (the y are orthogonal at one s, nearly so between the modes' own s),
 //! and Z stays linear in s, so the FRFs and their derivatives keep their form.
 //!
-//! Measured on the small plate (tests): 4e-3 … 2e-2 off a mesh twice as fine before, 1e-11
-//! after at the s measured, a fifteenth of the error at s × 1.5 and s / 1.5.
+//! Checked against a mesh twice as fine in the tests (their figures are there).
 
 use super::ReducedModel;
 use faer::Mat;
@@ -41,57 +40,60 @@ pub struct ModeError {
 }
 
 /// Scales outside [1/`SCALE_LIMIT`, `SCALE_LIMIT`] are refused. A coarse mesh's faces and
-/// core are a few per cent too stiff, and the split moves them by no more than that (0.4–2.7 %
-/// at the in-band foam roof's modes on its 28 × 28 level, docs/fit.md); a larger scale means an
-/// error the faces and the core do not make, such as a support's bounce whose patch the coarse
-/// mesh integrates otherwise (the supported close pair's 17.1 Hz mode asked 13 % and 16 %).
+/// core are a few per cent too stiff, and the split moves them by no more than that
+/// (docs/fit.md, "A correction mode by mode"); a larger scale means an error the faces and the
+/// core do not make, such as a support's bounce whose patch the coarse mesh integrates
+/// otherwise, or a pole matched to another branch.
 pub const SCALE_LIMIT: f64 = 1.1;
 
 /// Passes of [`ReducedModel::take_out_mode_errors`]: the real mode y is the complex one's
-/// approximation (to the mode's loss), so one pass leaves about 5 % of the error (the small
-/// plate's modes at η ≈ 0.15); three leave 1e-11 (the tests).
+/// approximation (to the mode's loss), so one pass leaves a part of the error of the order of
+/// the mode's loss factor and each further pass that part of what is left (the tests).
 pub const PASSES: usize = 3;
 
 impl ReducedModel {
     /// Takes each mode's error out of the model ([module docs](self)), in [`PASSES`] passes of
     /// the eigenvalue's first-order change, (α − 1) faces + (β − 1) core = λ_wanted − λ.
     /// Returns (α, β) per error, None where the mode is not found, the two equations are
-    /// singular (a mode whose faces and core do not set its eigenvalue, such as a support's
-    /// bounce, or a core without loss) or the first pass's scale falls outside
-    /// [`SCALE_LIMIT`]; those modes are left as they are.
+    /// singular in the first pass (a mode whose faces and core do not set its eigenvalue, such
+    /// as a support's bounce, or a core without loss), or a pass would take its scales outside
+    /// [`SCALE_LIMIT`]; such a mode keeps the passes before.
     pub fn take_out_mode_errors(&mut self, errors: &[ModeError]) -> Vec<Option<[f64; 2]>> {
-        let wanted: Vec<Option<Complex64>> = errors
+        let mut now: Vec<Option<Complex64>> =
+            errors.iter().map(|e| self.elastic_eigenvalue(e)).collect();
+        let wanted: Vec<Option<Complex64>> = now
             .iter()
-            .map(|e| Some(self.elastic_eigenvalue(e)? * (-e.ln_error).exp()))
+            .zip(errors)
+            .map(|(l, e)| l.map(|l| l * (-e.ln_error).exp()))
             .collect();
         let mut scales: Vec<Option<[f64; 2]>> =
             wanted.iter().map(|w| w.map(|_| [1.0; 2])).collect();
+        let within = |x: f64| (1.0 / SCALE_LIMIT..=SCALE_LIMIT).contains(&x);
         for pass in 0..PASSES {
-            let steps: Vec<Option<(Vec<f64>, [f64; 2])>> = errors
-                .iter()
-                .zip(&wanted)
-                .zip(&scales)
-                .map(|((e, w), kept)| {
-                    kept.as_ref()?;
-                    self.step_to(e, (*w)?)
+            if pass > 0 {
+                now = errors.iter().map(|e| self.elastic_eigenvalue(e)).collect();
+            }
+            let steps: Vec<Option<Step>> = (0..errors.len())
+                .map(|k| {
+                    scales[k]?;
+                    self.step_to(&errors[k], now[k]?, wanted[k]?)
                 })
                 .collect();
             for (k, step) in steps.into_iter().enumerate() {
-                let Some((y, [alpha, beta])) = step else {
+                let Some(step) = step else {
                     if pass == 0 {
                         scales[k] = None;
                     }
                     continue;
                 };
-                let within = |x: f64| (1.0 / SCALE_LIMIT..=SCALE_LIMIT).contains(&x);
                 let Some([a, b]) = scales[k] else { continue };
+                let [alpha, beta] = step.scales;
                 if !(within(a * alpha) && within(b * beta)) {
                     scales[k] = None;
                     continue;
                 }
-                let (ke, kc) = (quadratic(&self.k_elastic, &y), quadratic(&self.k_core, &y));
-                rank_one(&mut self.k_elastic, &y, (alpha - 1.0) * ke);
-                rank_one(&mut self.k_core, &y, (beta - 1.0) * kc);
+                rank_one(&mut self.k_elastic, &step.y, (alpha - 1.0) * step.faces);
+                rank_one(&mut self.k_core, &step.y, (beta - 1.0) * step.core);
                 scales[k] = Some([a * alpha, b * beta]);
             }
         }
@@ -107,14 +109,13 @@ impl ReducedModel {
             .nth(e.rank)
     }
 
-    /// The mode of `e` and the scales (α, β) of its faces and core that move its eigenvalue to
-    /// `wanted` to first order (module docs); None without the mode or where the two equations
-    /// are singular.
-    fn step_to(&self, e: &ModeError, wanted: Complex64) -> Option<(Vec<f64>, [f64; 2])> {
-        let now = self.elastic_eigenvalue(e)?;
+    /// The step of `e`'s mode from its eigenvalue `now` to `wanted` to first order (module
+    /// docs); None without the mode or where the two equations are singular.
+    fn step_to(&self, e: &ModeError, now: Complex64, wanted: Complex64) -> Option<Step> {
         let y = self.elastic_mode(e.core_scale.re, e.rank, e.target)?;
-        let faces = Complex64::new(1.0, self.elastic_loss) * quadratic(&self.k_elastic, &y);
-        let core = e.core_scale * quadratic(&self.k_core, &y);
+        let (ke, kc) = (quadratic(&self.k_elastic, &y), quadratic(&self.k_core, &y));
+        let faces = Complex64::new(1.0, self.elastic_loss) * ke;
+        let core = e.core_scale * kc;
         let change = wanted - now;
         let det = faces.re * core.im - core.re * faces.im;
         if det.abs() <= 1e-3 * faces.norm() * core.norm() {
@@ -122,7 +123,12 @@ impl ReducedModel {
         }
         let alpha = 1.0 + (change.re * core.im - core.re * change.im) / det;
         let beta = 1.0 + (faces.re * change.im - change.re * faces.im) / det;
-        (alpha.is_finite() && beta.is_finite()).then_some((y, [alpha, beta]))
+        (alpha.is_finite() && beta.is_finite()).then_some(Step {
+            y,
+            scales: [alpha, beta],
+            faces: ke,
+            core: kc,
+        })
     }
 
     /// The elastic eigenvector of `rank` of Vᵀ(K_e + s K_c + K_s)V at real scale `s` (unit
@@ -138,6 +144,18 @@ impl ReducedModel {
         let j = first + rank;
         (j < m).then(|| (0..m).map(|i| u[(i, j)]).collect())
     }
+}
+
+/// One pass's step of a mode ([`ReducedModel::take_out_mode_errors`]).
+struct Step {
+    /// The mode, unit length.
+    y: Vec<f64>,
+    /// (α, β).
+    scales: [f64; 2],
+    /// yᵀK_e y.
+    faces: f64,
+    /// yᵀK_c y.
+    core: f64,
 }
 
 /// yᵀ A y.
