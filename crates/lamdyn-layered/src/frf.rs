@@ -25,6 +25,7 @@ use faer::{Mat, c64};
 use num_complex::Complex64;
 
 /// A reduced layered model observed at sensors and driven at references.
+#[derive(Clone)]
 pub struct ObservedModel {
     model: ReducedModel,
     /// R: n_sensors × m, each sensor's row u·d times the basis.

@@ -41,6 +41,7 @@ use faer::{Mat, c64};
 use num_complex::Complex64;
 
 /// The reduced model: basis and projected matrices.
+#[derive(Clone)]
 pub struct ReducedModel {
     /// Basis V (n × m), M-orthonormal.
     pub basis: Mat<f64>,

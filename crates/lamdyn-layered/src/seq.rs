@@ -36,29 +36,85 @@ pub fn sparse_mul(a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) -> Mat<f64> 
 /// Eigenvalues of a square complex matrix (faer's complex EVD, without vectors), increasing
 /// real part; empty if the QR iteration does not converge.
 pub fn eigenvalues(z: MatRef<'_, c64>) -> Vec<Complex64> {
+    let Some((s, _)) = complex_evd(z, false) else {
+        return Vec::new();
+    };
+    let mut out: Vec<Complex64> = s.iter().map(|l| Complex64::new(l.re, l.im)).collect();
+    out.sort_by(|a, b| a.re.total_cmp(&b.re));
+    out
+}
+
+/// Eigenvalues and right eigenvectors (unit length) of a square complex matrix, by increasing
+/// real part; empty if the QR iteration does not converge.
+pub fn eigenpairs(z: MatRef<'_, c64>) -> Vec<(Complex64, Vec<Complex64>)> {
+    let Some((s, Some(u))) = complex_evd(z, true) else {
+        return Vec::new();
+    };
+    let mut out: Vec<(Complex64, Vec<Complex64>)> = s
+        .iter()
+        .enumerate()
+        .map(|(j, l)| {
+            let v = (0..u.nrows()).map(|i| Complex64::new(u[(i, j)].re, u[(i, j)].im));
+            (Complex64::new(l.re, l.im), v.collect())
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.re.total_cmp(&b.0.re));
+    out
+}
+
+/// faer's complex EVD of `z`, sequential: the eigenvalues and, with `vectors`, the right
+/// eigenvectors; None if the QR iteration does not converge.
+fn complex_evd(z: MatRef<'_, c64>, vectors: bool) -> Option<(Vec<c64>, Option<Mat<c64>>)> {
     let n = z.nrows();
     let mut s = faer::diag::Diag::<c64>::zeros(n);
+    let mut u = vectors.then(|| Mat::<c64>::zeros(n, n));
+    let right = if vectors {
+        ComputeEigenvectors::Yes
+    } else {
+        ComputeEigenvectors::No
+    };
     let req = evd_scratch::<c64>(
         n,
         ComputeEigenvectors::No,
-        ComputeEigenvectors::No,
+        right,
         Par::Seq,
         Default::default(),
     );
     let mut mem = MemBuffer::new(req);
-    let ok = evd_cplx(
+    evd_cplx(
         z,
         s.as_mut(),
         None,
-        None,
+        u.as_mut().map(|u| u.as_mut()),
         Par::Seq,
         MemStack::new(&mut mem),
         Default::default(),
+    )
+    .ok()?;
+    Some(((0..n).map(|i| s[i]).collect(), u))
+}
+
+/// Eigenvalues (nondecreasing) and eigenvectors (the columns) of a real symmetric matrix,
+/// its lower triangle read (faer's self-adjoint EVD); None if the iteration does not converge.
+pub fn symmetric_eigen(a: MatRef<'_, f64>) -> Option<(Vec<f64>, Mat<f64>)> {
+    let n = a.nrows();
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let mut u = Mat::<f64>::zeros(n, n);
+    let req = faer::linalg::evd::self_adjoint_evd_scratch::<f64>(
+        n,
+        ComputeEigenvectors::Yes,
+        Par::Seq,
+        Default::default(),
     );
-    if ok.is_err() {
-        return Vec::new();
-    }
-    let mut out: Vec<Complex64> = (0..n).map(|i| Complex64::new(s[i].re, s[i].im)).collect();
-    out.sort_by(|a, b| a.re.total_cmp(&b.re));
-    out
+    let mut mem = MemBuffer::new(req);
+    faer::linalg::evd::self_adjoint_evd(
+        a,
+        s.as_mut(),
+        Some(u.as_mut()),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .ok()?;
+    Some(((0..n).map(|i| s[i]).collect(), u))
 }

@@ -370,8 +370,11 @@ pub struct FrfRoute {
     pub fit: FrfFit,
     /// Why it is the answer (empty: the pole route is, and this is beside it).
     pub why: Vec<WhyFrfFit>,
-    /// The ladder's correction of the mesh.
+    /// The ladder's correction of the mesh: the line through its modes' errors.
     pub correction: DiscretizationCorrection,
+    /// Where the answer's model also took what the line leaves of each ladder mode's own
+    /// error out.
+    pub mode_by_mode: Option<ModeByMode>,
     /// The model: mesh, dofs, basis.
     pub model_line: String,
     /// Measured against model at a few channels.
@@ -380,6 +383,23 @@ pub struct FrfRoute {
     pub times_s: [f64; 2],
     /// The laws fitted and which one was kept (`inverse.core_law = "auto"`).
     pub laws: LawsCompared,
+}
+
+/// The mesh correction mode by mode (`layered::frf_fit`): the answer's model, on the line's
+/// converged scale ([`DiscretizationCorrection`]), also took what the line leaves of each
+/// ladder mode's own error out of the level's model
+/// ([`lamdyn_layered::frf::ObservedModel::take_out_mode_errors`]), and was fitted from the law
+/// fitted with the line alone. The two laws' difference measures the line's error between
+/// and at the modes and is part of the band.
+#[derive(Debug, Clone)]
+pub struct ModeByMode {
+    /// The ladder modes whose error was given (two poles matched to one model mode give none).
+    pub offered: usize,
+    /// Those taken out (the others' scales beyond
+    /// [`lamdyn_layered::reduced::mode_errors::SCALE_LIMIT`], or not found).
+    pub taken: usize,
+    /// The law fitted with the line alone.
+    pub line_law: FrfFit,
 }
 
 /// The laws the FRF fit tried and the one it kept.
@@ -443,8 +463,9 @@ impl FrfRoute {
     }
 
     /// The law and its 95 % band at `f_hz`: the fit's band (its covariance, the inputs'
-    /// priors) widened in quadrature by the mesh correction's uncertainty and by the law's
-    /// difference to the law with the inputs held, as one standard deviation
+    /// priors) widened in quadrature by the mesh correction's uncertainty, by the law's
+    /// difference to the law fitted with the correction's line alone ([`ModeByMode`]) and by its
+    /// difference to the law with the inputs held, each difference as one standard deviation
     /// ([`FrfFit::inputs_held_step`]). The data pin the inputs to a fraction of their priors (the
     /// faces' modulus to 0.1 % on the foam roof's 243 channels), so a model error the level's
     /// correction leaves moves them by more than their own band, and a stiff core's G' by ten
@@ -461,15 +482,45 @@ impl FrfRoute {
         let [held_storage, held_loss] = self
             .inputs_held_change(f_hz)
             .map_or([0.0; 2], |d| d.map(relative));
+        let [line_storage, line_loss] = self
+            .line_law_change(f_hz)
+            .map_or([0.0; 2], |d| d.map(relative));
         let [sd_storage, sd_loss] = [
-            self.correction.rel_sd[0].hypot(held_storage),
-            self.correction.rel_sd[1].hypot(held_loss),
+            self.correction.rel_sd[0]
+                .hypot(held_storage)
+                .hypot(line_storage),
+            self.correction.rel_sd[1].hypot(held_loss).hypot(line_loss),
         ];
         FrfLawPoint {
             storage_ci95: widen(p.storage_ci95, p.storage_pa, sd_storage),
             loss_factor_ci95: widen(p.loss_factor_ci95, p.loss_factor, sd_loss),
             ..p
         }
+    }
+
+    /// The law fitted with the mesh correction's line alone against the law, at `f_hz`:
+    /// (G'_line/G' − 1, η_line/η − 1); `None` where the answer is that law.
+    pub fn line_law_change(&self, f_hz: f64) -> Option<[f64; 2]> {
+        let line = &self.mode_by_mode.as_ref()?.line_law;
+        let (g, h) = (self.fit.modulus(f_hz), line.modulus(f_hz));
+        Some([h.re / g.re - 1.0, (h.im / h.re) / (g.im / g.re) - 1.0])
+    }
+
+    /// The smallest and largest [`Self::line_law_change`] in G' and η over the fit's band (at
+    /// 64 log-spaced lines; zeros without the correction mode by mode).
+    pub fn line_law_ranges(&self) -> [[f64; 2]; 2] {
+        let [lo, hi] = self.fit.band_hz;
+        let mut ranges = [[0.0f64; 2]; 2];
+        for k in 0..64 {
+            let f = lo * (hi / lo).powf(k as f64 / 63.0);
+            let Some(d) = self.line_law_change(f) else {
+                return [[0.0; 2]; 2];
+            };
+            for (range, x) in ranges.iter_mut().zip(d) {
+                *range = [range[0].min(x), range[1].max(x)];
+            }
+        }
+        ranges
     }
 
     /// The law with the inputs held against the law, at `f_hz`: (G'_held/G' − 1, η_held/η − 1);
@@ -550,12 +601,13 @@ impl FrfOutcome {
                     format!(
                         "corrected for the mesh by the ladder at {} mode(s): the level's model \
                          takes G*/c, c − 1 in G' {:+.2} … {:+.2} % (the level's own error at each \
-                         mode {:+.2} … {:+.2} %)",
+                         mode {:+.2} … {:+.2} %){}",
                         r.correction.modes.len(),
                         100.0 * applied[0],
                         100.0 * applied[1],
                         100.0 * own[0],
                         100.0 * own[1],
+                        mode_by_mode_clause(r),
                     )
                 };
                 format!(
@@ -575,6 +627,26 @@ impl FrfOutcome {
     pub fn answer(&self) -> Option<&FrfRoute> {
         self.route().filter(|r| r.is_the_answer())
     }
+}
+
+/// ", and what the line leaves of each mode's own error taken out ..." where the answer's
+/// model was corrected mode by mode ([`ModeByMode`]; empty otherwise).
+fn mode_by_mode_clause(route: &FrfRoute) -> String {
+    let Some(by_mode) = &route.mode_by_mode else {
+        return String::new();
+    };
+    let [storage, loss] = route.line_law_ranges();
+    format!(
+        ", and what c leaves of each mode's own error taken out of the model at {} of {} \
+         mode(s), fitted from the law with c alone, which differs by G' {:+.2} … {:+.2} %, η \
+         {:+.2} … {:+.2} % over the band (in the band as one sd)",
+        by_mode.taken,
+        by_mode.offered,
+        100.0 * storage[0],
+        100.0 * storage[1],
+        100.0 * loss[0],
+        100.0 * loss[1],
+    )
 }
 
 /// "; inputs found: face modulus +0.06 % (sd 0.98 %, prior 1.00 %), ...; with them held, G'

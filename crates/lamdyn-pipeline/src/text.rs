@@ -486,6 +486,14 @@ pub fn frf_more_modes(held_hz: f64, top_hz: f64, modes: usize) -> String {
     )
 }
 
+/// The FRF fit's progress line where it takes each mode's mesh error out of its model.
+pub fn frf_mode_by_mode(taken: usize, modes: usize) -> String {
+    format!(
+        "FRF fit: what the line leaves of the mesh error of {taken} of {modes} ladder mode(s) \
+         taken out mode by mode; fitted again from the law fitted with the line"
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

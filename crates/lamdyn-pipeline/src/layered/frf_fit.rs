@@ -2,7 +2,9 @@
 //! model on the ladder's finest level up to [`FrfFitTuning::max_dofs`]
 //! ([`lamdyn_fit::frf_fit`]), the inputs under the job's priors, on the converged scale: the
 //! level's model takes the law corrected by the ladder's mesh correction
-//! ([`crate::frf_route::DiscretizationCorrection`]).
+//! ([`crate::frf_route::DiscretizationCorrection`]), and then, fitted again, what that
+//! correction leaves of each ladder mode's own error taken out of the model
+//! ([`crate::frf_route::ModeByMode`]).
 //!
 //! The model is that level of the ladder read at every response channel and driven at
 //! every reference by the surface's shape functions ([`ObservedModel::build`]), on a basis of
@@ -17,7 +19,9 @@ use super::tuning::FrfFitTuning;
 use crate::Reporter;
 use crate::chain::CorePoint;
 use crate::error::{Context, Result};
-use crate::frf_route::{DiscretizationCorrection, FrfCurve, FrfRoute, LawsCompared, WhyFrfFit};
+use crate::frf_route::{
+    DiscretizationCorrection, FrfCurve, FrfRoute, LawsCompared, ModeByMode, WhyFrfFit,
+};
 use crate::job::CoreLawChoice;
 use crate::text;
 use lamdyn_fit::FitError;
@@ -28,6 +32,7 @@ use lamdyn_fit::joint::CoreLawFit;
 use lamdyn_frf::{Channel, FrfSet};
 use lamdyn_layered::frf::{FrfBasis, LineReceptance, MeasuredPoint, ObservedModel};
 use lamdyn_layered::inverse::BASIS_COVER;
+use lamdyn_layered::reduced::ModeError;
 use lamdyn_layered::sensitivity::Input;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -147,6 +152,19 @@ pub fn fit_to_frfs(
             let (fit, laws, other_s) = other_law(setup.core_law, &once, input.set, spinner);
             times[1] += other_s;
             let once = FitOnce { fit, ..once };
+            let (once, mode_by_mode) =
+                match fit_mode_by_mode(input, (level_index, &correction), g_ref, &once, spinner)? {
+                    Some((by_mode, [offered, taken])) => {
+                        let line_law = once.fit;
+                        let kept = ModeByMode {
+                            offered,
+                            taken,
+                            line_law,
+                        };
+                        (by_mode, Some(kept))
+                    }
+                    None => (once, None),
+                };
             let curves = shown_curves(&once.model, &once.fit, full)?;
             let inputs: Vec<&str> = once.model.model.inputs().iter().map(|i| i.name()).collect();
             let line = text::FrfModelLine {
@@ -163,6 +181,7 @@ pub fn fit_to_frfs(
             return Ok(FrfRoute {
                 model_line: text::frf_model_line(&line),
                 correction,
+                mode_by_mode,
                 fit: once.fit,
                 why,
                 curves,
@@ -354,6 +373,117 @@ fn other_law(
             seconds,
         ),
     }
+}
+
+/// The fit again with what the line leaves of each ladder mode's own mesh error taken out of
+/// `once`'s model ([`ObservedModel::take_out_mode_errors`]; [`mode_errors`]), from `once`'s
+/// law. The line through the modes' errors is fragile (one mode matched to another branch
+/// bends it, docs/fit.md), but it corrects every mode; the correction mode by mode holds only
+/// near each mode's G* and only where the faces' and the core's scales can take it, so the
+/// model keeps the line and each mode it can correct is corrected to its own error. It starts
+/// from the line's law, which the fit reached from any start: a start far off (a pole route
+/// misled by poles of another branch) may settle elsewhere (docs/fit.md, "A correction mode
+/// by mode"). Returns the fit and how many modes' errors were given and taken out; None where
+/// none could be.
+fn fit_mode_by_mode(
+    input: &FrfFitInput,
+    (level, line): (usize, &DiscretizationCorrection),
+    g_ref: f64,
+    once: &FitOnce,
+    spinner: &dyn Reporter,
+) -> Result<Option<(FitOnce, [usize; 2])>> {
+    let law = |f_hz: f64| once.fit.modulus(f_hz);
+    let errors = mode_errors(input.modal, (level, line), &law, g_ref);
+    if errors.is_empty() {
+        return Ok(None);
+    }
+    let t = Instant::now();
+    let mut model = once.model.model.clone();
+    let scales = model.take_out_mode_errors(&errors);
+    let taken = scales.iter().filter(|s| s.is_some()).count();
+    spinner.stage(&text::frf_mode_by_mode(taken, errors.len()));
+    if taken == 0 {
+        return Ok(None);
+    }
+    let model = OnConvergedScale {
+        model,
+        correction: line.clone(),
+    };
+    let build_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let first = &once.fit;
+    let curve = |w: f64| first.modulus(w / (2.0 * PI));
+    let settings = FrfFitSettings {
+        starts: 0,
+        ..once.settings.clone()
+    };
+    let fit = fit_core_to_frfs(
+        &model,
+        input.set,
+        first.law.clone(),
+        g_ref,
+        Some(&curve),
+        &settings,
+    )?;
+    let fitted = FitOnce {
+        model,
+        fit,
+        settings,
+        laws: once.laws.clone(),
+        times_s: [
+            once.times_s[0] + build_s,
+            once.times_s[1] + t.elapsed().as_secs_f64(),
+        ],
+    };
+    Ok(Some((fitted, [errors.len(), taken])))
+}
+
+/// Modes are corrected one by one where the law passes within this factor of their converged
+/// G' (the range over which the correction was checked against a finer mesh:
+/// `lamdyn_layered::reduced::mode_errors`' tests, a thirtieth of the error left at 1.5 × and
+/// ÷ 1.5 of the mode's G*). A mode further off is a pole matched to another branch of the
+/// model's modes, its error one of another mode at another G*.
+const MODE_BY_MODE_REACH: f64 = 1.5;
+
+/// What the `line` leaves of each of `modal`'s ladder modes' error on the ladder's level
+/// `level` (0: the coarsest), for a model whose core scale is G*/(`g_ref` c(f)), c on the line
+/// ([`ModeError`]): with the mode's own correction c_k (its converged G* over the level's,
+/// [`lamdyn_layered::convergence::ConvergedMode::level_corrections`]) and S = ∂ln λ/∂ln G*,
+/// ε = S (ln c_k − ln c(f_k)) at the scale G*_k/(g_ref c(f_k)) where the model meets the mode.
+/// Left out: a mode whose converged G' the `law` (G*(f), Pa) misses by more than
+/// [`MODE_BY_MODE_REACH`], and two poles matched to one model mode (which one is right is not
+/// known).
+fn mode_errors(
+    modal: &[CorePoint],
+    (level, line): (usize, &DiscretizationCorrection),
+    law: &dyn Fn(f64) -> Complex64,
+    g_ref: f64,
+) -> Vec<ModeError> {
+    let found: Vec<ModeError> = modal
+        .iter()
+        .filter_map(|p| {
+            let c = p
+                .layered_convergence
+                .as_ref()
+                .or(p.ladder_estimate.as_ref())?;
+            let off = (c.core_shear_pa.re / law(p.freq_hz).re).ln().abs();
+            // NaN (a G' of zero or none) is out of reach too.
+            if off.is_nan() || off > MODE_BY_MODE_REACH.ln() {
+                return None;
+            }
+            let on_line = line.factor(p.freq_hz);
+            let ln_error = c.sensitivity * (*c.level_corrections.get(level)? - on_line.ln());
+            let w = 2.0 * PI * p.freq_hz;
+            ln_error.is_finite().then_some(ModeError {
+                core_scale: c.core_shear_pa / (g_ref * on_line),
+                rank: c.rank,
+                target: w * w,
+                ln_error,
+            })
+        })
+        .collect();
+    let shared = |rank: usize| found.iter().filter(|e| e.rank == rank).count() > 1;
+    found.iter().filter(|e| !shared(e.rank)).copied().collect()
 }
 
 /// Builds the model on `level` with its basis at `g_ref` × `ratios` (with more modes where the
@@ -613,6 +743,54 @@ fn shown_curves(model: &OnConvergedScale, fit: &FrfFit, set: &FrfSet) -> Result<
 mod tests {
     use super::*;
     use lamdyn_frf::Quantity;
+    use lamdyn_layered::convergence::ConvergedMode;
+
+    /// Each mode's error is what the line leaves of its own, at the scale where the model on
+    /// the line meets the mode, ε = S (ln c_k − ln c(f_k)); a mode on the line has none left;
+    /// two poles matched to one model mode give none, nor do modes the law misses by more than
+    /// a factor 1.5.
+    #[test]
+    fn mode_errors_are_what_the_line_leaves() {
+        let g = Complex64::new(2e6, 1e6);
+        let point = |freq_hz: f64, c: f64, rank: usize| {
+            let mut mode = ConvergedMode::exact(g * c, g, rank);
+            mode.sensitivity = Complex64::new(0.5, 0.01);
+            CorePoint {
+                layered_convergence: Some(mode),
+                ..crate::frf_route::tests::at(freq_hz)
+            }
+        };
+        let modal = [
+            point(10.0, 1.04, 0),
+            point(20.0, 1.03, 1),
+            point(40.0, 1.01, 2),
+            point(41.0, 1.02, 2),
+        ];
+        let line = DiscretizationCorrection::from_ladder(&modal[..3], 0);
+        let law = |_: f64| g;
+        let errors = mode_errors(&modal, (0, &line), &law, 1e6);
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        for (e, p) in errors.iter().zip(&modal) {
+            let on_line = line.factor(p.freq_hz);
+            let own = p.layered_convergence.as_ref().unwrap();
+            let wanted = own.sensitivity * (own.level_corrections[0] - on_line.ln());
+            assert!((e.ln_error - wanted).norm() < 1e-12, "{e:?}");
+            assert!((e.core_scale - own.core_shear_pa / (1e6 * on_line)).norm() < 1e-12);
+            let w = 2.0 * PI * p.freq_hz;
+            assert_eq!((e.rank, e.target), (own.rank, w * w));
+        }
+        // The Theil–Sen line runs through the 10 and 40 Hz modes (the median slope is theirs):
+        // nothing is left of the first, and of the 20 Hz mode S (ln 1.03 − ln c(20 Hz)).
+        assert!(errors[0].ln_error.norm() < 1e-9, "{:?}", errors[0]);
+        assert!(errors[1].ln_error.norm() > 1e-3, "{:?}", errors[1]);
+        // Rank 2 is shared by the 40 and 41 Hz poles: both left out.
+        assert!(errors.iter().all(|e| e.rank != 2));
+        // A law 1.6 times the modes' G' leaves every mode out; 1.45 times keeps them.
+        let far = |_: f64| g * 1.6;
+        assert!(mode_errors(&modal, (0, &line), &far, 1e6).is_empty());
+        let near = |_: f64| g * 1.45;
+        assert_eq!(mode_errors(&modal, (0, &line), &near, 1e6).len(), 2);
+    }
 
     /// Four lines per half-width of the narrowest mode, at least one; no modes (or no spacing):
     /// every line.

@@ -218,6 +218,15 @@ pub(super) fn json(r: &ChainResult) -> serde_json::Value {
             "storage_applied": applied,
             "storage_level_error": own,
             "rel_sd": route.correction.rel_sd,
+            "mode_by_mode": route.mode_by_mode.as_ref().map(|m| {
+                let [storage, loss] = route.line_law_ranges();
+                serde_json::json!({
+                    "offered": m.offered,
+                    "taken": m.taken,
+                    "line_law_storage_change": storage,
+                    "line_law_loss_factor_change": loss,
+                })
+            }),
         },
         "curve": curve,
     })
