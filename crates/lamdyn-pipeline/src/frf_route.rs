@@ -393,11 +393,12 @@ pub struct FrfRoute {
 /// and at the modes and is part of the band.
 #[derive(Debug, Clone)]
 pub struct ModeByMode {
-    /// The ladder modes whose error was given (two poles matched to one model mode give none).
-    pub offered: usize,
-    /// Those taken out (the others' scales beyond
-    /// [`lamdyn_layered::reduced::mode_errors::SCALE_LIMIT`], or not found).
-    pub taken: usize,
+    /// The ladder modes (Hz) whose error was taken out.
+    pub taken_hz: Vec<f64>,
+    /// Those whose error was given but left to the line: their scales beyond
+    /// [`lamdyn_layered::reduced::mode_errors::SCALE_LIMIT`], or the mode not found. (Modes the
+    /// law misses by more than a factor 1.5, and two poles on one model mode, give none.)
+    pub left_hz: Vec<f64>,
     /// The law fitted with the line alone.
     pub line_law: FrfFit,
 }
@@ -637,11 +638,11 @@ fn mode_by_mode_clause(route: &FrfRoute) -> String {
     };
     let [storage, loss] = route.line_law_ranges();
     format!(
-        ", and what c leaves of each mode's own error taken out of the model at {} of {} \
-         mode(s), fitted from the law with c alone, which differs by G' {:+.2} … {:+.2} %, η \
+        ", and what c leaves of each mode's own error taken out of the model at {} (left to \
+         c: {}), fitted from the law with c alone, which differs by G' {:+.2} … {:+.2} %, η \
          {:+.2} … {:+.2} % over the band (in the band as one sd)",
-        by_mode.taken,
-        by_mode.offered,
+        crate::text::hz_list(&by_mode.taken_hz),
+        crate::text::hz_list(&by_mode.left_hz),
         100.0 * storage[0],
         100.0 * storage[1],
         100.0 * loss[0],

@@ -486,12 +486,31 @@ pub fn frf_more_modes(held_hz: f64, top_hz: f64, modes: usize) -> String {
     )
 }
 
-/// The FRF fit's progress line where it takes each mode's mesh error out of its model.
-pub fn frf_mode_by_mode(taken: usize, modes: usize) -> String {
+/// The FRF fit's progress line where it takes what the line leaves of each mode's mesh error
+/// out of its model: the modes taken and those left to the line (Hz).
+pub fn frf_mode_by_mode(taken_hz: &[f64], left_hz: &[f64]) -> String {
     format!(
-        "FRF fit: what the line leaves of the mesh error of {taken} of {modes} ladder mode(s) \
-         taken out mode by mode; fitted again from the law fitted with the line"
+        "FRF fit: what the line leaves of the mesh error taken out mode by mode at {}{}; fitted \
+         again from the law fitted with the line",
+        hz_list(taken_hz),
+        if left_hz.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (left to the line, their scales beyond 10 % or the mode not found: {})",
+                hz_list(left_hz)
+            )
+        }
     )
+}
+
+/// "26.1, 31.3 Hz" (at most eight named; "none" for none).
+pub fn hz_list(freqs_hz: &[f64]) -> String {
+    if freqs_hz.is_empty() {
+        return "none".to_string();
+    }
+    let items: Vec<String> = freqs_hz.iter().map(|f| format!("{f:.1}")).collect();
+    first_of(&items, 8) + " Hz"
 }
 
 #[cfg(test)]
@@ -520,5 +539,13 @@ mod tests {
         assert!(poor_coherence(0.9, &items, 10).ends_with("at 3 of 10 responses: a, b, c"));
         let five: Vec<String> = (1..=5).map(|k| k.to_string()).collect();
         assert!(poles_alone_refused(&five, 9, 0.1).contains("(1, 2, 3, 4, ...), where"));
+        assert_eq!(hz_list(&[]), "none");
+        assert_eq!(hz_list(&[16.46, 20.09]), "16.5, 20.1 Hz");
+        let nine: Vec<f64> = (1..=9).map(f64::from).collect();
+        assert!(hz_list(&nine).ends_with("8.0, ... Hz"));
+        let line = frf_mode_by_mode(&[26.1], &[16.5]);
+        assert!(line.contains("mode by mode at 26.1 Hz (left to the line"));
+        assert!(line.contains("not found: 16.5 Hz); fitted"));
+        assert!(!frf_mode_by_mode(&[26.1], &[]).contains("left to the line"));
     }
 }

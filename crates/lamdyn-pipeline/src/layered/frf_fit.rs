@@ -154,15 +154,7 @@ pub fn fit_to_frfs(
             let once = FitOnce { fit, ..once };
             let (once, mode_by_mode) =
                 match fit_mode_by_mode(input, (level_index, &correction), g_ref, &once, spinner)? {
-                    Some((by_mode, [offered, taken])) => {
-                        let line_law = once.fit;
-                        let kept = ModeByMode {
-                            offered,
-                            taken,
-                            line_law,
-                        };
-                        (by_mode, Some(kept))
-                    }
+                    Some((by_mode, kept)) => (by_mode, Some(kept)),
                     None => (once, None),
                 };
             let curves = shown_curves(&once.model, &once.fit, full)?;
@@ -383,26 +375,32 @@ fn other_law(
 /// model keeps the line and each mode it can correct is corrected to its own error. It starts
 /// from the line's law, which the fit reached from any start: a start far off (a pole route
 /// misled by poles of another branch) may settle elsewhere (docs/fit.md, "A correction mode
-/// by mode"). Returns the fit and how many modes' errors were given and taken out; None where
-/// none could be.
+/// by mode"). Returns the fit and which modes it took out; None where none could be.
 fn fit_mode_by_mode(
     input: &FrfFitInput,
     (level, line): (usize, &DiscretizationCorrection),
     g_ref: f64,
     once: &FitOnce,
     spinner: &dyn Reporter,
-) -> Result<Option<(FitOnce, [usize; 2])>> {
+) -> Result<Option<(FitOnce, ModeByMode)>> {
     let law = |f_hz: f64| once.fit.modulus(f_hz);
-    let errors = mode_errors(input.modal, (level, line), &law, g_ref);
-    if errors.is_empty() {
+    let found = mode_errors(input.modal, (level, line), &law, g_ref);
+    if found.is_empty() {
         return Ok(None);
     }
     let t = Instant::now();
     let mut model = once.model.model.clone();
+    let errors: Vec<ModeError> = found.iter().map(|m| m.error).collect();
     let scales = model.take_out_mode_errors(&errors);
-    let taken = scales.iter().filter(|s| s.is_some()).count();
-    spinner.stage(&text::frf_mode_by_mode(taken, errors.len()));
-    if taken == 0 {
+    let (mut taken_hz, mut left_hz) = (Vec::new(), Vec::new());
+    for (m, scale) in found.iter().zip(&scales) {
+        match scale {
+            Some(_) => taken_hz.push(m.freq_hz),
+            None => left_hz.push(m.freq_hz),
+        }
+    }
+    spinner.stage(&text::frf_mode_by_mode(&taken_hz, &left_hz));
+    if taken_hz.is_empty() {
         return Ok(None);
     }
     let model = OnConvergedScale {
@@ -435,7 +433,12 @@ fn fit_mode_by_mode(
             once.times_s[1] + t.elapsed().as_secs_f64(),
         ],
     };
-    Ok(Some((fitted, [errors.len(), taken])))
+    let kept = ModeByMode {
+        taken_hz,
+        left_hz,
+        line_law: once.fit.clone(),
+    };
+    Ok(Some((fitted, kept)))
 }
 
 /// Modes are corrected one by one where the law passes within this factor of their converged
@@ -458,8 +461,8 @@ fn mode_errors(
     (level, line): (usize, &DiscretizationCorrection),
     law: &dyn Fn(f64) -> Complex64,
     g_ref: f64,
-) -> Vec<ModeError> {
-    let found: Vec<ModeError> = modal
+) -> Vec<LadderModeError> {
+    let found: Vec<LadderModeError> = modal
         .iter()
         .filter_map(|p| {
             let c = p
@@ -474,16 +477,34 @@ fn mode_errors(
             let on_line = line.factor(p.freq_hz);
             let ln_error = c.sensitivity * (*c.level_corrections.get(level)? - on_line.ln());
             let w = 2.0 * PI * p.freq_hz;
-            ln_error.is_finite().then_some(ModeError {
+            let error = ModeError {
                 core_scale: c.core_shear_pa / (g_ref * on_line),
                 rank: c.rank,
                 target: w * w,
                 ln_error,
-            })
+            };
+            let freq_hz = p.freq_hz;
+            ln_error
+                .is_finite()
+                .then_some(LadderModeError { freq_hz, error })
         })
         .collect();
-    let shared = |rank: usize| found.iter().filter(|e| e.rank == rank).count() > 1;
-    found.iter().filter(|e| !shared(e.rank)).copied().collect()
+    let shared = |rank: usize| found.iter().filter(|m| m.error.rank == rank).count() > 1;
+    found
+        .iter()
+        .filter(|m| !shared(m.error.rank))
+        .copied()
+        .collect()
+}
+
+/// A ladder mode's error for [`ObservedModel::take_out_mode_errors`], with its pole's
+/// frequency.
+#[derive(Debug, Clone, Copy)]
+struct LadderModeError {
+    /// The pole's frequency, Hz.
+    freq_hz: f64,
+    /// The error.
+    error: ModeError,
 }
 
 /// Builds the model on `level` with its basis at `g_ref` × `ratios` (with more modes where the
@@ -770,6 +791,8 @@ mod tests {
         let law = |_: f64| g;
         let errors = mode_errors(&modal, (0, &line), &law, 1e6);
         assert_eq!(errors.len(), 2, "{errors:?}");
+        assert_eq!((errors[0].freq_hz, errors[1].freq_hz), (10.0, 20.0));
+        let errors: Vec<ModeError> = errors.iter().map(|m| m.error).collect();
         for (e, p) in errors.iter().zip(&modal) {
             let on_line = line.factor(p.freq_hz);
             let own = p.layered_convergence.as_ref().unwrap();

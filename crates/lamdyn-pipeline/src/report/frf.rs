@@ -221,8 +221,8 @@ pub(super) fn json(r: &ChainResult) -> serde_json::Value {
             "mode_by_mode": route.mode_by_mode.as_ref().map(|m| {
                 let [storage, loss] = route.line_law_ranges();
                 serde_json::json!({
-                    "offered": m.offered,
-                    "taken": m.taken,
+                    "taken_hz": m.taken_hz,
+                    "left_hz": m.left_hz,
                     "line_law_storage_change": storage,
                     "line_law_loss_factor_change": loss,
                 })
