@@ -496,8 +496,9 @@ pub fn frf_mode_by_mode(taken_hz: &[f64], left_hz: &[f64]) -> String {
         if left_hz.is_empty() {
             String::new()
         } else {
+            let limit = 100.0 * (lamdyn_layered::reduced::mode_errors::SCALE_LIMIT - 1.0);
             format!(
-                " (left to the line, their scales beyond 10 % or the mode not found: {})",
+                " (left to the line, their scales beyond {limit:.0} % or the mode not found: {})",
                 hz_list(left_hz)
             )
         }

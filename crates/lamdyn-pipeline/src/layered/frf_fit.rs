@@ -315,20 +315,8 @@ fn other_law(
     spinner.stage(&text::frf_other_law(law.name(), once.fit.law.name()));
     let t = Instant::now();
     let first = &once.fit;
-    let curve = |w: f64| first.modulus(w / (2.0 * PI));
-    let alone = FrfFitSettings {
-        starts: 0,
-        ..once.settings.clone()
-    };
     let name = law.name();
-    let other = fit_core_to_frfs(
-        &once.model,
-        set,
-        law,
-        first.assembled_modulus_pa,
-        Some(&curve),
-        &alone,
-    );
+    let other = fit_from_curve(&once.model, set, law, first, &once.settings);
     let seconds = t.elapsed().as_secs_f64();
     let other = match other {
         Ok(f) => f,
@@ -409,24 +397,12 @@ fn fit_mode_by_mode(
     };
     let build_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let first = &once.fit;
-    let curve = |w: f64| first.modulus(w / (2.0 * PI));
-    let settings = FrfFitSettings {
-        starts: 0,
-        ..once.settings.clone()
-    };
-    let fit = fit_core_to_frfs(
-        &model,
-        input.set,
-        first.law.clone(),
-        g_ref,
-        Some(&curve),
-        &settings,
-    )?;
+    let law = once.fit.law.clone();
+    let fit = fit_from_curve(&model, input.set, law, &once.fit, &once.settings)?;
     let fitted = FitOnce {
         model,
         fit,
-        settings,
+        settings: once.settings.clone(),
         laws: once.laws.clone(),
         times_s: [
             once.times_s[0] + build_s,
@@ -439,6 +415,30 @@ fn fit_mode_by_mode(
         line_law: once.fit.clone(),
     };
     Ok(Some((fitted, kept)))
+}
+
+/// `law` fitted on `model` from the curve of `first` alone (no grid of starts), with `first`'s
+/// settings otherwise.
+fn fit_from_curve(
+    model: &OnConvergedScale,
+    set: &FrfSet,
+    law: FrfLaw,
+    first: &FrfFit,
+    settings: &FrfFitSettings,
+) -> std::result::Result<FrfFit, FitError> {
+    let curve = |w: f64| first.modulus(w / (2.0 * PI));
+    let alone = FrfFitSettings {
+        starts: 0,
+        ..settings.clone()
+    };
+    fit_core_to_frfs(
+        model,
+        set,
+        law,
+        first.assembled_modulus_pa,
+        Some(&curve),
+        &alone,
+    )
 }
 
 /// Modes are corrected one by one where the law passes within this factor of their converged
