@@ -18,12 +18,18 @@ TEMPERATURES_K = [287.15, 293.15, 299.15]
 
 
 @pytest.fixture(scope="session")
-def cli():
-    """A function running the lamdyn binary (LAMDYN_BIN, default target/release/lamdyn) and
-    returning its --json output."""
+def lamdyn_exe():
+    """The lamdyn binary: LAMDYN_BIN, default target/release/lamdyn."""
     exe = Path(os.environ.get("LAMDYN_BIN", REPO / "target" / "release" / "lamdyn"))
     if not exe.exists():
         pytest.fail(f"the lamdyn binary '{exe}' is missing: cargo build --release (or set LAMDYN_BIN)")
+    return exe
+
+
+@pytest.fixture(scope="session")
+def cli(lamdyn_exe):
+    """A function running the lamdyn binary (`lamdyn_exe`) and returning its --json output."""
+    exe = lamdyn_exe
 
     def call(*args, check=True):
         p = subprocess.run([str(exe), *map(str, args), "--json"], capture_output=True, text=True)
