@@ -44,10 +44,11 @@ def spectra(i):
     return np.fft.rfftfreq(len(x), 1 / FS), np.fft.rfft(x), np.fft.rfft(y), (x, y)
 
 
-def noise_of_h(i, f_hz):
-    """Relative standard deviation of run i's H at f_hz from the sensors' noise: a white noise of
-    the quiet ends' RMS sigma gives |N(f)| = sigma sqrt(n) in an n-point transform."""
-    f, X, Y, (x, y) = spectra(i)
+def noise_of_h(spectra_of_run, f_hz):
+    """Relative standard deviation of a run's H at f_hz from the sensors' noise (`spectra`'s
+    output), and H there: a white noise of the quiet ends' RMS sigma gives |N(f)| = sigma sqrt(n)
+    in an n-point transform."""
+    f, X, Y, (x, y) = spectra_of_run
     q = int(QUIET_S * FS)
     n = len(x)
     sx, sy = (np.concatenate([s[:q], s[-q:]]).std() * np.sqrt(n) for s in (x, y))
@@ -104,20 +105,24 @@ def nearest(poles, f0):
 
 
 def per_run(exe):
-    """{run: {"lamdyn": [...], "sdypy": [...], "local": [...], "noise": rel, "force": |X|}} with
-    one (f_hz, zeta) per README mode in each list."""
+    """{run: {"lamdyn": [...], "sdypy": [...], "local": [...], "noise": rel, "h": H, "force": |X|}}
+    with one (f_hz, zeta) per README mode in each list, and the noise, H and |X| at the first
+    mode's README frequency."""
     out = {}
+    f1 = README_MODES[0][0]
     for i in (1, 2, 3, 4):
-        f, X, Y, _ = spectra(i)
+        spec = spectra(i)
+        f, X, Y, _ = spec
         h = Y / X
         lam = lamdyn_poles(exe, [i])
-        noise, _ = noise_of_h(i, README_MODES[0][0])
-        k = int(round(README_MODES[0][0] / (f[1] - f[0])))
+        noise, h1 = noise_of_h(spec, f1)
+        k = int(round(f1 / (f[1] - f[0])))
         out[i] = {
             "lamdyn": [nearest(lam, f0) for f0, _ in README_MODES],
             "sdypy": sdypy_poles(f, h),
             "local": [local_pole(f, h, f0, z0) for f0, z0 in README_MODES],
             "noise": noise,
+            "h": h1,
             "force": abs(X[k]),
         }
     return out
@@ -137,10 +142,8 @@ def main():
     print()
     print("| run | force |X| at 77 Hz | noise of H at 77 Hz (rel.) | H at 77 Hz against run 1 |")
     print("|---|---|---|---|")
-    _, h1 = noise_of_h(1, 77.0)
     for i, r in runs.items():
-        _, h = noise_of_h(i, 77.0)
-        print(f"| {i} | {r['force']:.0f} | {r['noise']:.1e} | {abs(h / h1 - 1):.2f} |")
+        print(f"| {i} | {r['force']:.0f} | {r['noise']:.1e} | {abs(r['h'] / runs[1]['h'] - 1):.2f} |")
 
 
 if __name__ == "__main__":

@@ -503,32 +503,43 @@ impl FrfRoute {
     /// (G'_line/G' − 1, η_line/η − 1); `None` where the answer is that law.
     pub fn line_law_change(&self, f_hz: f64) -> Option<[f64; 2]> {
         let line = &self.mode_by_mode.as_ref()?.line_law;
-        let (g, h) = (self.fit.modulus(f_hz), line.modulus(f_hz));
-        Some([h.re / g.re - 1.0, (h.im / h.re) / (g.im / g.re) - 1.0])
+        Some(relative_change(self.fit.modulus(f_hz), line.modulus(f_hz)))
     }
 
     /// The smallest and largest [`Self::line_law_change`] in G' and η over the fit's band (at
-    /// 64 log-spaced lines; zeros without the correction mode by mode).
+    /// 64 log-spaced lines, the ranges taken from zero; zeros without the correction mode by
+    /// mode).
     pub fn line_law_ranges(&self) -> [[f64; 2]; 2] {
-        let [lo, hi] = self.fit.band_hz;
-        let mut ranges = [[0.0f64; 2]; 2];
-        for k in 0..64 {
-            let f = lo * (hi / lo).powf(k as f64 / 63.0);
-            let Some(d) = self.line_law_change(f) else {
-                return [[0.0; 2]; 2];
-            };
-            for (range, x) in ranges.iter_mut().zip(d) {
-                *range = [range[0].min(x), range[1].max(x)];
-            }
+        if self.mode_by_mode.is_none() {
+            return [[0.0; 2]; 2];
         }
-        ranges
+        self.change_ranges(64, [[0.0; 2]; 2], |f| self.line_law_change(f))
     }
 
     /// The law with the inputs held against the law, at `f_hz`: (G'_held/G' − 1, η_held/η − 1);
     /// `None` without inputs fitted.
     pub fn inputs_held_change(&self, f_hz: f64) -> Option<[f64; 2]> {
-        let (g, h) = (self.fit.modulus(f_hz), self.fit.modulus_inputs_held(f_hz)?);
-        Some([h.re / g.re - 1.0, (h.im / h.re) / (g.im / g.re) - 1.0])
+        let held = self.fit.modulus_inputs_held(f_hz)?;
+        Some(relative_change(self.fit.modulus(f_hz), held))
+    }
+
+    /// The smallest and largest of `change` (G', η; a line without one counts as zero) at `n`
+    /// (at least 2) lines evenly spaced in ln f over the fit's band, folded into `from`.
+    fn change_ranges(
+        &self,
+        n: usize,
+        from: [[f64; 2]; 2],
+        change: impl Fn(f64) -> Option<[f64; 2]>,
+    ) -> [[f64; 2]; 2] {
+        let [lo, hi] = self.fit.band_hz.map(f64::ln);
+        let n = n.max(2);
+        (0..n).fold(from, |mut ranges, k| {
+            let f = (lo + (hi - lo) * k as f64 / (n - 1) as f64).exp();
+            for (range, x) in ranges.iter_mut().zip(change(f).unwrap_or([0.0; 2])) {
+                *range = [range[0].min(x), range[1].max(x)];
+            }
+            ranges
+        })
     }
 
     /// [`Self::at`] on `n` (at least 2) lines evenly spaced in ln f over the fitted band.
@@ -650,6 +661,14 @@ fn mode_by_mode_clause(route: &FrfRoute) -> String {
     )
 }
 
+/// `other` against `law` (G*, Pa): (G'_other/G' − 1, η_other/η − 1).
+fn relative_change(law: Complex64, other: Complex64) -> [f64; 2] {
+    [
+        other.re / law.re - 1.0,
+        (other.im / other.re) / (law.im / law.re) - 1.0,
+    ]
+}
+
 /// "; inputs found: face modulus +0.06 % (sd 0.98 %, prior 1.00 %), ...; with them held, G'
 /// −0.2 … +1.0 %, η ..." for the inputs the fit moved beside the law (empty without).
 fn inputs_found(route: &FrfRoute) -> String {
@@ -670,17 +689,9 @@ fn inputs_found(route: &FrfRoute) -> String {
     if found.is_empty() {
         return String::new();
     }
-    let [lo, hi] = route.fit.band_hz.map(f64::ln);
-    let mut range = [[f64::INFINITY, f64::NEG_INFINITY]; 2];
-    for k in 0..=20 {
-        let f = (lo + (hi - lo) * f64::from(k) / 20.0).exp();
-        for (r, d) in range
-            .iter_mut()
-            .zip(route.inputs_held_change(f).unwrap_or([0.0; 2]))
-        {
-            *r = [r[0].min(d), r[1].max(d)];
-        }
-    }
+    let range = route.change_ranges(21, [[f64::INFINITY, f64::NEG_INFINITY]; 2], |f| {
+        route.inputs_held_change(f)
+    });
     let held = format!(
         "; with them held the law moves G' {:+.2} … {:+.2} %, η {:+.2} … {:+.2} % (in its band as \
          one sd)",

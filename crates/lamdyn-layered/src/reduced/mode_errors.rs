@@ -164,12 +164,9 @@ impl ElasticMode {
     /// φᵀ (y uᵀ + u yᵀ) φ / (2 φᵀφ) = (φᵀy)(uᵀφ) / φᵀφ, u = A y.
     fn change_by_scaling(&self, a: &Mat<f64>, y: &[f64]) -> Complex64 {
         let phi = &self.vector;
-        let m = y.len();
-        let dot = |v: &dyn Fn(usize) -> f64| -> Complex64 { (0..m).map(|i| phi[i] * v(i)).sum() };
-        let phi_y = dot(&|i| y[i]);
-        let phi_u = dot(&|i| (0..m).map(|j| a[(i, j)] * y[j]).sum());
+        let dot = |v: &[f64]| -> Complex64 { phi.iter().zip(v).map(|(p, x)| p * x).sum() };
         let phi_phi: Complex64 = phi.iter().map(|p| p * p).sum();
-        phi_y * phi_u / phi_phi
+        dot(y) * dot(&times(a, y)) / phi_phi
     }
 }
 
@@ -189,15 +186,20 @@ struct Step {
 fn scale_in_direction(a: &mut Mat<f64>, y: &[f64], scale: f64) {
     let m = y.len();
     let gamma = scale.sqrt() - 1.0;
-    let u: Vec<f64> = (0..m)
-        .map(|i| (0..m).map(|j| a[(i, j)] * y[j]).sum())
-        .collect();
-    let q: f64 = (0..m).map(|i| y[i] * u[i]).sum();
+    let u = times(a, y);
+    let q: f64 = y.iter().zip(&u).map(|(a, b)| a * b).sum();
     for j in 0..m {
         for i in 0..m {
             a[(i, j)] += gamma * (y[i] * u[j] + u[i] * y[j]) + gamma * gamma * q * y[i] * y[j];
         }
     }
+}
+
+/// A y.
+fn times(a: &Mat<f64>, y: &[f64]) -> Vec<f64> {
+    (0..y.len())
+        .map(|i| y.iter().enumerate().map(|(j, v)| a[(i, j)] * v).sum())
+        .collect()
 }
 
 #[cfg(test)]
