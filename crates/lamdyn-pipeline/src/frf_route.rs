@@ -189,8 +189,8 @@ pub fn reasons(
 /// on the foam roof").
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct DiscretizationCorrection {
-    /// (f in Hz, c) at each converged mode, increasing f.
-    pub modes: Vec<(f64, Complex64)>,
+    /// Each converged mode's correction, increasing f.
+    pub modes: Vec<ModeCorrection>,
     /// The line ln c = a + b ln f (complex a, b; real and imaginary parts fitted apart).
     pub line: [Complex64; 2],
     /// The correction's relative standard deviation in (G', η): the modes' own, weighted, with
@@ -203,15 +203,16 @@ pub struct DiscretizationCorrection {
 const INTERPOLATION_SHARE: f64 = 0.25;
 
 /// One mode's correction of a level ([`DiscretizationCorrection`]).
-struct ModeCorrection {
-    /// ln f.
-    x: f64,
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModeCorrection {
+    /// ln f, f the pole's frequency in Hz.
+    pub x: f64,
     /// ln c.
-    y: Complex64,
-    /// |S|².
-    weight: f64,
-    /// Its relative standard deviations of G' and η.
-    sd: [f64; 2],
+    pub y: Complex64,
+    /// |S|², its weight in the line.
+    pub weight: f64,
+    /// Its relative standard deviations of G' and η (the ladder's band, a quarter of |ln c|).
+    pub sd: [f64; 2],
 }
 
 impl DiscretizationCorrection {
@@ -277,7 +278,7 @@ impl DiscretizationCorrection {
             [own(0).hypot(s_re), own(1).hypot(s_im * eta_factor)]
         };
         Self {
-            modes: points.iter().map(|p| (p.x.exp(), p.y.exp())).collect(),
+            modes: points,
             line,
             rel_sd,
         }
@@ -291,8 +292,8 @@ impl DiscretizationCorrection {
                 [lo.min(x), hi.max(x)]
             })
         };
-        let applied = range(&mut self.modes.iter().map(|m| self.factor(m.0).re - 1.0));
-        let own = range(&mut self.modes.iter().map(|m| m.1.re - 1.0));
+        let applied = range(&mut self.modes.iter().map(|m| self.factor(m.x.exp()).re - 1.0));
+        let own = range(&mut self.modes.iter().map(|m| m.y.exp().re - 1.0));
         [applied, own]
     }
 
@@ -301,7 +302,7 @@ impl DiscretizationCorrection {
         let (Some(first), Some(last)) = (self.modes.first(), self.modes.last()) else {
             return Complex64::new(1.0, 0.0);
         };
-        let x = f_hz.clamp(first.0, last.0).ln();
+        let x = f_hz.ln().clamp(first.x, last.x);
         (self.line[0] + self.line[1] * x).exp()
     }
 }
@@ -375,6 +376,10 @@ pub struct FrfRoute {
     /// Where the answer's model also took what the line leaves of each ladder mode's own
     /// error out.
     pub mode_by_mode: Option<ModeByMode>,
+    /// The poles (Hz) whose ladder mode the pole route had found on another branch of the
+    /// model's modes, converged again from the law fitted with the line: their modes, not the
+    /// pole route's, are in `correction` (and the law was fitted again with it).
+    pub converged_again_hz: Vec<f64>,
     /// The model: mesh, dofs, basis.
     pub model_line: String,
     /// Measured against model at a few channels.
@@ -611,10 +616,11 @@ impl FrfOutcome {
                 } else {
                     let [applied, own] = r.correction.storage_ranges();
                     format!(
-                        "corrected for the mesh by the ladder at {} mode(s): the level's model \
+                        "corrected for the mesh by the ladder at {} mode(s){}: the level's model \
                          takes G*/c, c − 1 in G' {:+.2} … {:+.2} % (the level's own error at each \
                          mode {:+.2} … {:+.2} %){}",
                         r.correction.modes.len(),
+                        converged_again_clause(r),
                         100.0 * applied[0],
                         100.0 * applied[1],
                         100.0 * own[0],
@@ -639,6 +645,19 @@ impl FrfOutcome {
     pub fn answer(&self) -> Option<&FrfRoute> {
         self.route().filter(|r| r.is_the_answer())
     }
+}
+
+/// " (at 67.0 Hz the ladder's mode converged again ...)" where the FRF fit ran the ladder
+/// again on a pole ([`FrfRoute::converged_again_hz`]; empty otherwise).
+fn converged_again_clause(route: &FrfRoute) -> String {
+    if route.converged_again_hz.is_empty() {
+        return String::new();
+    }
+    format!(
+        " (at {} the ladder's mode converged again from the law: the pole route's lay on \
+         another branch)",
+        crate::text::hz_list(&route.converged_again_hz)
+    )
 }
 
 /// ", and what the line leaves of each mode's own error taken out ..." where the answer's

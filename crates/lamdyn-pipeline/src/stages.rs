@@ -115,7 +115,7 @@ pub fn run_job(
     };
     let route = layered_route(&mut t, &config.layered, data, &mut modal, &cache)?;
     layered::to_real_frequency(&mut modal, route.law.as_ref());
-    let frf = frf_fit_stage(&mut t, (&config, &route), data, &modal);
+    let frf = frf_fit_stage(&mut t, (&config, &route), data, &modal, &cache);
     let mc = uncertainty_stage(&mut t, &config, fit_result, freqs_hz)?;
     let truth = truth_stage(&mut t, config.truth.as_deref())?;
     warnings.extend(cache.notes());
@@ -461,6 +461,7 @@ fn frf_fit_stage(
     (config, route): (&RunConfig, &LayeredRoute),
     data: layered::Observations,
     modal: &[CorePoint],
+    cache: &Cache,
 ) -> FrfOutcome {
     let (law, levels) = (route.law.as_ref(), route.levels.as_slice());
     // The setup as the job gives it, supports included: the FRF fit fits the supports itself
@@ -495,6 +496,10 @@ fn frf_fit_stage(
             .chain(&data.ema.set_aside)
             .map(|m| m.damping_ratio * m.freq_hz)
             .collect(),
+        ladder_again: Some(layered::LadderAgain {
+            cache,
+            ema: data.ema,
+        }),
     };
     let spinner = t.spinner;
     let outcome = t.stage("FRF fit", || {

@@ -505,6 +505,24 @@ pub fn frf_mode_by_mode(taken_hz: &[f64], left_hz: &[f64]) -> String {
     )
 }
 
+/// The FRF fit runs the ladder again on poles its law passes far off.
+pub fn frf_converge_again(freqs_hz: &[f64]) -> String {
+    format!(
+        "FRF fit: the ladder again at {} from the law fitted (the pole route's core there is off \
+         it by more than a factor 1.5: a pole matched to another branch of the model's modes)",
+        hz_list(freqs_hz)
+    )
+}
+
+/// The ladder run again failed; the correction keeps the pole route's modes.
+pub fn frf_converge_again_failed(e: &crate::error::PipelineError) -> String {
+    format!(
+        "FRF fit: the ladder run again failed ({}); the mesh correction keeps the pole route's \
+         modes",
+        crate::error::chain_text(e)
+    )
+}
+
 /// "26.1, 31.3 Hz" (at most eight named; "none" for none).
 pub fn hz_list(freqs_hz: &[f64]) -> String {
     if freqs_hz.is_empty() {

@@ -129,6 +129,12 @@ impl<'a> LevelBuilds<'a> {
     }
 
     /// A finer level's model on `elements`.
+    /// The coarsest model alone, with its inputs' derivatives (from the cache where it is
+    /// there), for a ladder run again on a few modes ([`super::converge_again`]).
+    pub fn coarsest(&self) -> Result<LayeredInverse, LayeredError> {
+        self.cached(&self.setup.plate, self.setup.start, true)
+    }
+
     fn finer(&self, elements: [usize; 2]) -> Result<LayeredInverse, LayeredError> {
         self.cached(&self.setup.plate, elements, false)
     }

@@ -125,15 +125,7 @@ pub fn run(
         .context("cannot build the layered model")?;
     let eigenvalues: Vec<Complex64> = targets.iter().map(|w| w.eigenvalue).collect();
     let first: Vec<Complex64> = targets.iter().map(|w| starts[w.point]).collect();
-    let converged = converge_keeping_levels(
-        &coarsest,
-        setup.start,
-        &builds,
-        &eigenvalues,
-        &first,
-        &setup.ladder,
-        &|m| spinner.stage(&text::layered_progress(m)),
-    );
+    let converged = climb(setup, (&coarsest, &builds), (&eigenvalues, &first), spinner);
     let build_s = t.elapsed().as_secs_f64();
     let (mut out, finer) = match converged {
         Ok(o) => o,
@@ -181,6 +173,86 @@ pub fn run(
             .zip(out.dofs.iter().copied())
             .collect(),
     })
+}
+
+/// What the FRF fit needs to run the ladder again on a few of the pole route's modes
+/// ([`converge_again`]).
+#[derive(Clone, Copy)]
+pub struct LadderAgain<'a> {
+    /// The run's cache (the ladder's levels are there from the layered stage).
+    pub cache: &'a crate::cache::Cache,
+    /// The identification, whose poles are the targets.
+    pub ema: &'a EmaResult,
+}
+
+/// The ladder of `setup` run again for the modal points `points` (indices into `modal`) from
+/// the starts `starts` (G*, Pa), as [`run`] runs it from the pole route's: each point's
+/// converged mode, or the ladder's estimate where it missed its tolerance, where its core is
+/// passive; None for a point without a pole or without a passive answer. The FRF fit calls it
+/// for poles the pole route matched to another branch of the model's modes, from its own law
+/// (`frf_fit`, [`crate::frf_route::DiscretizationCorrection`]).
+///
+/// # Errors
+/// The coarsest model cannot be built; the ladder's own errors.
+pub(crate) fn converge_again(
+    setup: &LayeredSetup,
+    again: LadderAgain,
+    modal: &[CorePoint],
+    (points, starts): (&[usize], &[Complex64]),
+    spinner: &dyn Reporter,
+) -> Result<Vec<Option<ConvergedMode>>> {
+    let all = targets(again.ema, modal);
+    let chosen: Vec<(usize, Complex64, Complex64)> = points
+        .iter()
+        .zip(starts)
+        .filter_map(|(&p, &s)| {
+            let t = all.iter().find(|t| t.point == p)?;
+            Some((p, t.eigenvalue, s))
+        })
+        .collect();
+    let mut found = vec![None; points.len()];
+    if chosen.is_empty() {
+        return Ok(found);
+    }
+    // The same G_ref as the layered stage's, so its levels come from the cache.
+    let builds = LevelBuilds::new(setup, again.cache, basis_modulus(&setup.starts(modal)));
+    let coarsest = builds
+        .coarsest()
+        .context("cannot build the layered model")?;
+    let eigenvalues: Vec<Complex64> = chosen.iter().map(|c| c.1).collect();
+    let first: Vec<Complex64> = chosen.iter().map(|c| c.2).collect();
+    let (out, _) = climb(setup, (&coarsest, &builds), (&eigenvalues, &first), spinner)
+        .context("the ladder run again failed")?;
+    for ((point, _, _), (mode, estimate)) in chosen
+        .iter()
+        .zip(out.modes.iter().zip(&out.beyond_tolerance))
+    {
+        let m = mode.as_ref().ok().or(estimate.as_ref());
+        if let (Some(k), Some(m)) = (points.iter().position(|p| p == point), m) {
+            found[k] = physical(m).ok().cloned();
+        }
+    }
+    Ok(found)
+}
+
+/// The ladder of `setup` from its coarsest model on the eigenvalues `targets`, each from its
+/// start G* in `starts` (Pa), the finer levels from `builds`
+/// ([`converge_keeping_levels`]); progress on `spinner`.
+fn climb(
+    setup: &LayeredSetup,
+    (coarsest, builds): (&LayeredInverse, &LevelBuilds),
+    (targets, starts): (&[Complex64], &[Complex64]),
+    spinner: &dyn Reporter,
+) -> std::result::Result<(Converged, Vec<LayeredInverse>), lamdyn_layered::LayeredError> {
+    converge_keeping_levels(
+        coarsest,
+        setup.start,
+        builds,
+        targets,
+        starts,
+        &setup.ladder,
+        &|m| spinner.stage(&text::layered_progress(m)),
+    )
 }
 
 /// Each target's converged mode into its modal point: its G* where it is passive, else why

@@ -218,6 +218,14 @@ pub(super) fn json(r: &ChainResult) -> serde_json::Value {
             "storage_applied": applied,
             "storage_level_error": own,
             "rel_sd": route.correction.rel_sd,
+            "converged_again_hz": route.converged_again_hz,
+            "per_mode": route.correction.modes.iter().map(|m| serde_json::json!({
+                "f_hz": m.x.exp(),
+                "ln_c": [m.y.re, m.y.im],
+                "weight": m.weight,
+                "rel_sd": m.sd,
+            })).collect::<Vec<_>>(),
+            "line_ln_c": route.correction.line.map(|z| [z.re, z.im]),
             "mode_by_mode": route.mode_by_mode.as_ref().map(|m| {
                 let [storage, loss] = route.line_law_ranges();
                 serde_json::json!({
