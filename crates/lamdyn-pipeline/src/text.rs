@@ -514,12 +514,12 @@ pub fn frf_converge_again(freqs_hz: &[f64]) -> String {
     )
 }
 
-/// The ladder run again failed; the correction keeps the pole route's modes.
-pub fn frf_converge_again_failed(e: &crate::error::PipelineError) -> String {
+/// The ladder run again, or the fit with the line it gave, failed (`why`); the correction
+/// keeps the pole route's modes.
+pub fn frf_converge_again_failed(why: &str) -> String {
     format!(
-        "FRF fit: the ladder run again failed ({}); the mesh correction keeps the pole route's \
-         modes",
-        crate::error::chain_text(e)
+        "FRF fit: the ladder run again, or the fit with its line, failed ({why}); the mesh \
+         correction keeps the pole route's modes"
     )
 }
 

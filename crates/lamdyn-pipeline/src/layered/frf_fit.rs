@@ -119,7 +119,7 @@ pub fn fit_to_frfs(
 ) -> Result<FrfRoute> {
     let level = fit_level(setup, input.levels)?;
     let level_index = input.levels.iter().position(|l| l.0 == level).unwrap_or(0);
-    let mut correction = DiscretizationCorrection::from_ladder(input.modal, level_index);
+    let correction = DiscretizationCorrection::from_ladder(input.modal, level_index);
     let (mut g_ref, mut ratios) = basis_moduli(setup, input);
     let f = input.set.freqs_hz();
     let spacing = if f.len() > 1 { f[1] - f[0] } else { 0.0 };
@@ -143,7 +143,6 @@ pub fn fit_to_frfs(
         pole_law.map(|f| Box::new(f) as Box<dyn Fn(f64) -> Complex64 + Sync>);
     let mut times = [0.0; 2];
     let mut round = 0;
-    let mut converged_again_hz = Vec::new();
     loop {
         let once = fit_once(
             setup,
@@ -159,26 +158,21 @@ pub fn fit_to_frfs(
         if held || round == tuning.max_recentres {
             let (fit, laws, other_s) = other_law(setup.core_law, &once, input.set, spinner);
             times[1] += other_s;
-            let mut once = FitOnce { fit, ..once };
+            let once = FitOnce { fit, ..once };
             let before = once.times_s;
-            let mut modal = input.modal.to_vec();
-            let again = converge_out_of_reach(setup, input, (level_index, &once), spinner);
-            if let Some((found, hz)) = again {
-                let line = DiscretizationCorrection::from_ladder(&found, level_index);
-                once = fit_on_line(once, line, input.set)?;
-                (correction, modal) = (once.model.correction.clone(), found);
-                converged_again_hz = hz;
-            }
-            let input = &FrfFitInput {
-                modal: &modal,
-                half_widths_hz: Vec::new(),
-                ..*input
-            };
-            let (once, mode_by_mode) =
-                match fit_mode_by_mode(input, (level_index, &correction), g_ref, &once, spinner)? {
-                    Some((by_mode, kept)) => (by_mode, Some(kept)),
-                    None => (once, None),
-                };
+            let Corrected {
+                once,
+                correction,
+                mode_by_mode,
+                converged_again_hz,
+            } = correct_further(
+                setup,
+                input,
+                (level_index, correction),
+                g_ref,
+                once,
+                spinner,
+            )?;
             for (t, (now, then)) in times.iter_mut().zip(once.times_s.iter().zip(before)) {
                 *t += now - then;
             }
@@ -467,11 +461,67 @@ fn fit_from_curve(
     )
 }
 
+/// The law fitted with the mesh correction's line, corrected further: with its poles out of
+/// the law's reach converged again and the law fitted again with the line drawn again
+/// ([`converge_out_of_reach`]), then mode by mode ([`fit_mode_by_mode`]).
+struct Corrected {
+    /// The fit the route answers with.
+    once: FitOnce,
+    /// The line its model is on.
+    correction: DiscretizationCorrection,
+    /// The correction mode by mode, where there was one.
+    mode_by_mode: Option<ModeByMode>,
+    /// The poles converged again (Hz).
+    converged_again_hz: Vec<f64>,
+}
+
+/// [`Corrected`] from `once`, the law fitted with the `line` of the ladder's level `level`
+/// (0: the coarsest) on a basis at `g_ref`.
+fn correct_further(
+    setup: &LayeredSetup,
+    input: &FrfFitInput,
+    (level, line): (usize, DiscretizationCorrection),
+    g_ref: f64,
+    once: FitOnce,
+    spinner: &dyn Reporter,
+) -> Result<Corrected> {
+    let (mut once, mut correction) = (once, line);
+    let mut modal = input.modal.to_vec();
+    let mut converged_again_hz = Vec::new();
+    if let Some((found, hz)) = converge_out_of_reach(setup, input, (level, &once), spinner) {
+        let line = DiscretizationCorrection::from_ladder(&found, level);
+        match fit_on_line(&once, line, input.set) {
+            Ok(refit) => {
+                once = refit;
+                (correction, modal) = (once.model.correction.clone(), found);
+                converged_again_hz = hz;
+            }
+            Err(e) => spinner.stage(&text::frf_converge_again_failed(&e.to_string())),
+        }
+    }
+    let input = &FrfFitInput {
+        modal: &modal,
+        half_widths_hz: Vec::new(),
+        ..*input
+    };
+    let (once, mode_by_mode) =
+        match fit_mode_by_mode(input, (level, &correction), g_ref, &once, spinner)? {
+            Some((by_mode, kept)) => (by_mode, Some(kept)),
+            None => (once, None),
+        };
+    Ok(Corrected {
+        once,
+        correction,
+        mode_by_mode,
+        converged_again_hz,
+    })
+}
+
 /// The poles the pole route matched to another branch of the model's modes, converged again
 /// on the ladder from the law `once` fitted with the line (level `level`), where they then
 /// land within [`MODE_BY_MODE_REACH`] of it: the modal points with those modes in place of the
 /// pole route's, and the poles' frequencies (None: no such pole, no ladder to run, or none
-/// landed; a ladder that fails is said and left).
+/// landed; a ladder that fails is said and left, as is a refit with the new line that fails).
 ///
 /// A pole on another branch carries that branch's level error, and its |S|² there is 20 to 40
 /// times its own mode's: on the foam roof's 48 × 48 and 64 × 64 truths the 67 Hz pole on
@@ -506,7 +556,8 @@ fn converge_out_of_reach(
     let found = match found {
         Ok(found) => found,
         Err(e) => {
-            spinner.stage(&text::frf_converge_again_failed(&e));
+            let why = crate::error::chain_text(&e);
+            spinner.stage(&text::frf_converge_again_failed(&why));
             return None;
         }
     };
@@ -526,18 +577,23 @@ fn converge_out_of_reach(
 }
 
 /// `once`'s law fitted again from its curve on its level's model with the correction `line`.
-fn fit_on_line(once: FitOnce, line: DiscretizationCorrection, set: &FrfSet) -> Result<FitOnce> {
+fn fit_on_line(
+    once: &FitOnce,
+    line: DiscretizationCorrection,
+    set: &FrfSet,
+) -> std::result::Result<FitOnce, FitError> {
     let t = Instant::now();
     let model = OnConvergedScale {
-        model: once.model.model,
+        model: once.model.model.clone(),
         correction: line,
     };
     let fit = fit_from_curve(&model, set, once.fit.law.clone(), &once.fit, &once.settings)?;
     Ok(FitOnce {
         model,
         fit,
+        settings: once.settings.clone(),
+        laws: once.laws.clone(),
         times_s: [once.times_s[0], once.times_s[1] + t.elapsed().as_secs_f64()],
-        ..once
     })
 }
 
