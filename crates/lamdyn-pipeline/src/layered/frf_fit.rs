@@ -415,20 +415,7 @@ fn fit_mode_by_mode(
         model,
         correction: line.clone(),
     };
-    let build_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let law = once.fit.law.clone();
-    let fit = fit_from_curve(&model, input.set, law, &once.fit, &once.settings)?;
-    let fitted = FitOnce {
-        model,
-        fit,
-        settings: once.settings.clone(),
-        laws: once.laws.clone(),
-        times_s: [
-            once.times_s[0] + build_s,
-            once.times_s[1] + t.elapsed().as_secs_f64(),
-        ],
-    };
+    let fitted = refit(once, model, input.set, t.elapsed().as_secs_f64())?;
     let kept = ModeByMode {
         taken_hz,
         left_hz,
@@ -486,21 +473,24 @@ fn correct_further(
     spinner: &dyn Reporter,
 ) -> Result<Corrected> {
     let (mut once, mut correction) = (once, line);
-    let mut modal = input.modal.to_vec();
+    let mut modal = None;
     let mut converged_again_hz = Vec::new();
     if let Some((found, hz)) = converge_out_of_reach(setup, input, (level, &once), spinner) {
-        let line = DiscretizationCorrection::from_ladder(&found, level);
-        match fit_on_line(&once, line, input.set) {
-            Ok(refit) => {
-                once = refit;
-                (correction, modal) = (once.model.correction.clone(), found);
+        let model = OnConvergedScale {
+            model: once.model.model.clone(),
+            correction: DiscretizationCorrection::from_ladder(&found, level),
+        };
+        match refit(&once, model, input.set, 0.0) {
+            Ok(fitted) => {
+                once = fitted;
+                (correction, modal) = (once.model.correction.clone(), Some(found));
                 converged_again_hz = hz;
             }
             Err(e) => spinner.stage(&text::frf_converge_again_failed(&e.to_string())),
         }
     }
     let input = &FrfFitInput {
-        modal: &modal,
+        modal: modal.as_deref().unwrap_or(input.modal),
         half_widths_hz: Vec::new(),
         ..*input
     };
@@ -576,24 +566,25 @@ fn converge_out_of_reach(
     (!landed.is_empty()).then_some((modal, landed))
 }
 
-/// `once`'s law fitted again from its curve on its level's model with the correction `line`.
-fn fit_on_line(
+/// `once`'s law fitted again from its curve on `model` (built in `build_s` seconds, counted
+/// with the build), with `once`'s settings.
+fn refit(
     once: &FitOnce,
-    line: DiscretizationCorrection,
+    model: OnConvergedScale,
     set: &FrfSet,
+    build_s: f64,
 ) -> std::result::Result<FitOnce, FitError> {
     let t = Instant::now();
-    let model = OnConvergedScale {
-        model: once.model.model.clone(),
-        correction: line,
-    };
     let fit = fit_from_curve(&model, set, once.fit.law.clone(), &once.fit, &once.settings)?;
     Ok(FitOnce {
         model,
         fit,
         settings: once.settings.clone(),
         laws: once.laws.clone(),
-        times_s: [once.times_s[0], once.times_s[1] + t.elapsed().as_secs_f64()],
+        times_s: [
+            once.times_s[0] + build_s,
+            once.times_s[1] + t.elapsed().as_secs_f64(),
+        ],
     })
 }
 

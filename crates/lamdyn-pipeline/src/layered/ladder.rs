@@ -107,7 +107,7 @@ impl<'a> LevelBuilds<'a> {
                 (built, self.through_thickness())
             },
             || {
-                let coarsest = self.cached(&self.setup.plate, self.setup.start, true);
+                let coarsest = self.coarsest();
                 let rest: Vec<_> = rest.iter().map(|&m| (m, self.finer(m))).collect();
                 (coarsest, rest)
             },
@@ -128,13 +128,12 @@ impl<'a> LevelBuilds<'a> {
         self.all_cached.load(Ordering::Relaxed)
     }
 
-    /// A finer level's model on `elements`.
-    /// The coarsest model alone, with its inputs' derivatives (from the cache where it is
-    /// there), for a ladder run again on a few modes ([`super::converge_again`]).
+    /// The coarsest model, with its inputs' derivatives (from the cache where it is there).
     pub fn coarsest(&self) -> Result<LayeredInverse, LayeredError> {
         self.cached(&self.setup.plate, self.setup.start, true)
     }
 
+    /// A finer level's model on `elements`.
     fn finer(&self, elements: [usize; 2]) -> Result<LayeredInverse, LayeredError> {
         self.cached(&self.setup.plate, elements, false)
     }

@@ -202,12 +202,11 @@ pub(crate) fn converge_again(
     spinner: &dyn Reporter,
 ) -> Result<Vec<Option<ConvergedMode>>> {
     let all = targets(again.ema, modal);
-    let chosen: Vec<(usize, Complex64, Complex64)> = points
-        .iter()
-        .zip(starts)
-        .filter_map(|(&p, &s)| {
+    // (index into `points`, the pole's eigenvalue, the start).
+    let chosen: Vec<(usize, Complex64, Complex64)> = (points.iter().zip(starts).enumerate())
+        .filter_map(|(k, (&p, &s))| {
             let t = all.iter().find(|t| t.point == p)?;
-            Some((p, t.eigenvalue, s))
+            Some((k, t.eigenvalue, s))
         })
         .collect();
     let mut found = vec![None; points.len()];
@@ -223,14 +222,12 @@ pub(crate) fn converge_again(
     let first: Vec<Complex64> = chosen.iter().map(|c| c.2).collect();
     let (out, _) = climb(setup, (&coarsest, &builds), (&eigenvalues, &first), spinner)
         .context("the ladder run again failed")?;
-    for ((point, _, _), (mode, estimate)) in chosen
+    for (&(k, _, _), (mode, estimate)) in chosen
         .iter()
         .zip(out.modes.iter().zip(&out.beyond_tolerance))
     {
         let m = mode.as_ref().ok().or(estimate.as_ref());
-        if let (Some(k), Some(m)) = (points.iter().position(|p| p == point), m) {
-            found[k] = physical(m).ok().cloned();
-        }
+        found[k] = m.and_then(|m| physical(m).ok()).cloned();
     }
     Ok(found)
 }
