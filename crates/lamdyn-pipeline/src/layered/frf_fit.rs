@@ -513,11 +513,9 @@ fn correct_further(
 /// pole route's, and the poles' frequencies (None: no such pole, no ladder to run, or none
 /// landed; a ladder that fails is said and left, as is a refit with the new line that fails).
 ///
-/// A pole on another branch carries that branch's level error, and its |S|² there is 20 to 40
-/// times its own mode's: on the foam roof's 48 × 48 and 64 × 64 truths the 67 Hz pole on
-/// another branch tilted the line's loss part by 3 % over the band, and η's error with it
-/// (+1.6 % at 16 Hz, −1.7 % at 65 Hz, outside its band at 9–11 of 40 lines); left out, the
-/// line tilted the other way (docs/fit.md). Its own mode's error is the ladder's at the law.
+/// A pole on another branch carries that branch's level error, with that branch's |S|², and
+/// can draw the line to itself; left out, the line loses the mode (docs/fit.md, "Poles on
+/// another branch, converged again"). Its own mode's error is the ladder's at the law.
 fn converge_out_of_reach(
     setup: &LayeredSetup,
     input: &FrfFitInput,
