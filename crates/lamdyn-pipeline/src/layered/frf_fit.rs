@@ -162,17 +162,9 @@ pub fn fit_to_frfs(
             let before = once.times_s;
             let Corrected {
                 once,
-                correction,
                 mode_by_mode,
                 converged_again_hz,
-            } = correct_further(
-                setup,
-                input,
-                (level_index, correction),
-                g_ref,
-                once,
-                spinner,
-            )?;
+            } = correct_further(setup, input, level_index, g_ref, once, spinner)?;
             for (t, (now, then)) in times.iter_mut().zip(once.times_s.iter().zip(before)) {
                 *t += now - then;
             }
@@ -191,7 +183,7 @@ pub fn fit_to_frfs(
             };
             return Ok(FrfRoute {
                 model_line: text::frf_model_line(&line),
-                correction,
+                correction: once.model.correction,
                 mode_by_mode,
                 converged_again_hz,
                 fit: once.fit,
@@ -377,7 +369,8 @@ fn other_law(
 
 /// The fit again with what the line leaves of each ladder mode's own mesh error taken out of
 /// `once`'s model ([`ObservedModel::take_out_mode_errors`]; [`mode_errors`]), from `once`'s
-/// law. The line through the modes' errors is fragile (one mode matched to another branch
+/// law, on the line `once`'s model is on (level `level`, 0: the coarsest). The line through
+/// the modes' errors is fragile (one mode matched to another branch
 /// bends it, docs/fit.md), but it corrects every mode; the correction mode by mode holds only
 /// near each mode's G* and only where the faces' and the core's scales can take it, so the
 /// model keeps the line and each mode it can correct is corrected to its own error. It starts
@@ -386,11 +379,12 @@ fn other_law(
 /// by mode"). Returns the fit and which modes it took out; None where none could be.
 fn fit_mode_by_mode(
     input: &FrfFitInput,
-    (level, line): (usize, &DiscretizationCorrection),
+    level: usize,
     g_ref: f64,
     once: &FitOnce,
     spinner: &dyn Reporter,
 ) -> Result<Option<(FitOnce, ModeByMode)>> {
+    let line = &once.model.correction;
     let law = |f_hz: f64| once.fit.modulus(f_hz);
     let found = mode_errors(input.modal, (level, line), &law, g_ref);
     if found.is_empty() {
@@ -452,27 +446,24 @@ fn fit_from_curve(
 /// the law's reach converged again and the law fitted again with the line drawn again
 /// ([`converge_out_of_reach`]), then mode by mode ([`fit_mode_by_mode`]).
 struct Corrected {
-    /// The fit the route answers with.
+    /// The fit the route answers with (its model on the line it was fitted with).
     once: FitOnce,
-    /// The line its model is on.
-    correction: DiscretizationCorrection,
     /// The correction mode by mode, where there was one.
     mode_by_mode: Option<ModeByMode>,
     /// The poles converged again (Hz).
     converged_again_hz: Vec<f64>,
 }
 
-/// [`Corrected`] from `once`, the law fitted with the `line` of the ladder's level `level`
+/// [`Corrected`] from `once`, the law fitted with the line of the ladder's level `level`
 /// (0: the coarsest) on a basis at `g_ref`.
 fn correct_further(
     setup: &LayeredSetup,
     input: &FrfFitInput,
-    (level, line): (usize, DiscretizationCorrection),
+    level: usize,
     g_ref: f64,
-    once: FitOnce,
+    mut once: FitOnce,
     spinner: &dyn Reporter,
 ) -> Result<Corrected> {
-    let (mut once, mut correction) = (once, line);
     let mut modal = None;
     let mut converged_again_hz = Vec::new();
     if let Some((found, hz)) = converge_out_of_reach(setup, input, (level, &once), spinner) {
@@ -482,9 +473,7 @@ fn correct_further(
         };
         match refit(&once, model, input.set, 0.0) {
             Ok(fitted) => {
-                once = fitted;
-                (correction, modal) = (once.model.correction.clone(), Some(found));
-                converged_again_hz = hz;
+                (once, modal, converged_again_hz) = (fitted, Some(found), hz);
             }
             Err(e) => spinner.stage(&text::frf_converge_again_failed(&e.to_string())),
         }
@@ -494,14 +483,12 @@ fn correct_further(
         half_widths_hz: Vec::new(),
         ..*input
     };
-    let (once, mode_by_mode) =
-        match fit_mode_by_mode(input, (level, &correction), g_ref, &once, spinner)? {
-            Some((by_mode, kept)) => (by_mode, Some(kept)),
-            None => (once, None),
-        };
+    let (once, mode_by_mode) = match fit_mode_by_mode(input, level, g_ref, &once, spinner)? {
+        Some((by_mode, kept)) => (by_mode, Some(kept)),
+        None => (once, None),
+    };
     Ok(Corrected {
         once,
-        correction,
         mode_by_mode,
         converged_again_hz,
     })
