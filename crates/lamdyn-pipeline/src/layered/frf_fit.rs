@@ -1,6 +1,5 @@
 //! The layered stage's FRF fit: the core's law fitted to the measured FRFs through the layered
-//! model on the ladder's finest level up to [`FrfFitTuning::max_dofs`]
-//! ([`lamdyn_fit::frf_fit`]), the inputs under the job's priors, on the converged scale: the
+//! model on the ladder's finest level ([`lamdyn_fit::frf_fit`]), the inputs under the job's priors, on the converged scale: the
 //! level's model takes the law corrected by the ladder's mesh correction
 //! ([`crate::frf_route::DiscretizationCorrection`]), and then, fitted again, what that
 //! correction leaves of each ladder mode's own error taken out of the model
@@ -54,8 +53,8 @@ pub struct FrfFitInput<'a> {
     pub start: Option<&'a CoreLawFit>,
     /// The pole route's modal points (the ladder's corrections; the starts without a law).
     pub modal: &'a [CorePoint],
-    /// The ladder's levels (elements, dofs), coarsest first: the fit takes the finest up to
-    /// [`FrfFitTuning::max_dofs`] (the coarsest when empty).
+    /// The ladder's levels (elements, dofs), coarsest first: the fit takes the finest (the
+    /// coarsest when empty).
     pub levels: &'a [([usize; 2], usize)],
     /// The identified modes' half-power half-widths ζf (Hz): the lines are thinned to
     /// [`FrfFitTuning::lines_per_half_width`] per the narrowest ([`line_step`]).
@@ -202,18 +201,21 @@ pub fn fit_to_frfs(
     }
 }
 
-/// The level the fit's model is built on: the finest of the ladder's `levels` up to
-/// [`FrfFitTuning::max_dofs`] and `inverse.layered_max_dofs`; without levels (no ladder was
-/// built), the coarsest, if it is within `inverse.layered_max_dofs`.
+/// The level the fit's model is built on: the finest of the ladder's `levels` (each within
+/// `inverse.layered_max_dofs`, which the ladder obeys); without levels (no ladder was built),
+/// the coarsest, if it is within `inverse.layered_max_dofs`. Its cost per line does not grow
+/// with the level (one LU of the reduced basis), its build does (the basis's eigen solves and
+/// the inputs' assemblies, on a mesh the ladder has already factorized); the finest level
+/// leaves least for the ladder's correction to carry, whose second-order terms and the modes
+/// it cannot take move the law (docs/fit.md, "The finest level").
 ///
 /// # Errors
 /// The coarsest level above `inverse.layered_max_dofs` (the ladder refused it too), or a plan
 /// that cannot be meshed.
 fn fit_level(setup: &LayeredSetup, levels: &[([usize; 2], usize)]) -> Result<[usize; 2]> {
-    let cap = setup.tuning.frf_fit.max_dofs.min(setup.ladder.max_dofs);
     if let Some(level) = levels
         .iter()
-        .filter(|l| l.1 <= cap)
+        .filter(|l| l.1 <= setup.ladder.max_dofs)
         .map(|l| l.0)
         .next_back()
     {

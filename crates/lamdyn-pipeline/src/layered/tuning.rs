@@ -102,11 +102,6 @@ pub struct FrfFitTuning {
     /// information as every seventh of them at a seventh of the cost (each line is one LU;
     /// docs/fit.md).
     pub lines_per_half_width: f64,
-    /// The largest level (dofs) the fit's model is built on: default 60 000. Its cost per line
-    /// does not grow with the level (one LU of the reduced basis), its build does (the basis's
-    /// eigen solves and the inputs' assemblies); a finer level leaves less for the ladder's
-    /// correction to carry.
-    pub max_dofs: usize,
     /// The most modes per reference modulus the basis takes when the band needs more than
     /// `inverse.layered_modes`: default 90 (the cost of a line grows with the cube of the
     /// basis).
@@ -120,7 +115,6 @@ impl Default for FrfFitTuning {
         Self {
             rule: FrfRule::default(),
             lines_per_half_width: 4.0,
-            max_dofs: 60_000,
             max_modes: 90,
             max_recentres: 2,
         }
