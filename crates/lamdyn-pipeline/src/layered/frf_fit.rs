@@ -1,8 +1,8 @@
 //! The layered stage's FRF fit: the core's law fitted to the measured FRFs through the layered
-//! model on the ladder's finest level ([`lamdyn_fit::frf_fit`]), the inputs under the job's priors, on the converged scale: the
-//! level's model takes the law corrected by the ladder's mesh correction
-//! ([`crate::frf_route::DiscretizationCorrection`]), and then, fitted again, what that
-//! correction leaves of each ladder mode's own error taken out of the model
+//! model on the ladder's finest level ([`lamdyn_fit::frf_fit`]), the inputs under the job's
+//! priors, on the converged scale: the level's model takes the law corrected by the ladder's
+//! mesh correction ([`crate::frf_route::DiscretizationCorrection`]), and then, fitted again,
+//! what that correction leaves of each ladder mode's own error taken out of the model
 //! ([`crate::frf_route::ModeByMode`]). A pole the pole route matched to another branch of the
 //! model's modes (its converged G' far off the law fitted) is converged again on the ladder
 //! from that law before the correction is drawn for good ([`converge_out_of_reach`]).
