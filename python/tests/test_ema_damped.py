@@ -5,8 +5,8 @@ table of docs/ema.md, "Damped poles"; this test runs a few seeds of it).
 
 What must hold (issue 45, item 1): the final pole is never worse than the diagram's on noise-free
 FRFs, and on noisy ones better or equal, and as good as sdypy-EMA's. Measured: on noise-free
-FRFs it holds but at one mode (zeta +0.35 % next to the band's edge); on noisy ones a refined
-pole taken can trade a better frequency for a worse damping ratio (below).
+FRFs it is the diagram's pole in every case; on noisy ones at 8 % damping a refined pole taken
+can trade a better damping ratio for a worse frequency (docs/ema.md; not run here).
 """
 
 import sys
@@ -38,12 +38,14 @@ def test_noise_free_poles_stay_where_the_diagram_has_them(bench, zeta, reference
     targets, errors = bench.run(zeta, references, 0.0, 1, with_sdypy=False)
     diagram, checked = np.abs(errors["diagram"][0]), np.abs(errors["checked"][0])
     assert np.all(np.isfinite(checked[:, 0])), f"modes missing: {targets}"
-    # The diagram is exact to 1e-6 at <= 2 % damping and within 0.1 % in zeta at 15 %. The
-    # check lets one refined pole through on these FRFs: the 180.6 Hz mode next to the band's
-    # edge at 2 % damping, one reference, zeta +0.35 % (measured); 0.5 % holds that, and a
-    # refinement let through unchecked is +11.6 % there (25.6 Hz).
+    # The diagram is exact to 1e-6 at <= 2 % damping and within 0.1 % in zeta at 15 %. With
+    # the refinement holding the LSCF model's roots outside the band, the check keeps the
+    # diagram's pole at every mode of these FRFs (measured: equal to the table's digits); the
+    # residual terms' refinement let one through before (180.6 Hz, 2 %, one reference, zeta
+    # +0.35 %), so 1e-4 in zeta (0.01 %) fails on what was fixed, and a refinement let through
+    # unchecked is 0.07-6.4 % off.
     assert np.all(checked[:, 0] <= diagram[:, 0] + 5e-5)
-    assert np.all(checked[:, 1] <= diagram[:, 1] + 5e-3)
+    assert np.all(checked[:, 1] <= diagram[:, 1] + 1e-4)
 
 
 @pytest.mark.parametrize("zeta", [0.001, 0.02])
@@ -54,18 +56,18 @@ def test_noisy_poles_are_better_than_the_diagrams_and_sdypys(bench, zeta, refere
     for k, f in enumerate(targets):
         print(f"{f:6.1f} Hz  zeta err diagram {100 * d[k, 1]:6.2f} %  checked {100 * c[k, 1]:6.2f} %"
               f"  sdypy {100 * s[k, 1]:6.2f} %   f err {100 * d[k, 0]:.4f} / {100 * c[k, 0]:.4f} / {100 * s[k, 0]:.4f} %")
-    # The check takes the diagram's pole or a refined one that fits significantly better; a
-    # refined pole can trade: at 2 % damping, one reference, the 175.6 Hz mode's frequency
-    # error falls 0.022 -> 0.004 % while zeta's rises 0.09 -> 0.75 % (measured). So: no mode
-    # worse in both beyond the scatter of four seeds (the RMS of four draws scatters by about
-    # 35 %), and the worst mode no worse than the diagram's worst.
+    # The check takes the diagram's pole or a refined one that fits significantly better; over
+    # 20 seeds no mode is worse than the diagram's in f or zeta at these damping levels
+    # (measured; the trades are at 8 %). So: no mode worse in both beyond the scatter of four
+    # seeds (the RMS of four draws scatters by about 35 %), and the worst mode no worse than
+    # the diagram's worst.
     worse = lambda q, tol: c[:, q] > 1.35 * d[:, q] + tol  # noqa: E731
     assert not np.any(worse(0, 1e-5) & worse(1, 1e-3))
     assert np.max(c[:, 1]) <= 1.05 * np.max(d[:, 1]) + 1e-3
     assert np.max(c[:, 0]) <= 1.05 * np.max(d[:, 0]) + 1e-5
     # Against sdypy-EMA wherever its select_closest_poles found the mode: never worse in both
-    # (measured exception in one: at 2 % damping, one reference, the 25.6 Hz mode's frequency
-    # is 0.0125 % off against sdypy's 0.0054 %, its damping 0.97 % against sdypy's 1.74 %).
+    # (20 seeds at 2 %, one reference, 25.6 Hz: f 0.0051 against sdypy's 0.0064 %, zeta 0.20
+    # against 1.33 %; the residual terms' refinement was worse in f there, 0.0125 %).
     found = np.isfinite(s[:, 1])
     assert found.sum() >= 3
     beaten = lambda q, tol: c[found, q] > 1.35 * s[found, q] + tol  # noqa: E731

@@ -10,16 +10,12 @@
 //! docs/ema.md ("Damped poles").
 //!
 //! **The context.** The LSCF model of order n is H_o(Ω) = B_o(Ω) A(Ω)⁻¹ with Ω = e^{−iωΔt} and
-//! real coefficients ([`crate::lscf`]). Its partial fractions
-//!
-//!   H_o(Ω) = d_o + Σ_r c_o,r / (Ω − x_r),   x_r the roots of det A, c_o,r̄ = c̄_o,r,
-//!
-//! span the functions the numerators B_o can make (for several references the residues per
-//! curve are free, where PolyMAX ties them into rank-one matrices). The roots of the diagram's
-//! highest order hold the modes outside the band, the band's edges and the noise (its
-//! computational roots); with the roots fixed the model is linear in the residues and the
-//! direct term d_o (real): real and imaginary parts of every line, one real column per real
-//! root, two per conjugate pair (g₁ = 1/(Ω−x) + 1/(Ω−x̄), g₂ = i[1/(Ω−x) − 1/(Ω−x̄)]).
+//! real coefficients ([`crate::lscf`]); its partial fractions (module `denominator`) span the
+//! functions the numerators B_o can make (for several references the residues per curve are
+//! free, where PolyMAX ties them into rank-one matrices). The roots of the diagram's highest
+//! order hold the modes outside the band, the band's edges and the noise (its computational
+//! roots); with the roots fixed the model is linear in the residues and the direct term d_o
+//! (real).
 //!
 //! **The check.** With the physical poles' own roots replaced by the poles (x = e^{−λΔt}), the
 //! residual sum of squares J of that model (the fixed columns projected out once, the residues
@@ -33,6 +29,8 @@
 //! diagram's poles already fit the context model, and the refinement's moves bring no
 //! significant drop; with noise the linearised estimator's bias does.
 
+pub use crate::denominator::LscfContext;
+use crate::denominator::{FixedRoot, pair_columns, scaled_real_matrix};
 use crate::error::EmaError;
 use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
 use crate::projection::apply_transpose_q;
@@ -41,69 +39,6 @@ use faer::linalg::solvers::{Qr, SolveLstsq};
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use std::f64::consts::PI;
-
-/// The denominator of the LSCF model the physical poles were read from.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LscfContext {
-    /// The model's sampling interval Δt ([`crate::lscf::sample_interval`]), s.
-    pub dt: f64,
-    /// Every root x of its denominator, in the Ω domain ([`crate::lscf::OrderPoles::roots`]).
-    pub roots: Vec<Complex64>,
-}
-
-/// One fixed root of the context: one real column, or two for a conjugate pair.
-#[derive(Debug, Clone, Copy)]
-enum FixedRoot {
-    Real(f64),
-    Pair(Complex64),
-}
-
-impl LscfContext {
-    /// The roots held fixed beside `poles` (rad/s): one of each conjugate pair and the real
-    /// roots, less the root nearest each pole (its own root at this order) where one lies
-    /// within three half-power half-widths or 1 % of |λ|.
-    fn fixed_roots(&self, poles: &[Complex64]) -> Vec<FixedRoot> {
-        let real = |x: &Complex64| x.im.abs() <= 1e-12 * x.norm().max(1e-300);
-        let mut pairs: Vec<Complex64> = self
-            .roots
-            .iter()
-            .copied()
-            .filter(|x| !real(x) && x.im < 0.0)
-            .collect();
-        for &p in poles {
-            let own = pairs
-                .iter()
-                .enumerate()
-                .map(|(k, &x)| (k, (self.pole(x) - p).norm()))
-                .min_by(|a, b| a.1.total_cmp(&b.1));
-            if let Some((k, d)) = own {
-                if d <= 3.0 * (-p.re).max(0.01 * p.norm()) {
-                    pairs.swap_remove(k);
-                }
-            }
-        }
-        let reals = self
-            .roots
-            .iter()
-            .filter(|x| real(x))
-            .map(|x| FixedRoot::Real(x.re));
-        pairs
-            .into_iter()
-            .map(FixedRoot::Pair)
-            .chain(reals)
-            .collect()
-    }
-
-    /// The pole λ = −ln(x)/Δt of root x.
-    fn pole(&self, x: Complex64) -> Complex64 {
-        -x.ln() / self.dt
-    }
-
-    /// The root x = e^{−λΔt} of pole λ.
-    fn root(&self, p: Complex64) -> Complex64 {
-        (-p * self.dt).exp()
-    }
-}
 
 /// The context model on the refinement's lines: the data with the fixed columns projected out.
 /// With the QR F = Q R of the fixed columns F (rows × k), the projection is taken in Q's
@@ -130,10 +65,7 @@ impl<'a> ContextProblem<'a> {
         context: &'a LscfContext,
         poles: &[Complex64],
     ) -> Self {
-        let omega: Vec<Complex64> = lines
-            .iter()
-            .map(|&k| Complex64::from_polar(1.0, -2.0 * PI * freqs_hz[k] * context.dt))
-            .collect();
+        let omega = context.omega(freqs_hz, lines);
         let mut cols: Vec<Vec<Complex64>> = vec![vec![Complex64::new(1.0, 0.0); omega.len()]];
         for root in context.fixed_roots(poles) {
             match root {
@@ -190,37 +122,6 @@ fn projected_out(fixed: &Qr<f64>, mut m: Mat<f64>) -> Mat<f64> {
     apply_transpose_q(fixed, &mut m);
     let k = fixed.thin_R().nrows();
     m.subrows(k, m.nrows() - k).to_owned()
-}
-
-/// The two real-coefficient columns of the conjugate pair (x, x̄) over the lines Ω (module
-/// docs).
-fn pair_columns(omega: &[Complex64], x: Complex64) -> (Vec<Complex64>, Vec<Complex64>) {
-    omega
-        .iter()
-        .map(|w| {
-            let (a, b) = (1.0 / (w - x), 1.0 / (w - x.conj()));
-            (a + b, Complex64::i() * (a - b))
-        })
-        .unzip()
-}
-
-/// The complex columns as a real matrix (real and imaginary part of each line in turn), each
-/// column scaled to unit norm (for the QR's conditioning; the span is what counts).
-fn scaled_real_matrix(cols: &[Vec<Complex64>], rows: usize) -> Mat<f64> {
-    let norms: Vec<f64> = cols
-        .iter()
-        .map(|c| {
-            c.iter()
-                .map(|v| v.norm_sqr())
-                .sum::<f64>()
-                .sqrt()
-                .max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    Mat::from_fn(rows, cols.len(), |row, c| {
-        let v = cols[c][row / 2] / norms[c];
-        if row % 2 == 0 { v.re } else { v.im }
-    })
 }
 
 /// The poles taken (module docs): each refined pole that lowers the context's sum of squares

@@ -87,8 +87,8 @@ impl Default for EmaSettings {
 pub enum PoleEstimator {
     /// The diagram's pole.
     Diagram,
-    /// The refined pole ([`crate::lsfd::refine`]: the output error beside real residual
-    /// terms), unchecked.
+    /// The refined pole (the output error beside real residual terms and the LSCF model's
+    /// roots outside the band, [`crate::lsfd`]), unchecked.
     Refined,
     /// The refined pole where the LSCF model's context says it fits the curves significantly
     /// better than the diagram's, the diagram's pole elsewhere ([`crate::context`]).
@@ -569,6 +569,7 @@ fn fit_selected(
         band,
         s.refine_lines,
         s.refine_iterations,
+        context,
         &progress,
     )?;
     let (fitted, t) = match (estimator, context) {

@@ -9,6 +9,7 @@
 //! | [`stabilization`] | stabilization diagram, automatic and targeted pole selection |
 //! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC, pole refinement |
 //! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
+//! | `denominator` | the LSCF model's roots and their partial-fraction columns |
 //! | [`context`] | pole refinement in the LSCF model's context (its other roots fixed) |
 //! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
@@ -22,6 +23,7 @@
 pub mod band;
 mod companion;
 pub mod context;
+mod denominator;
 mod error;
 pub mod identify;
 pub mod lscf;

@@ -15,12 +15,18 @@
 //! the linearised LSCF (its damping errors reach several percent at 40 dB for close modes).
 //! They are refined by Levenberg–Marquardt on Σ_o Σ_k |H_o − Ĥ_o|² over the poles alone, the
 //! residues being the LSFD solution for each trial (variable projection [Golub & Pereyra
-//! 1973]); with white noise this is the maximum-likelihood estimate.
+//! 1973]); with white noise this is the maximum-likelihood estimate *if* the model held. The
+//! residual terms cannot hold damped modes above the band, and a damped pole next to the band's
+//! edge takes up the misfit; so, given the LSCF model's denominator the diagram was read from,
+//! the refinement holds that model's roots outside the band beside its poles as fixed partial
+//! fractions (in the Ω domain, residues free: `LscfContext::outside_columns`), the roots inside
+//! the band (its computational ones) left out.
 //!
 //! **Shapes.** For one reference, the residues over the responses are the complex mode shape
 //! (up to scale). With a driving point p (response = reference), mass-normalised complex modes
 //! A_r = φ φᵀ/(2iω_d) give φ_p = √(2iω_d A_r,pp) and φ_o = 2iω_d A_r,op/φ_p.
 
+use crate::denominator::LscfContext;
 use crate::error::{EmaError, check_curves, invalid};
 pub use crate::projection::LineBasis;
 use crate::projection::{LineSamples, solve_by_blocks};
@@ -330,13 +336,15 @@ pub fn refine_with(
         band_hz,
         fit_lines,
         iterations,
+        None,
         on_iteration,
     )?;
     lsfd(freqs_hz, curves, quantity, &refined, band_hz)
 }
 
 /// The poles of [`refine_with`] without their residues (`poles` themselves where the residue
-/// problem fails at the start).
+/// problem fails at the start); with `outside`, the LSCF model the poles were read from, its
+/// roots outside the band held fixed beside them (module docs).
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -349,10 +357,14 @@ pub(crate) fn refined_poles(
     band_hz: [f64; 2],
     fit_lines: RefineLines,
     iterations: usize,
+    outside: Option<&LscfContext>,
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<Vec<Complex64>, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
-    let samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
+    let mut samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
+    if let Some(c) = outside {
+        samples = samples.with_fixed(c.outside_columns(freqs_hz, &lines, band_hz, poles));
+    }
     Ok(
         levenberg_marquardt(&samples, poles, iterations, on_iteration)
             .unwrap_or_else(|| poles.to_vec()),
@@ -486,7 +498,7 @@ fn deviations(samples: &LineSamples, poles: &[Complex64]) -> Option<Vec<PoleSd>>
     let at = samples.project(&to_poles(&u))?;
     let cols = at.jacobian(samples);
     let rows = samples.rows();
-    let own = (2 * poles.len() + 2) as f64 + u.len() as f64 / samples.curves() as f64;
+    let own = samples.unknowns(poles.len()) as f64 + u.len() as f64 / samples.curves() as f64;
     let dof = (rows as f64 - own).max(1.0);
     let variance: Vec<f64> = (0..samples.curves())
         .map(|o| at.curve_cost(o) / dof)

@@ -41,6 +41,9 @@ pub(crate) struct LineSamples {
     omega: Vec<f64>,
     quantity: Quantity,
     data: Mat<f64>,
+    /// Columns beside the poles' and the residual terms' that do not depend on the poles (real
+    /// rows as `data`'s): none unless [`Self::with_fixed`] gives them.
+    fixed: Mat<f64>,
 }
 
 impl LineSamples {
@@ -63,11 +66,31 @@ impl LineSamples {
         if !data.is_all_finite() {
             return Err(invalid("FRFs", "a value in the band is not finite".into()));
         }
+        let fixed = Mat::zeros(data.nrows(), 0);
         Ok(Self {
             omega,
             quantity,
             data,
+            fixed,
         })
+    }
+
+    /// These samples with the columns `fixed` (real rows as the samples', one column per
+    /// function of the line) beside the poles' and the residual terms' in every basis: their
+    /// coefficients are unknowns as the residues are, their columns do not move with the poles.
+    ///
+    /// # Panics
+    /// When `fixed` has not one row per sample row (a caller's bug).
+    pub(crate) fn with_fixed(mut self, fixed: Mat<f64>) -> Self {
+        assert_eq!(fixed.nrows(), self.rows(), "fixed columns' rows");
+        self.fixed = fixed;
+        self
+    }
+
+    /// The unknowns per curve with `poles` poles: two per pole, the two residual terms and
+    /// one per fixed column.
+    pub(crate) fn unknowns(&self, poles: usize) -> usize {
+        2 * poles + 2 + self.fixed.ncols()
     }
 
     /// Rows per curve: two per line.
@@ -88,10 +111,12 @@ impl LineSamples {
 
     /// The basis A for `poles` (unscaled): per pole the columns (iω)^k [1/(iω − λ) + 1/(iω − λ*)]
     /// and (iω)^k i[1/(iω − λ) − 1/(iω − λ*)], then the lower residual's −(iω)^k/ω² and the upper
-    /// residual's (iω)^k.
+    /// residual's (iω)^k, then the fixed columns ([`Self::with_fixed`]).
     fn basis(&self, poles: &[Complex64]) -> Mat<f64> {
         let n = 2 * poles.len();
-        let mut a = Mat::zeros(self.rows(), n + 2);
+        let mut a = Mat::zeros(self.rows(), self.unknowns(poles.len()));
+        a.subcols_mut(n + 2, self.fixed.ncols())
+            .copy_from(&self.fixed);
         for (i, &w) in self.omega.iter().enumerate() {
             let line = LineBasis::new(poles, self.quantity, w);
             for (r, &(a1, a2)) in line.fractions.iter().enumerate() {
@@ -128,7 +153,7 @@ impl LineSamples {
     /// The basis for `poles` with each column scaled to unit norm, and the norms; None without
     /// more rows than columns.
     fn scaled_basis(&self, poles: &[Complex64]) -> Option<(Mat<f64>, Vec<f64>)> {
-        if self.rows() <= 2 * poles.len() + 2 {
+        if self.rows() <= self.unknowns(poles.len()) {
             return None;
         }
         let mut a = self.basis(poles);

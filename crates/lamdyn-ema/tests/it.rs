@@ -1103,3 +1103,81 @@ fn the_second_cmif_curve_brings_back_a_close_pair() {
         );
     }
 }
+
+/// Damped modes above the band do not bias the refined poles. A simply supported plate's modal
+/// model (the one of tools/ema/damped_bias.py: f_mn = 10 (m² + (n/0.8)²) Hz, 2 % damping, twelve
+/// responses, one reference, accelerance, noise-free), nine modes in the band 20–200 Hz and
+/// eight above it up to 400 Hz. The refinement with the real residual terms alone puts the
+/// 25.6 Hz mode's damping 11.6 % off (measured; asserted below at > 5 % with `lsfd::refine`,
+/// which has no LSCF model beside it); with the LSCF model's roots outside the band held
+/// fixed (`identify`'s refinement) every mode is within 0.09 % in damping and 1e-5 in frequency
+/// (measured), asserted at 0.2 % and 1e-4: an order of magnitude under the residual terms'
+/// smallest bias on this plate (0.35 % at 180.6 Hz).
+#[test]
+fn damped_modes_above_the_band_do_not_bias_the_refinement() {
+    use lamdyn_ema::identify::{EmaSettings, PoleEstimator, identify};
+    let zeta = 0.02;
+    let modes: Vec<(f64, usize, usize)> = (1..=6)
+        .flat_map(|m| (1..=5).map(move |n| (m, n)))
+        .map(|(m, n)| (10.0 * ((m * m) as f64 + (n as f64 / 0.8).powi(2)), m, n))
+        .filter(|&(f, _, _)| f <= 400.0)
+        .collect();
+    let at = |(m, n): (usize, usize), o: usize| {
+        let (x, y) = ([0.11, 0.33, 0.57, 0.83][o % 4], [0.13, 0.41, 0.67][o / 4]);
+        (m as f64 * PI * x).sin() * (n as f64 * PI * y / 0.8).sin()
+    };
+    let freqs: Vec<f64> = (1..=2500).map(|k| k as f64 * 0.1).collect();
+    let damped: Vec<(f64, f64)> = modes.iter().map(|&(f, _, _)| (f, zeta)).collect();
+    let curves: Vec<Complex64> = (0..12)
+        .flat_map(|o| {
+            accelerance(&freqs, &damped, |r| {
+                let mn = (modes[r].1, modes[r].2);
+                at(mn, o) * at(mn, 0)
+            })
+        })
+        .collect();
+    let ch = |n: String| lamdyn_frf::Channel::new(n, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
+    let set = lamdyn_frf::FrfSet::new(
+        freqs.clone(),
+        (0..12).map(|o| ch(format!("point{o}"))).collect(),
+        vec![ch("hammer".into())],
+        Quantity::Accelerance,
+        curves,
+    )
+    .unwrap();
+    let band = [20.0, 200.0];
+    let targets: Vec<f64> = modes
+        .iter()
+        .map(|m| m.0)
+        .filter(|f| (band[0]..=band[1]).contains(f))
+        .collect();
+    let settings = EmaSettings {
+        band_hz: Some(band),
+        near_hz: Some(targets.clone()),
+        window_hz: 0.75,
+        estimator: PoleEstimator::Refined,
+        ..EmaSettings::default()
+    };
+    let r = identify(&set, &settings).unwrap();
+    assert_eq!(r.modes.len(), targets.len());
+    for (m, f) in r.modes.iter().zip(&targets) {
+        let (df, dz) = (m.freq_hz / f - 1.0, m.damping_ratio / zeta - 1.0);
+        eprintln!("{f:6.1} Hz: refined f {df:+.2e}, zeta {dz:+.2e}");
+        assert!(
+            df.abs() < 1e-4 && dz.abs() < 2e-3,
+            "{f} Hz: {df:e} / {dz:e}"
+        );
+    }
+    let refs: Vec<&[Complex64]> = (0..12).map(|o| set.curve(o, 0)).collect();
+    let diagram: Vec<Complex64> = r.modes.iter().map(|m| m.diagram_pole).collect();
+    let alone = refine(&freqs, &refs, Quantity::Accelerance, &diagram, band, 30).unwrap();
+    let worst = alone
+        .poles
+        .iter()
+        .map(|p| (pole_damping(*p) / zeta - 1.0).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst > 0.05,
+        "residual terms alone: zeta {worst:e} off at worst"
+    );
+}

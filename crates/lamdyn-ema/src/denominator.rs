@@ -1,0 +1,182 @@
+//! The denominator of the LSCF model the diagram's poles were read from, kept for the pole
+//! refinement and its check: its roots in the Ω = e^{−iωΔt} domain ([`crate::lscf`]), and the
+//! real partial-fraction columns of those held fixed.
+//!
+//! The model of order n is H_o(Ω) = B_o(Ω) A(Ω)⁻¹ with real coefficients. Its partial fractions
+//!
+//!   H_o(Ω) = d_o + Σ_r c_o,r / (Ω − x_r),   x_r the roots of det A, c_o,r̄ = c̄_o,r,
+//!
+//! span the functions the numerators B_o can make; with the roots fixed they are linear in the
+//! residues: one real column per real root, two per conjugate pair (g₁ = 1/(Ω−x) + 1/(Ω−x̄),
+//! g₂ = i[1/(Ω−x) − 1/(Ω−x̄)]), real and imaginary part of every line as two rows.
+
+use faer::Mat;
+use num_complex::Complex64;
+use std::f64::consts::PI;
+
+/// The denominator of the LSCF model the physical poles were read from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LscfContext {
+    /// The model's sampling interval Δt ([`crate::lscf::sample_interval`]), s.
+    pub dt: f64,
+    /// Every root x of its denominator, in the Ω domain ([`crate::lscf::OrderPoles::roots`]).
+    pub roots: Vec<Complex64>,
+}
+
+/// One root held fixed: one real column, or two for a conjugate pair.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum FixedRoot {
+    /// A real root: one column 1/(Ω − x).
+    Real(f64),
+    /// One root x of a conjugate pair (x, x̄): the two columns of [`pair_columns`].
+    Pair(Complex64),
+}
+
+impl LscfContext {
+    /// The roots held fixed beside `poles` (rad/s): one of each conjugate pair and the real
+    /// roots, less the root nearest each pole (its own root at this order) where one lies
+    /// within three half-power half-widths or 1 % of |λ|.
+    pub(crate) fn fixed_roots(&self, poles: &[Complex64]) -> Vec<FixedRoot> {
+        let real = |x: &Complex64| is_real(*x);
+        let mut pairs: Vec<Complex64> = self
+            .roots
+            .iter()
+            .copied()
+            .filter(|x| !real(x) && x.im < 0.0)
+            .collect();
+        for &p in poles {
+            let own = pairs
+                .iter()
+                .enumerate()
+                .map(|(k, &x)| (k, (self.pole(x) - p).norm()))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((k, d)) = own {
+                if d <= 3.0 * (-p.re).max(0.01 * p.norm()) {
+                    pairs.swap_remove(k);
+                }
+            }
+        }
+        let reals = self
+            .roots
+            .iter()
+            .filter(|x| real(x))
+            .map(|x| FixedRoot::Real(x.re));
+        pairs
+            .into_iter()
+            .map(FixedRoot::Pair)
+            .chain(reals)
+            .collect()
+    }
+
+    /// The columns of the roots that stand for what lies outside `band_hz` on `lines` (indices
+    /// into `freqs_hz`), as real rows (re, im of each line) scaled to unit norm, in two groups:
+    /// above the band, the negative real roots (their poles at the damped frequency 1/(2Δt),
+    /// the band's upper edge, where the model gathers the modes above it); below, the positive
+    /// real roots (at 0 Hz) and the conjugate pairs whose pole's damped frequency lies below the
+    /// band. A group is left out whole where one of its roots' poles lies within three
+    /// half-power half-widths (or 1 % of |λ|) of one of `poles` (rad/s): a damped pole next to
+    /// the band's edge trades with them (measured in docs/ema.md, "Damped poles"). No direct
+    /// term: the refinement's residual terms hold the constant. The computational roots inside
+    /// the band, with which a damped pole would compete, are never among them.
+    pub(crate) fn outside_columns(
+        &self,
+        freqs_hz: &[f64],
+        lines: &[usize],
+        band_hz: [f64; 2],
+        poles: &[Complex64],
+    ) -> Mat<f64> {
+        let omega = self.omega(freqs_hz, lines);
+        let near_a_pole = |x: &Complex64| {
+            let q = self.pole(*x);
+            let q = Complex64::new(q.re, q.im.abs());
+            poles
+                .iter()
+                .any(|&p| (q - p).norm() <= 3.0 * (-p.re).max(0.01 * p.norm()))
+        };
+        let above: Vec<Complex64> = self
+            .roots
+            .iter()
+            .copied()
+            .filter(|&x| is_real(x) && x.re < 0.0)
+            .collect();
+        let below: Vec<Complex64> = self
+            .roots
+            .iter()
+            .copied()
+            .filter(|&x| {
+                (is_real(x) && x.re > 0.0)
+                    || (x.im < 0.0 && !is_real(x) && self.pole(x).im / (2.0 * PI) < band_hz[0])
+            })
+            .collect();
+        let mut cols: Vec<Vec<Complex64>> = Vec::new();
+        for group in [above, below] {
+            if group.iter().any(near_a_pole) {
+                continue;
+            }
+            for x in group {
+                if is_real(x) {
+                    cols.push(omega.iter().map(|w| 1.0 / (w - x.re)).collect());
+                } else {
+                    let (g1, g2) = pair_columns(&omega, x);
+                    cols.push(g1);
+                    cols.push(g2);
+                }
+            }
+        }
+        scaled_real_matrix(&cols, 2 * lines.len())
+    }
+
+    /// Ω = e^{−iωΔt} of each of `lines` (indices into `freqs_hz`).
+    pub(crate) fn omega(&self, freqs_hz: &[f64], lines: &[usize]) -> Vec<Complex64> {
+        lines
+            .iter()
+            .map(|&k| Complex64::from_polar(1.0, -2.0 * PI * freqs_hz[k] * self.dt))
+            .collect()
+    }
+
+    /// The pole λ = −ln(x)/Δt of root x.
+    pub(crate) fn pole(&self, x: Complex64) -> Complex64 {
+        -x.ln() / self.dt
+    }
+
+    /// The root x = e^{−λΔt} of pole λ.
+    pub(crate) fn root(&self, p: Complex64) -> Complex64 {
+        (-p * self.dt).exp()
+    }
+}
+
+/// Whether root `x` is real (its imaginary part within rounding of its modulus).
+pub(crate) fn is_real(x: Complex64) -> bool {
+    x.im.abs() <= 1e-12 * x.norm().max(1e-300)
+}
+
+/// The two real-coefficient columns of the conjugate pair (x, x̄) over the lines Ω (module
+/// docs).
+pub(crate) fn pair_columns(omega: &[Complex64], x: Complex64) -> (Vec<Complex64>, Vec<Complex64>) {
+    omega
+        .iter()
+        .map(|w| {
+            let (a, b) = (1.0 / (w - x), 1.0 / (w - x.conj()));
+            (a + b, Complex64::i() * (a - b))
+        })
+        .unzip()
+}
+
+/// The complex columns as a real matrix (real and imaginary part of each line in turn), each
+/// column scaled to unit norm (for the QR's conditioning; the span is what counts).
+pub(crate) fn scaled_real_matrix(cols: &[Vec<Complex64>], rows: usize) -> Mat<f64> {
+    let norms: Vec<f64> = cols
+        .iter()
+        .map(|c| {
+            c.iter()
+                .map(|v| v.norm_sqr())
+                .sum::<f64>()
+                .sqrt()
+                .max(f64::MIN_POSITIVE)
+        })
+        .collect();
+    Mat::from_fn(rows, cols.len(), |row, c| {
+        let v = cols[c][row / 2] / norms[c];
+        if row % 2 == 0 { v.re } else { v.im }
+    })
+}
