@@ -10,7 +10,7 @@
 //! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC, pole refinement |
 //! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
 //! | `denominator` | the LSCF model's roots and their partial-fraction columns |
-//! | [`context`] | pole refinement in the LSCF model's context (its other roots fixed) |
+//! | [`context`] | the refined poles checked in the LSCF model's context (its other roots fixed) |
 //! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
 //! | [`spectra`] | H1/H2/Hv and coherence from hammer hits, force and exponential windows |

@@ -947,7 +947,7 @@ fn same_bits_on_one_and_two_threads() {
 /// over the band): modal damping above 5 %, neighbours overlapping.
 fn damped() -> Description {
     let laminate = include_str!("../../lamdyn-testbench/tests/data/small_laminate.toml")
-        .replace("elements = [6, 6]", "elements = [18, 18]\nedge_grading = 0.2")
+        .replace("elements = [6, 6]", "elements = [40, 40]\nedge_grading = 0.2")
         .replace(
             r#"shear_law = { kind = "fractional_zener", g0_pa = 0.3e6, g_inf_pa = 300e6, tau_s = 1e-4, alpha = 0.55 }"#,
             r#"shear_law = { kind = "generalized_maxwell", g_e_pa = 0.2e6, terms = [{ g_pa = 0.5e6, tau_s = 1e-1 }, { g_pa = 2.0e6, tau_s = 1e-2 }, { g_pa = 8.0e6, tau_s = 1e-3 }, { g_pa = 32e6, tau_s = 1e-4 }, { g_pa = 128e6, tau_s = 1e-5 }] }"#,
@@ -959,17 +959,18 @@ fn damped() -> Description {
     Description::parse("damped.toml", &text).unwrap()
 }
 
-/// Damped, overlapping modes (modal damping 5.7–14.2 %, six overlapping pairs, 1 % noise; the
-/// rule of lamdyn_pipeline::frf_route fires, and the paper's route finds no peak): the run
-/// takes the FRF fit as its answer, says why, has a core at every mode (exit 0), recovers the
-/// core within 4 % in G' and in η of the truth at every pole the EMA found, inside its 95 %
-/// band, and the report shows the section with the measured and model FRFs. Of the EMA's eight
-/// poles from 69 to 344 Hz four are smears over clusters (MPC 0.01–0.43), set aside from the
-/// inverses: there the pole route was −14 … +131 % in G'; at the four modes left it is
-/// −4.8 … 0 % (no core at 247 Hz). Measured, FRF fit: G' −3.9 … −1.3 %, η −1.4 … +2.0 % at the
-/// eight poles; the rest is the model's error (relative RMS misfit 5.0 % against 1 % noise: the
-/// fit's model, on the ladder's finest level 38 × 38, is finer than the 18 × 18 graded truth,
-/// and the core thickness found takes up the difference at −3.9 %, three of its prior's sd).
+/// Damped, overlapping modes (modal damping 5.7–15 %, overlapping pairs, 1 % noise; the rule
+/// of lamdyn_pipeline::frf_route fires, and the paper's route finds no peak): the run takes the
+/// FRF fit as its answer, says why, has a core at every mode (exit 0), recovers the core within
+/// 4 % in G' and in η of the truth at every pole the EMA found, inside its 95 % band, and the
+/// report shows the section with the measured and model FRFs. The truth is a 40 × 40 graded
+/// mesh, finer than the fit's model (the ladder's finest level, 38 × 38): on an 18 × 18 truth
+/// the truth's own discretization error was the comparison's limit (G' −4.1 … −1.7 %, the core
+/// thickness found at −4.2 %, three of its prior's sd). Of the EMA's seven poles from 69 to
+/// 343 Hz three are smears over clusters (MPC 0.02–0.36), set aside from the inverses; at the
+/// four modes left the pole route is −7.9 … −3.2 % in G' (no core at 249 Hz). Measured, FRF fit:
+/// G' −2.5 … +0.8 %, η −2.9 … +0.9 % at the seven poles, the core thickness found at −1.4 %
+/// (1.5 of its prior's sd); run 232 s on 2 cores.
 #[test]
 fn damped_modes_take_the_frf_fit() {
     let dir = TempDir::new("pipeline-damped");
