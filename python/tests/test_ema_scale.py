@@ -29,13 +29,19 @@ def test_a_scaled_dam_gives_the_same_modes(dam, factor):
     assert list(scaled["verdict"]) == list(measured["verdict"])
     # A factor that is not a power of two changes the data in their last bit (1e-16), and the
     # diagram's roots by ~1e-7 (test_uff_time measures 2.6e-8 for its band). Where that tips
-    # the check between a mode's diagram pole and its refined pole (the dam's 8.64 Hz mode, at
-    # x3 and x1e-100), the two lie within the poles' own sds; elsewhere the modes agree.
+    # the check between a mode's diagram pole and its refined pole, the two lie within the
+    # poles' own sds; elsewhere the modes agree (below).
+    # The refinement holds the LSCF model's roots outside the band, and a cluster of real roots
+    # at the band's edge moves far more than the diagram's poles under a last-bit change: a
+    # refined pole moves by up to 0.03 of its sd (measured on all three factors: 4e-4 of zeta,
+    # 7e-6 of f), asserted at 0.1 sd; a diagram's pole stays within 1e-5.
     same = scaled["refined"] == measured["refined"]
+    diagram = same & ~measured["refined"]
     for key, sd in (("freq_hz", "freq_sd_hz"), ("damping_ratio", "damping_sd")):
         moved = np.abs(scaled[key] - measured[key])
         assert np.all(moved <= 2 * measured[sd]), (key, moved / measured[sd])
-        np.testing.assert_allclose(scaled[key][same], measured[key][same], rtol=1e-5)
+        assert np.all(moved[same] <= 0.1 * measured[sd][same]), (key, moved / measured[sd])
+        np.testing.assert_allclose(scaled[key][diagram], measured[key][diagram], rtol=1e-5)
     # The shapes (residues: every mode's shift in one least-squares fit moves all of them a
     # little) correlate as one shape, and scale with the data.
     a, b = scaled["shapes"], measured["shapes"]
