@@ -30,7 +30,7 @@
 //! significant drop; with noise the linearised estimator's bias does.
 
 pub use crate::denominator::LscfContext;
-use crate::denominator::{FixedRoot, pair_columns, scaled_real_matrix};
+use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
 use crate::error::EmaError;
 use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
 use crate::projection::apply_transpose_q;
@@ -67,16 +67,7 @@ impl<'a> ContextProblem<'a> {
     ) -> Self {
         let omega = context.omega(freqs_hz, lines);
         let mut cols: Vec<Vec<Complex64>> = vec![vec![Complex64::new(1.0, 0.0); omega.len()]];
-        for root in context.fixed_roots(poles) {
-            match root {
-                FixedRoot::Real(x) => cols.push(omega.iter().map(|w| 1.0 / (w - x)).collect()),
-                FixedRoot::Pair(x) => {
-                    let (g1, g2) = pair_columns(&omega, x);
-                    cols.push(g1);
-                    cols.push(g2);
-                }
-            }
-        }
+        cols.extend(root_columns(&omega, &context.fixed_roots(poles)));
         let rows = 2 * lines.len();
         let fixed = scaled_real_matrix(&cols, rows).qr();
         let b = Mat::from_fn(rows, curves.len(), |row, o| {

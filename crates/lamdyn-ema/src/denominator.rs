@@ -37,12 +37,11 @@ impl LscfContext {
     /// roots, less the root nearest each pole (its own root at this order) where one lies
     /// within three half-power half-widths or 1 % of |λ|.
     pub(crate) fn fixed_roots(&self, poles: &[Complex64]) -> Vec<FixedRoot> {
-        let real = |x: &Complex64| is_real(*x);
         let mut pairs: Vec<Complex64> = self
             .roots
             .iter()
             .copied()
-            .filter(|x| !real(x) && x.im < 0.0)
+            .filter(|&x| !is_real(x) && x.im < 0.0)
             .collect();
         for &p in poles {
             let own = pairs
@@ -50,16 +49,14 @@ impl LscfContext {
                 .enumerate()
                 .map(|(k, &x)| (k, (self.pole(x) - p).norm()))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
-            if let Some((k, d)) = own {
-                if d <= 3.0 * (-p.re).max(0.01 * p.norm()) {
-                    pairs.swap_remove(k);
-                }
+            if let Some((k, _)) = own.filter(|&(k, _)| within_reach(p, self.pole(pairs[k]))) {
+                pairs.swap_remove(k);
             }
         }
         let reals = self
             .roots
             .iter()
-            .filter(|x| real(x))
+            .filter(|&&x| is_real(x))
             .map(|x| FixedRoot::Real(x.re));
         pairs
             .into_iter()
@@ -85,45 +82,34 @@ impl LscfContext {
         band_hz: [f64; 2],
         poles: &[Complex64],
     ) -> Mat<f64> {
-        let omega = self.omega(freqs_hz, lines);
         let near_a_pole = |x: &Complex64| {
             let q = self.pole(*x);
             let q = Complex64::new(q.re, q.im.abs());
-            poles
-                .iter()
-                .any(|&p| (q - p).norm() <= 3.0 * (-p.re).max(0.01 * p.norm()))
+            poles.iter().any(|&p| within_reach(p, q))
         };
-        let above: Vec<Complex64> = self
+        let above = self
             .roots
             .iter()
             .copied()
-            .filter(|&x| is_real(x) && x.re < 0.0)
-            .collect();
-        let below: Vec<Complex64> = self
-            .roots
-            .iter()
-            .copied()
-            .filter(|&x| {
-                (is_real(x) && x.re > 0.0)
-                    || (x.im < 0.0 && !is_real(x) && self.pole(x).im / (2.0 * PI) < band_hz[0])
+            .filter(|&x| is_real(x) && x.re < 0.0);
+        let below = self.roots.iter().copied().filter(|&x| {
+            (is_real(x) && x.re > 0.0)
+                || (x.im < 0.0 && !is_real(x) && self.pole(x).im / (2.0 * PI) < band_hz[0])
+        });
+        let held: Vec<FixedRoot> = [above.collect::<Vec<_>>(), below.collect()]
+            .into_iter()
+            .filter(|group| !group.iter().any(near_a_pole))
+            .flatten()
+            .map(|x| {
+                if is_real(x) {
+                    FixedRoot::Real(x.re)
+                } else {
+                    FixedRoot::Pair(x)
+                }
             })
             .collect();
-        let mut cols: Vec<Vec<Complex64>> = Vec::new();
-        for group in [above, below] {
-            if group.iter().any(near_a_pole) {
-                continue;
-            }
-            for x in group {
-                if is_real(x) {
-                    cols.push(omega.iter().map(|w| 1.0 / (w - x.re)).collect());
-                } else {
-                    let (g1, g2) = pair_columns(&omega, x);
-                    cols.push(g1);
-                    cols.push(g2);
-                }
-            }
-        }
-        scaled_real_matrix(&cols, 2 * lines.len())
+        let omega = self.omega(freqs_hz, lines);
+        scaled_real_matrix(&root_columns(&omega, &held), 2 * lines.len())
     }
 
     /// Ω = e^{−iωΔt} of each of `lines` (indices into `freqs_hz`).
@@ -143,6 +129,29 @@ impl LscfContext {
     pub(crate) fn root(&self, p: Complex64) -> Complex64 {
         (-p * self.dt).exp()
     }
+}
+
+/// Whether `q` lies within the reach of pole `p` (both rad/s): three half-power half-widths of
+/// `p`, or 1 % of |p| for a lightly damped one.
+fn within_reach(p: Complex64, q: Complex64) -> bool {
+    (q - p).norm() <= 3.0 * (-p.re).max(0.01 * p.norm())
+}
+
+/// The partial-fraction columns of `roots` over the lines Ω (module docs), complex: one per
+/// real root, two per conjugate pair ([`pair_columns`]).
+pub(crate) fn root_columns(omega: &[Complex64], roots: &[FixedRoot]) -> Vec<Vec<Complex64>> {
+    let mut cols = Vec::with_capacity(2 * roots.len());
+    for root in roots {
+        match *root {
+            FixedRoot::Real(x) => cols.push(omega.iter().map(|w| 1.0 / (w - x)).collect()),
+            FixedRoot::Pair(x) => {
+                let (g1, g2) = pair_columns(omega, x);
+                cols.push(g1);
+                cols.push(g2);
+            }
+        }
+    }
+    cols
 }
 
 /// Whether root `x` is real (its imaginary part within rounding of its modulus).
