@@ -28,16 +28,24 @@
 //! tried together, with the χ² point of four degrees of freedom. On noise-free curves the
 //! diagram's poles already fit the context model, and the refinement's moves bring no
 //! significant drop; with noise the linearised estimator's bias does.
+//!
+//! **Moves that change the model.** The refinement corrects the diagram's poles; a refined pole
+//! that ends nearer another diagram pole than its own has merged with or swapped for that
+//! neighbour, and is never taken. Where the context model misfits (heavily damped, overlapping
+//! modes: its J at the diagram's poles is systematic, not noise) such a merged pair can pass
+//! the χ² test and would drop a mode.
 
 pub use crate::denominator::LscfContext;
 use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
 use crate::error::EmaError;
 use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
 use crate::projection::apply_transpose_q;
+use crate::thin_qr::ThinQr;
 use faer::Mat;
-use faer::linalg::solvers::{Qr, SolveLstsq};
+use faer::linalg::solvers::Qr;
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// The context model on the refinement's lines: the data with the fixed columns projected out.
@@ -83,7 +91,8 @@ impl<'a> ContextProblem<'a> {
         }
     }
 
-    /// The residual sum of squares with the physical poles `poles` (their residues fitted);
+    /// The residual sum of squares with the physical poles `poles` (their residues fitted): the
+    /// last rows of Q_Pᵀ times the data, for the QR of the projected pole columns P = Q_P R_P;
     /// None where it is not finite.
     fn cost(&self, poles: &[Complex64]) -> Option<f64> {
         let mut cols = Vec::with_capacity(2 * poles.len());
@@ -93,9 +102,11 @@ impl<'a> ContextProblem<'a> {
             cols.push(g2);
         }
         let p = projected_out(&self.fixed, scaled_real_matrix(&cols, 2 * self.omega.len()));
-        let x = p.qr().solve_lstsq(&self.data);
-        let r = &self.data - &p * &x;
-        let j = r.squared_norm_l2();
+        let qr = ThinQr::new(&p);
+        let mut qtd = self.data.clone();
+        qr.apply_transpose_q(&mut qtd);
+        let k = qr.r_rows();
+        let j = qtd.subrows(k, qtd.nrows() - k).squared_norm_l2();
         j.is_finite().then_some(j)
     }
 
@@ -115,43 +126,118 @@ fn projected_out(fixed: &Qr<f64>, mut m: Mat<f64>) -> Mat<f64> {
     m.subrows(k, m.nrows() - k).to_owned()
 }
 
-/// The poles taken (module docs): each refined pole that lowers the context's sum of squares
-/// significantly by itself; then, of each pair of neighbours whose half-power bands overlap
-/// (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which was taken alone, both refined poles where
-/// together they do (coupled in the fit: one of a close pair moved alone can fit worse); the
-/// diagram's pole elsewhere.
-fn checked_poles(
-    freqs_hz: &[f64],
-    curves: &[&[Complex64]],
-    lines: &[usize],
-    context: &LscfContext,
-    diagram: &[Complex64],
-    refined: &[Complex64],
-) -> Vec<Complex64> {
-    let problem = ContextProblem::new(freqs_hz, curves, lines, context, diagram);
-    let Some(base) = problem.cost(diagram) else {
-        return diagram.to_vec();
-    };
-    let variance = base / problem.dof(diagram.len()) as f64;
-    let significant = |members: &[usize]| {
-        let mut trial = diagram.to_vec();
-        for &r in members {
-            trial[r] = refined[r];
-        }
-        let drop = problem.cost(&trial).map_or(0.0, |c| base - c);
-        drop > chi_square_99(2 * members.len()) * variance
-    };
-    let alone: Vec<bool> = (0..diagram.len()).map(|r| significant(&[r])).collect();
-    let mut taken: Vec<Complex64> = (0..diagram.len())
-        .map(|r| if alone[r] { refined[r] } else { diagram[r] })
-        .collect();
-    for [a, b] in overlapping_pairs(diagram) {
-        if !alone[a] && !alone[b] && significant(&[a, b]) {
-            taken[a] = refined[a];
-            taken[b] = refined[b];
+/// The check of refined poles against their diagram poles (module docs), prepared from the
+/// diagram's poles alone: the context model with the fixed columns projected out and its sum of
+/// squares at the diagram's poles. It does not depend on the refinement, so a caller can build it
+/// while the refinement runs.
+pub struct RefinementCheck<'a> {
+    freqs_hz: &'a [f64],
+    curves: &'a [&'a [Complex64]],
+    quantity: Quantity,
+    band_hz: [f64; 2],
+    diagram: Vec<Complex64>,
+    /// The context problem and J at the diagram's poles; None where that J is not finite (the
+    /// diagram's poles are kept then).
+    model: Option<(ContextProblem<'a>, f64)>,
+}
+
+impl<'a> RefinementCheck<'a> {
+    /// The check of the diagram's poles `diagram` on the lines `fit_lines` chooses in `band_hz`
+    /// (the refinement's), in the LSCF model's `context`; `curves` are values of `quantity` at
+    /// `freqs_hz`, already checked by the refinement's caller.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        freqs_hz: &'a [f64],
+        curves: &'a [&'a [Complex64]],
+        quantity: Quantity,
+        diagram: &[Complex64],
+        band_hz: [f64; 2],
+        fit_lines: RefineLines,
+        context: &'a LscfContext,
+    ) -> Self {
+        let band = crate::band::positive_lines(freqs_hz, band_hz);
+        let lines = refinement_lines(freqs_hz, &band, diagram, fit_lines);
+        let problem = ContextProblem::new(freqs_hz, curves, &lines, context, diagram);
+        let model = problem.cost(diagram).map(|base| (problem, base));
+        Self {
+            freqs_hz,
+            curves,
+            quantity,
+            band_hz,
+            diagram: diagram.to_vec(),
+            model,
         }
     }
-    taken
+
+    /// The poles taken of `refined` (index-aligned with the diagram's poles): each refined pole
+    /// that lowers the context's sum of squares significantly by itself; then, of each pair of
+    /// neighbours whose half-power bands overlap (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which
+    /// was taken alone, both refined poles where together they do (coupled in the fit: one of a
+    /// close pair moved alone can fit worse); the diagram's pole elsewhere.
+    pub fn taken(&self, refined: &[Complex64]) -> Vec<Complex64> {
+        let diagram = &self.diagram;
+        let Some((problem, base)) = &self.model else {
+            return diagram.clone();
+        };
+        let variance = base / problem.dof(diagram.len()) as f64;
+        let own = stays_with_its_own(diagram, refined);
+        let significant = |members: &[usize]| {
+            if !members.iter().all(|&r| own[r]) {
+                return false;
+            }
+            let mut trial = diagram.clone();
+            for &r in members {
+                trial[r] = refined[r];
+            }
+            let drop = problem.cost(&trial).map_or(0.0, |c| base - c);
+            drop > chi_square_99(2 * members.len()) * variance
+        };
+        let alone: Vec<bool> = (0..diagram.len())
+            .into_par_iter()
+            .map(|r| significant(&[r]))
+            .collect();
+        let mut taken: Vec<Complex64> = (0..diagram.len())
+            .map(|r| if alone[r] { refined[r] } else { diagram[r] })
+            .collect();
+        for [a, b] in overlapping_pairs(diagram) {
+            if !alone[a] && !alone[b] && significant(&[a, b]) {
+                taken[a] = refined[a];
+                taken[b] = refined[b];
+            }
+        }
+        taken
+    }
+
+    /// The modal model of the poles [`Self::taken`] of `refined` ([`lsfd`] over the band).
+    ///
+    /// # Errors
+    /// As [`lsfd`].
+    pub fn fit(&self, refined: &[Complex64]) -> Result<ModalFit, EmaError> {
+        let taken = self.taken(refined);
+        lsfd(
+            self.freqs_hz,
+            self.curves,
+            self.quantity,
+            &taken,
+            self.band_hz,
+        )
+    }
+}
+
+/// For each refined pole, whether it lies nearer its own diagram pole than any other (in the
+/// complex plane; module docs, "Moves that change the model").
+fn stays_with_its_own(diagram: &[Complex64], refined: &[Complex64]) -> Vec<bool> {
+    refined
+        .iter()
+        .enumerate()
+        .map(|(r, p)| {
+            let own = (p - diagram[r]).norm();
+            diagram
+                .iter()
+                .enumerate()
+                .all(|(j, d)| j == r || (p - d).norm() > own)
+        })
+        .collect()
 }
 
 /// Neighbours (by frequency) whose half-power bands overlap: |f₁ − f₂| < ζ₁f₁ + ζ₂f₂, as
@@ -178,30 +264,6 @@ fn chi_square_99(dof: usize) -> f64 {
     v * (1.0 - a + 2.326_348 * a.sqrt()).powi(3)
 }
 
-/// The refined poles `refined` of [`crate::lsfd::refine_with`] (index-aligned with their
-/// diagram poles `diagram`; the curves already checked by it), each checked against its diagram
-/// pole in the LSCF model's `context` on the lines `fit_lines` chooses in `band_hz` (module
-/// docs): the modal model of the poles taken ([`lsfd`]).
-///
-/// # Errors
-/// As [`lsfd`].
-#[allow(clippy::too_many_arguments)]
-pub fn check_refined(
-    freqs_hz: &[f64],
-    curves: &[&[Complex64]],
-    quantity: Quantity,
-    diagram: &[Complex64],
-    refined: &[Complex64],
-    band_hz: [f64; 2],
-    fit_lines: RefineLines,
-    context: &LscfContext,
-) -> Result<ModalFit, EmaError> {
-    let band = crate::band::positive_lines(freqs_hz, band_hz);
-    let lines = refinement_lines(freqs_hz, &band, diagram, fit_lines);
-    let taken = checked_poles(freqs_hz, curves, &lines, context, diagram, refined);
-    lsfd(freqs_hz, curves, quantity, &taken, band_hz)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -213,6 +275,18 @@ mod tests {
             let got = chi_square_99(dof);
             assert!((got / want - 1.0).abs() < 5e-3, "{dof}: {got} vs {want}");
         }
+    }
+
+    /// A refined pole that moved past the midpoint towards its neighbour has merged with it.
+    #[test]
+    fn a_refined_pole_nearer_another_diagram_pole_is_not_its_own() {
+        let pole = |f: f64| Complex64::new(-0.08 * 2.0 * PI * f, 2.0 * PI * f);
+        let diagram = [pole(150.625), pole(152.5), pole(175.6)];
+        let refined = [pole(152.006), pole(152.49), pole(175.0)];
+        assert_eq!(
+            stays_with_its_own(&diagram, &refined),
+            vec![false, true, true]
+        );
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
 //! correlation with the measured ones, and the CMIF.
 
-use crate::context::{LscfContext, check_refined};
+use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
 use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz, sample_interval};
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
@@ -232,9 +232,16 @@ impl EmaTimings {
 /// # Errors
 /// [`EmaError::Invalid`] when every curve is zero over the band.
 fn unit_scale(curves: &[&[Complex64]], lines: &[usize], band: [f64; 2]) -> Result<f64, EmaError> {
-    let largest = curves
-        .iter()
-        .flat_map(|c| lines.iter().map(|&k| c[k].norm()))
+    let values = || curves.iter().flat_map(|c| lines.iter().map(|&k| c[k]));
+    // |z| ≥ max(|Re z|, |Im z|) ≥ |z|/√2: only values whose larger component is within √2 of
+    // the largest component can hold the largest modulus (its hypot is slow on every line).
+    // The bound is taken 1e-9 under m/√2, so its rounding cannot leave that value out.
+    let component = |v: Complex64| v.re.abs().max(v.im.abs());
+    let largest_component = values().map(component).fold(0.0, f64::max);
+    let bound = largest_component * std::f64::consts::FRAC_1_SQRT_2 * (1.0 - 1e-9);
+    let largest = values()
+        .filter(|&v| component(v) >= bound)
+        .map(|v| v.norm())
         .fold(0.0, f64::max);
     if largest == 0.0 {
         return Err(invalid(
@@ -561,35 +568,48 @@ fn fit_selected(
         timings.residues += t;
         return Ok(fitted);
     }
-    let refined = refined_poles(
-        freqs,
-        curves,
-        quantity,
-        &poles,
-        band,
-        s.refine_lines,
-        s.refine_iterations,
-        context,
-        &progress,
-    )?;
+    let refine = || {
+        refined_poles(
+            freqs,
+            curves,
+            quantity,
+            &poles,
+            band,
+            s.refine_lines,
+            s.refine_iterations,
+            context,
+            &progress,
+        )
+    };
     let (fitted, t) = match (estimator, context) {
         (PoleEstimator::Checked, Some(c)) => {
+            // The check's model needs the diagram's poles only: built on another thread while
+            // this one refines.
+            let mut check = None;
+            let refined = rayon::in_place_scope(|scope| {
+                scope.spawn(|_| {
+                    check = Some(RefinementCheck::new(
+                        freqs,
+                        curves,
+                        quantity,
+                        &poles,
+                        band,
+                        s.refine_lines,
+                        c,
+                    ));
+                });
+                refine()
+            })?;
             timings.refinement += lap(&mut clock);
-            let fit = check_refined(
-                freqs,
-                curves,
-                quantity,
-                &poles,
-                &refined,
-                band,
-                s.refine_lines,
-                c,
-            )?;
+            let fit = match &check {
+                Some(check) => check.fit(&refined)?,
+                None => lsfd(freqs, curves, quantity, &poles, band)?,
+            };
             timings.check += lap(&mut clock);
             in_columns(fit, Some(refined), &mut clock)?
         }
         _ => {
-            let fit = lsfd(freqs, curves, quantity, &refined, band)?;
+            let fit = lsfd(freqs, curves, quantity, &refine()?, band)?;
             timings.refinement += lap(&mut clock);
             in_columns(fit, None, &mut clock)?
         }

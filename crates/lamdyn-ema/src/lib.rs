@@ -33,6 +33,7 @@ pub mod quality;
 pub mod shapes;
 pub mod spectra;
 pub mod stabilization;
+pub mod thin_qr;
 pub mod welch;
 
 pub use error::EmaError;

@@ -29,7 +29,7 @@
 use crate::denominator::LscfContext;
 use crate::error::{EmaError, check_curves, invalid};
 pub use crate::projection::LineBasis;
-use crate::projection::{LineSamples, solve_by_blocks};
+use crate::projection::{LineSamples, NormalEquations, solve_by_blocks};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use lamdyn_frf::Quantity;
@@ -373,9 +373,9 @@ pub(crate) fn refined_poles(
 
 /// Levenberg–Marquardt on the poles' parameters ([`pole_parameters`]) from `poles`, minimising
 /// the residual sum of squares of the residue problem on `samples` with the residues eliminated
-/// (its exact Jacobian: [`crate::projection::Projection::jacobian`]), at most `iterations` steps
-/// (`on_iteration(k, max)` as step k starts); the refined poles, or None where the residue
-/// problem fails at the start.
+/// (its exact normal equations: [`crate::projection::Projection::normal_equations`]), at most
+/// `iterations` steps (`on_iteration(k, max)` as step k starts); the refined poles, or None
+/// where the residue problem fails at the start.
 fn levenberg_marquardt(
     samples: &LineSamples,
     poles: &[Complex64],
@@ -389,9 +389,8 @@ fn levenberg_marquardt(
     let p = u.len();
     for k in 0..iterations {
         on_iteration(k + 1, iterations);
-        let jacobian = at.jacobian(samples);
-        let jtj = jacobian.transpose() * &jacobian;
-        let jtr = jacobian.transpose() * at.residual_vector();
+        let normal = at.normal_equations(samples);
+        let (jtj, jtr) = (normal.weighted(|_| 1.0), normal.gradient);
         let mut improved = false;
         for _ in 0..8 {
             let m = Mat::from_fn(p, p, |a, b| {
@@ -496,14 +495,14 @@ pub fn pole_deviations(
 fn deviations(samples: &LineSamples, poles: &[Complex64]) -> Option<Vec<PoleSd>> {
     let u = pole_parameters(poles);
     let at = samples.project(&to_poles(&u))?;
-    let cols = at.jacobian(samples);
+    let normal = at.normal_equations(samples);
     let rows = samples.rows();
     let own = samples.unknowns(poles.len()) as f64 + u.len() as f64 / samples.curves() as f64;
     let dof = (rows as f64 - own).max(1.0);
     let variance: Vec<f64> = (0..samples.curves())
         .map(|o| at.curve_cost(o) / dof)
         .collect();
-    parameter_covariance(&cols, &variance, rows).map(|cov| {
+    parameter_covariance(&normal, &variance).map(|cov| {
         poles
             .iter()
             .enumerate()
@@ -521,16 +520,13 @@ fn deviations(samples: &LineSamples, poles: &[Complex64]) -> Option<Vec<PoleSd>>
     })
 }
 
-/// The sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of [`pole_deviations`] from the Jacobian
-/// `jacobian` (one column per parameter) and each curve's variance (`rows` residuals per curve);
-/// None when JᵀJ is singular.
-fn parameter_covariance(jacobian: &Mat<f64>, variance: &[f64], rows: usize) -> Option<Mat<f64>> {
-    let p = jacobian.ncols();
-    let jtj = jacobian.transpose() * jacobian;
-    let weighted = Mat::from_fn(jacobian.nrows(), p, |i, j| {
-        variance[i / rows].sqrt() * jacobian[(i, j)]
-    });
-    let meat = weighted.transpose() * &weighted;
+/// The sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of [`pole_deviations`] from the normal
+/// equations `normal` (JᵀJ curve by curve) and each curve's variance; None when JᵀJ is
+/// singular.
+fn parameter_covariance(normal: &NormalEquations, variance: &[f64]) -> Option<Mat<f64>> {
+    let jtj = normal.weighted(|_| 1.0);
+    let meat = normal.weighted(|o| variance[o]);
+    let p = jtj.nrows();
     let inverse = jtj.full_piv_lu().solve(Mat::<f64>::identity(p, p));
     let cov = &inverse * &meat * &inverse;
     (0..p)

@@ -13,14 +13,17 @@
 //!   ∂R/∂u_j = −P⊥ D_j X − (A⁺)ᵀ D_jᵀ R,   D_j = ∂A/∂u_j,
 //!
 //! with D_j nonzero only in the two columns of u_j's pole. With the columns scaled by their
-//! norms S for conditioning and the thin QR A S⁻¹ = Q R̃, A⁺ = S⁻¹ R̃⁻¹ Qᵀ and (A⁺)ᵀ = Q R̃⁻ᵀ S⁻¹:
-//! the Jacobian costs two products with Q per parameter instead of a factorization per
-//! finite-difference step, and is exact where differences are not.
+//! norms S for conditioning and the QR A S⁻¹ = Q R̃ ([`crate::thin_qr`]), A⁺ = S⁻¹ R̃⁻¹ Q₁ᵀ and
+//! (A⁺)ᵀ = Q₁ R̃⁻ᵀ S⁻¹. The Gauss–Newton steps need only JᵀJ and Jᵀr, and the two terms of
+//! ∂R/∂u_j are orthogonal (one outside the basis's span, one inside), so both come from small
+//! matrices ([`Projection::normal_equations`]): the Jacobian itself (rows × curves per
+//! parameter) is never formed. It is exact where finite differences are not.
 //!
 //! The pole parameters are u = (ln σ, ω_d) for λ = −σ + iω_d (σ > 0 keeps the pole stable):
 //! ∂λ/∂ln σ = −σ, ∂λ/∂ω_d = i.
 
 use crate::error::{EmaError, invalid};
+use crate::thin_qr::ThinQr;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::householder::{
     apply_block_householder_sequence_transpose_on_the_left_in_place_scratch,
@@ -167,34 +170,37 @@ impl LineSamples {
     fn triangle(&self, poles: &[Complex64]) -> (Mat<f64>, Mat<f64>) {
         let mut a = self.basis(poles);
         let scale = unit_columns(&mut a);
-        let qr = a.qr();
-        let mut r = qr.thin_R().to_owned();
+        let qr = ThinQr::new(&a);
+        let mut r = qr.r();
         for (c, s) in scale.iter().enumerate() {
             r.col_mut(c).iter_mut().for_each(|v| *v *= s);
         }
         let mut qtb = self.data.clone();
-        apply_transpose_q(&qr, &mut qtb);
+        qr.apply_transpose_q(&mut qtb);
         let rows = r.nrows();
         (r, qtb.subrows(0, rows).to_owned())
     }
 
     /// The residue problem solved for `poles` (module docs); None where it is singular or not
-    /// finite. Needs more rows than unknowns (2 poles + 2).
+    /// finite. Needs more rows than unknowns (2 poles + 2). The residual is Q [0; (QᵀB)₂], the
+    /// part of B outside the basis's span.
     pub(crate) fn project(&self, poles: &[Complex64]) -> Option<Projection> {
         let (a, scale) = self.scaled_basis(poles)?;
-        let qr = a.qr();
-        let q = qr.compute_thin_Q();
-        let r = qr.thin_R().to_owned();
-        let qtb = q.transpose() * &self.data;
-        let mut unknowns = qtb.clone();
+        let qr = ThinQr::new(&a);
+        let r = qr.r();
+        let n = r.nrows();
+        let mut residual = self.data.clone();
+        qr.apply_transpose_q(&mut residual);
+        let mut unknowns = residual.subrows(0, n).to_owned();
         solve_upper_triangular_in_place(r.as_ref(), unknowns.as_mut(), Par::Seq);
         if !unknowns.is_all_finite() {
             return None;
         }
-        let residual = &self.data - &q * &qtb;
+        residual.subrows_mut(0, n).fill(0.0);
+        qr.apply_q(&mut residual);
         Some(Projection {
             poles: poles.to_vec(),
-            q,
+            qr,
             r,
             scale,
             unknowns,
@@ -317,8 +323,8 @@ fn quantity_factor(w: f64, q: Quantity) -> Complex64 {
 /// The residue problem of [`LineSamples::project`] solved at given poles.
 pub(crate) struct Projection {
     poles: Vec<Complex64>,
-    /// Thin Q of the scaled basis.
-    q: Mat<f64>,
+    /// The QR of the scaled basis.
+    qr: ThinQr,
     /// Its triangular factor R̃.
     r: Mat<f64>,
     /// Column norms S of the basis.
@@ -346,59 +352,145 @@ impl Projection {
         self.residual.col(o).squared_norm_l2()
     }
 
-    /// The residuals curve after curve (rows 2i, 2i + 1: line i's real and imaginary part), as
-    /// one column.
-    pub(crate) fn residual_vector(&self) -> Mat<f64> {
-        let rows = self.residual.nrows();
-        Mat::from_fn(rows * self.residual.ncols(), 1, |i, _| {
-            self.residual[(i % rows, i / rows)]
-        })
-    }
-
-    /// The Jacobian of [`Self::residual_vector`] with respect to the pole parameters
-    /// (ln σ, ω_d of each pole in turn): one column per parameter (module docs).
-    pub(crate) fn jacobian(&self, samples: &LineSamples) -> Mat<f64> {
-        use rayon::prelude::*;
-        let cols: Vec<Mat<f64>> = (0..2 * self.poles.len())
-            .into_par_iter()
-            .map(|j| self.jacobian_column(samples, j))
-            .collect();
-        let rows = self.residual.nrows();
-        Mat::from_fn(rows * self.residual.ncols(), cols.len(), |i, j| {
-            -cols[j][(i % rows, i / rows)]
-        })
-    }
-
-    /// Column `j` of [`Self::jacobian`] negated, one column per curve:
-    /// P⊥ D_j X + Q R̃⁻ᵀ S⁻¹ D_jᵀ R.
-    fn jacobian_column(&self, samples: &LineSamples, j: usize) -> Mat<f64> {
-        let k = j / 2;
-        let p = self.poles[k];
-        let dlambda = if j % 2 == 0 {
-            Complex64::new(p.re, 0.0)
-        } else {
-            Complex64::i()
-        };
-        let d = samples.basis_derivative(p, dlambda);
-        let curves = self.residual.ncols();
-        let x = Mat::from_fn(2, curves, |m, o| self.unknown(2 * k + m, o));
-        let v = &d * &x;
-        let mut w = Mat::<f64>::zeros(self.q.ncols(), curves);
-        let dtr = d.transpose() * &self.residual;
-        for m in 0..2 {
+    /// The Gauss–Newton normal equations of the projected residual with respect to the pole
+    /// parameters (ln σ, ω_d of each pole in turn), curve by curve, without forming the
+    /// Jacobian (module docs: J_j = −(P⊥ D_j X + Q Z_j) with Z_j = R̃⁻ᵀ S⁻¹ D_jᵀ R). The two
+    /// terms are orthogonal (P⊥ Q = 0) and P⊥ R = R, so for curve o
+    ///
+    ///   (JᵀJ)_ab = x_aᵀ E_aᵀ P⊥ E_b x_b + z_aᵀ z_b,   (Jᵀr)_a = −x_aᵀ E_aᵀ r,
+    ///
+    /// with E_j the two nonzero columns of D_j, x_j their two unknowns and z_j curve o's column
+    /// of Z_j. EᵀP⊥E is the Gram matrix of the last rows of QᵀE (P⊥E in Q's coordinates)
+    /// rather than EᵀE − (Q₁ᵀE)ᵀ(Q₁ᵀE), which cancels where a derivative lies near the basis's
+    /// span.
+    pub(crate) fn normal_equations(&self, samples: &LineSamples) -> NormalEquations {
+        let (n, p, curves) = (self.r.nrows(), 2 * self.poles.len(), self.residual.ncols());
+        let mut e = Mat::<f64>::zeros(samples.rows(), 2 * p);
+        for j in 0..p {
+            let d = samples.basis_derivative(self.poles[j / 2], self.parameter_derivative(j));
+            e.subcols_mut(2 * j, 2).copy_from(&d);
+        }
+        let etr = e.transpose() * &self.residual;
+        let mut perp = e;
+        self.qr.apply_transpose_q(&mut perp);
+        perp.subrows_mut(0, n).fill(0.0);
+        let m = perp.transpose() * &perp;
+        let mut z = Mat::<f64>::zeros(n, p * curves);
+        for j in 0..p {
             for o in 0..curves {
-                w[(2 * k + m, o)] = dtr[(m, o)] / self.scale[2 * k + m];
+                for c in 0..2 {
+                    let col = 2 * (j / 2) + c;
+                    z[(col, j * curves + o)] = etr[(2 * j + c, o)] / self.scale[col];
+                }
             }
         }
-        solve_lower_triangular_in_place(self.r.transpose(), w.as_mut(), Par::Seq);
-        let qtv = self.q.transpose() * &v;
-        &self.q * (&w - &qtv) + &v
+        solve_lower_triangular_in_place(self.r.transpose(), z.as_mut(), Par::Seq);
+        let x = |j: usize, o: usize| [0, 1].map(|c| self.unknown(2 * (j / 2) + c, o));
+        let per_curve = (0..curves)
+            .map(|o| {
+                Mat::from_fn(p, p, |a, b| {
+                    let (xa, xb) = (x(a, o), x(b, o));
+                    let mut v = z.col(a * curves + o).transpose() * z.col(b * curves + o);
+                    for (c, xac) in xa.iter().enumerate() {
+                        for (d, xbd) in xb.iter().enumerate() {
+                            v += xac * m[(2 * a + c, 2 * b + d)] * xbd;
+                        }
+                    }
+                    v
+                })
+            })
+            .collect();
+        let gradient = Mat::from_fn(p, 1, |a, _| {
+            (0..curves)
+                .map(|o| {
+                    let xa = x(a, o);
+                    -(xa[0] * etr[(2 * a, o)] + xa[1] * etr[(2 * a + 1, o)])
+                })
+                .sum()
+        });
+        NormalEquations {
+            per_curve,
+            gradient,
+        }
+    }
+
+    /// ∂λ/∂u_j of parameter `j`: −σ = Re λ for ln σ (even j), i for ω_d (odd j).
+    fn parameter_derivative(&self, j: usize) -> Complex64 {
+        if j % 2 == 0 {
+            Complex64::new(self.poles[j / 2].re, 0.0)
+        } else {
+            Complex64::i()
+        }
+    }
+}
+
+/// The Gauss–Newton normal equations of [`Projection::normal_equations`].
+pub(crate) struct NormalEquations {
+    /// JᵀJ of each curve's residuals (parameters × parameters).
+    pub(crate) per_curve: Vec<Mat<f64>>,
+    /// Jᵀr over every curve (one column).
+    pub(crate) gradient: Mat<f64>,
+}
+
+impl NormalEquations {
+    /// JᵀJ over every curve, each curve's weighted by `weights[o]`.
+    pub(crate) fn weighted(&self, weights: impl Fn(usize) -> f64) -> Mat<f64> {
+        let p = self.gradient.nrows();
+        let mut sum = Mat::<f64>::zeros(p, p);
+        for (o, m) in self.per_curve.iter().enumerate() {
+            sum += m * faer::Scale(weights(o));
+        }
+        sum
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    impl Projection {
+        /// The residuals curve after curve (rows 2i, 2i + 1: line i's real and imaginary
+        /// part), as one column.
+        fn residual_vector(&self) -> Mat<f64> {
+            let rows = self.residual.nrows();
+            Mat::from_fn(rows * self.residual.ncols(), 1, |i, _| {
+                self.residual[(i % rows, i / rows)]
+            })
+        }
+
+        /// The Jacobian of [`Self::residual_vector`], formed column by column (module docs):
+        /// −(P⊥ D_j X + Q R̃⁻ᵀ S⁻¹ D_jᵀ R).
+        fn jacobian(&self, samples: &LineSamples) -> Mat<f64> {
+            let (rows, curves) = (self.residual.nrows(), self.residual.ncols());
+            let mut jac = Mat::<f64>::zeros(rows * curves, 2 * self.poles.len());
+            for j in 0..2 * self.poles.len() {
+                let k = j / 2;
+                let d = samples.basis_derivative(self.poles[k], self.parameter_derivative(j));
+                let x = Mat::from_fn(2, curves, |m, o| self.unknown(2 * k + m, o));
+                let v = &d * &x;
+                let mut w = Mat::<f64>::zeros(self.r.nrows(), curves);
+                let dtr = d.transpose() * &self.residual;
+                for m in 0..2 {
+                    for o in 0..curves {
+                        w[(2 * k + m, o)] = dtr[(m, o)] / self.scale[2 * k + m];
+                    }
+                }
+                solve_lower_triangular_in_place(self.r.transpose(), w.as_mut(), Par::Seq);
+                let mut q = Mat::<f64>::zeros(rows, self.r.nrows());
+                q.subrows_mut(0, self.r.nrows())
+                    .copy_from(Mat::<f64>::identity(self.r.nrows(), self.r.nrows()));
+                self.qr.apply_q(&mut q);
+                let qtv = q.transpose() * &v;
+                let col = &q * (&w - &qtv) + &v;
+                for o in 0..curves {
+                    for i in 0..rows {
+                        jac[(o * rows + i, j)] = -col[(i, o)];
+                    }
+                }
+            }
+            jac
+        }
+    }
 
     /// The pole of frequency `f` (Hz) and damping ratio `z`.
     fn pole(f: f64, z: f64) -> Complex64 {
@@ -500,5 +592,34 @@ mod tests {
                 "parameter {j}: {diff:e} against {norm:e}"
             );
         }
+    }
+
+    /// The normal equations without the Jacobian equal JᵀJ and Jᵀr of the explicit Jacobian
+    /// (itself checked against central differences above), curve by curve.
+    #[test]
+    fn normal_equations_match_the_explicit_jacobian() {
+        let freqs: Vec<f64> = (1..=400).map(|k| 0.25 * f64::from(k)).collect();
+        let truth = [pole(40.0, 0.02), pole(41.5, 0.03), pole(80.0, 0.01)];
+        let curves = accelerances(&freqs, &truth, 3, 1e-3);
+        let refs: Vec<&[Complex64]> = curves.iter().map(|c| c.as_slice()).collect();
+        let lines: Vec<usize> = (0..freqs.len()).collect();
+        let samples = LineSamples::new(&freqs, &refs, Quantity::Accelerance, &lines).unwrap();
+        let start: Vec<Complex64> = truth
+            .iter()
+            .map(|p| p * Complex64::new(0.99, -0.003))
+            .collect();
+        let at = samples.project(&start).unwrap();
+        let jac = at.jacobian(&samples);
+        let normal = at.normal_equations(&samples);
+        let rows = samples.rows();
+        for o in 0..refs.len() {
+            let block = jac.subrows(o * rows, rows);
+            let want = block.transpose() * block;
+            let diff = (&normal.per_curve[o] - &want).norm_l2();
+            assert!(diff < 1e-10 * want.norm_l2(), "curve {o}: {diff:e}");
+        }
+        let want = jac.transpose() * at.residual_vector();
+        let diff = (&normal.gradient - &want).norm_l2();
+        assert!(diff < 1e-10 * want.norm_l2(), "gradient: {diff:e}");
     }
 }
