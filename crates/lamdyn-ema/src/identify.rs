@@ -189,10 +189,11 @@ pub struct EmaTimings {
     /// The CMIF, its peaks and the selection of poles.
     pub selection: f64,
     /// The poles' refinement (Levenberg–Marquardt with the residues eliminated); with the
-    /// refined estimator, the residues of its poles.
+    /// refined estimator, the residues of its poles; with the checked one, the check's context
+    /// model too, built on another thread meanwhile.
     pub refinement: f64,
-    /// The check of each refined pole in the LSCF model's context, and the residues of the
-    /// poles it takes.
+    /// The check of each refined pole in the LSCF model's context (after its model), and the
+    /// residues of the poles it takes.
     pub check: f64,
     /// The residues of the diagram's poles (without refinement), and those fitted again where
     /// a refined pole left its column and was put back.
