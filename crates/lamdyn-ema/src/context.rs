@@ -145,7 +145,6 @@ impl<'a> RefinementCheck<'a> {
     /// The check of the diagram's poles `diagram` on the lines `fit_lines` chooses in `band_hz`
     /// (the refinement's), in the LSCF model's `context`; `curves` are values of `quantity` at
     /// `freqs_hz`, already checked by the refinement's caller.
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         freqs_hz: &'a [f64],
         curves: &'a [&'a [Complex64]],

@@ -602,6 +602,7 @@ fn fit_selected(
                 refine()
             })?;
             timings.refinement += lap(&mut clock);
+            // The scope has run the spawned check; without it (never) the diagram's poles.
             let fit = match &check {
                 Some(check) => check.fit(&refined)?,
                 None => lsfd(freqs, curves, quantity, &poles, band)?,
