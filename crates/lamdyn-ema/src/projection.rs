@@ -201,7 +201,6 @@ impl LineSamples {
         Some(Projection {
             poles: poles.to_vec(),
             qr,
-            r,
             scale,
             unknowns,
             residual,
@@ -323,10 +322,8 @@ fn quantity_factor(w: f64, q: Quantity) -> Complex64 {
 /// The residue problem of [`LineSamples::project`] solved at given poles.
 pub(crate) struct Projection {
     poles: Vec<Complex64>,
-    /// The QR of the scaled basis.
+    /// The QR of the scaled basis (its triangular factor is R̃).
     qr: ThinQr,
-    /// Its triangular factor R̃.
-    r: Mat<f64>,
     /// Column norms S of the basis.
     scale: Vec<f64>,
     /// The scaled unknowns X̃ = S X, one column per curve.
@@ -364,7 +361,8 @@ impl Projection {
     /// rather than EᵀE − (Q₁ᵀE)ᵀ(Q₁ᵀE), which cancels where a derivative lies near the basis's
     /// span.
     pub(crate) fn normal_equations(&self, samples: &LineSamples) -> NormalEquations {
-        let (n, p, curves) = (self.r.nrows(), 2 * self.poles.len(), self.residual.ncols());
+        let r = self.qr.r();
+        let (n, p, curves) = (r.nrows(), 2 * self.poles.len(), self.residual.ncols());
         let mut e = Mat::<f64>::zeros(samples.rows(), 2 * p);
         for j in 0..p {
             let d = samples.basis_derivative(self.poles[j / 2], self.parameter_derivative(j));
@@ -384,7 +382,7 @@ impl Projection {
                 }
             }
         }
-        solve_lower_triangular_in_place(self.r.transpose(), z.as_mut(), Par::Seq);
+        solve_lower_triangular_in_place(r.transpose(), z.as_mut(), Par::Seq);
         let x = |j: usize, o: usize| [0, 1].map(|c| self.unknown(2 * (j / 2) + c, o));
         let per_curve = (0..curves)
             .map(|o| {
@@ -462,23 +460,24 @@ mod tests {
         /// −(P⊥ D_j X + Q R̃⁻ᵀ S⁻¹ D_jᵀ R).
         fn jacobian(&self, samples: &LineSamples) -> Mat<f64> {
             let (rows, curves) = (self.residual.nrows(), self.residual.ncols());
+            let r = self.qr.r();
             let mut jac = Mat::<f64>::zeros(rows * curves, 2 * self.poles.len());
             for j in 0..2 * self.poles.len() {
                 let k = j / 2;
                 let d = samples.basis_derivative(self.poles[k], self.parameter_derivative(j));
                 let x = Mat::from_fn(2, curves, |m, o| self.unknown(2 * k + m, o));
                 let v = &d * &x;
-                let mut w = Mat::<f64>::zeros(self.r.nrows(), curves);
+                let mut w = Mat::<f64>::zeros(r.nrows(), curves);
                 let dtr = d.transpose() * &self.residual;
                 for m in 0..2 {
                     for o in 0..curves {
                         w[(2 * k + m, o)] = dtr[(m, o)] / self.scale[2 * k + m];
                     }
                 }
-                solve_lower_triangular_in_place(self.r.transpose(), w.as_mut(), Par::Seq);
-                let mut q = Mat::<f64>::zeros(rows, self.r.nrows());
-                q.subrows_mut(0, self.r.nrows())
-                    .copy_from(Mat::<f64>::identity(self.r.nrows(), self.r.nrows()));
+                solve_lower_triangular_in_place(r.transpose(), w.as_mut(), Par::Seq);
+                let mut q = Mat::<f64>::zeros(rows, r.nrows());
+                q.subrows_mut(0, r.nrows())
+                    .copy_from(Mat::<f64>::identity(r.nrows(), r.nrows()));
                 self.qr.apply_q(&mut q);
                 let qtv = q.transpose() * &v;
                 let col = &q * (&w - &qtv) + &v;
