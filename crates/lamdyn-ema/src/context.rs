@@ -31,9 +31,11 @@
 //!
 //! **Moves that change the model.** The refinement corrects the diagram's poles; a refined pole
 //! that ends nearer another diagram pole than its own has merged with or swapped for that
-//! neighbour, and is never taken. Where the context model misfits (heavily damped, overlapping
-//! modes: its J at the diagram's poles is systematic, not noise) such a merged pair can pass
-//! the χ² test and would drop a mode.
+//! neighbour, and is never taken. Nor is a refined pole whose half-power band overlaps that of
+//! a pole the refinement lost (one that left its column in the diagram and is put back): it was
+//! fitted beside a pole standing elsewhere and may have taken over that pole's mode. Where the
+//! context model misfits (heavily damped, overlapping modes: its J at the diagram's poles is
+//! systematic, not noise) such moves can pass the χ² test (docs/ema.md, "Damped poles").
 
 pub use crate::denominator::LscfContext;
 use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
@@ -168,20 +170,23 @@ impl<'a> RefinementCheck<'a> {
         }
     }
 
-    /// The poles taken of `refined` (index-aligned with the diagram's poles): each refined pole
-    /// that lowers the context's sum of squares significantly by itself; then, of each pair of
+    /// The poles taken of `refined` (index-aligned with the diagram's poles; `left_column`: those
+    /// the refinement sent out of their columns in the diagram): each refined pole that keeps to
+    /// its own and is not beside a lost one (module docs, "Moves that change the model") and
+    /// lowers the context's sum of squares significantly by itself; then, of each pair of
     /// neighbours whose half-power bands overlap (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which
     /// was taken alone, both refined poles where together they do (coupled in the fit: one of a
     /// close pair moved alone can fit worse); the diagram's pole elsewhere.
-    pub fn taken(&self, refined: &[Complex64]) -> Vec<Complex64> {
+    pub fn taken(&self, refined: &[Complex64], left_column: &[bool]) -> Vec<Complex64> {
         let diagram = &self.diagram;
         let Some((problem, base)) = &self.model else {
             return diagram.clone();
         };
         let variance = base / problem.dof(diagram.len()) as f64;
         let own = stays_with_its_own(diagram, refined);
+        let beside = beside_a_lost_pole(diagram, left_column);
         let significant = |members: &[usize]| {
-            if !members.iter().all(|&r| own[r]) {
+            if !members.iter().all(|&r| own[r] && !beside[r]) {
                 return false;
             }
             let mut trial = diagram.clone();
@@ -207,12 +212,13 @@ impl<'a> RefinementCheck<'a> {
         taken
     }
 
-    /// The modal model of the poles [`Self::taken`] of `refined` ([`lsfd`] over the band).
+    /// The modal model of the poles [`Self::taken`] of `refined` and `left_column` ([`lsfd`]
+    /// over the band).
     ///
     /// # Errors
     /// As [`lsfd`].
-    pub fn fit(&self, refined: &[Complex64]) -> Result<ModalFit, EmaError> {
-        let taken = self.taken(refined);
+    pub fn fit(&self, refined: &[Complex64], left_column: &[bool]) -> Result<ModalFit, EmaError> {
+        let taken = self.taken(refined, left_column);
         lsfd(
             self.freqs_hz,
             self.curves,
@@ -239,18 +245,31 @@ fn stays_with_its_own(diagram: &[Complex64], refined: &[Complex64]) -> Vec<bool>
         .collect()
 }
 
-/// Neighbours (by frequency) whose half-power bands overlap: |f₁ − f₂| < ζ₁f₁ + ζ₂f₂, as
-/// indices into `poles`.
+/// For each diagram pole, whether the refinement lost it (`lost`: it left its column) or lost
+/// a pole whose half-power band overlaps its own ([`bands_overlap`]); module docs, "Moves that
+/// change the model".
+fn beside_a_lost_pole(diagram: &[Complex64], lost: &[bool]) -> Vec<bool> {
+    (0..diagram.len())
+        .map(|r| {
+            (0..diagram.len()).any(|j| lost[j] && (j == r || bands_overlap(diagram[r], diagram[j])))
+        })
+        .collect()
+}
+
+/// Whether the half-power bands of two poles overlap: |f₁ − f₂| < ζ₁f₁ + ζ₂f₂.
+fn bands_overlap(a: Complex64, b: Complex64) -> bool {
+    let half_width = |p: Complex64| -p.re / (2.0 * PI);
+    (b.norm() - a.norm()).abs() / (2.0 * PI) < half_width(a) + half_width(b)
+}
+
+/// Neighbours (by frequency) whose half-power bands overlap ([`bands_overlap`]), as indices
+/// into `poles`.
 fn overlapping_pairs(poles: &[Complex64]) -> Vec<[usize; 2]> {
     let mut order: Vec<usize> = (0..poles.len()).collect();
     order.sort_by(|&a, &b| poles[a].im.total_cmp(&poles[b].im));
-    let half_width = |p: Complex64| -p.re / (2.0 * PI);
     order
         .windows(2)
-        .filter(|w| {
-            let (a, b) = (poles[w[0]], poles[w[1]]);
-            (b.norm() - a.norm()).abs() / (2.0 * PI) < half_width(a) + half_width(b)
-        })
+        .filter(|w| bands_overlap(poles[w[0]], poles[w[1]]))
         .map(|w| [w[0], w[1]])
         .collect()
 }
@@ -286,6 +305,19 @@ mod tests {
             stays_with_its_own(&diagram, &refined),
             vec![false, true, true]
         );
+    }
+
+    /// Only the lost pole and the poles whose half-power bands overlap its own are marked.
+    #[test]
+    fn poles_beside_a_lost_pole_are_marked() {
+        let pole = |f: f64| Complex64::new(-0.08 * 2.0 * PI * f, 2.0 * PI * f);
+        let diagram = [pole(25.6), pole(102.5), pole(105.6), pole(152.5)];
+        let lost = [false, false, true, false];
+        assert_eq!(
+            beside_a_lost_pole(&diagram, &lost),
+            vec![false, true, true, false]
+        );
+        assert_eq!(beside_a_lost_pole(&diagram, &[false; 4]), vec![false; 4]);
     }
 
     #[test]

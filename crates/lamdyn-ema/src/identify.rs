@@ -16,6 +16,7 @@ use crate::stabilization::{
 };
 use lamdyn_frf::FrfSet;
 use num_complex::Complex64;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -325,21 +326,12 @@ fn keep_poles_in_their_columns(
         .iter()
         .zip(selected)
         .map(|(&p, col)| {
-            let (f, z) = (pole_freq_hz(p), pole_damping(p));
-            if col.holds(f, z, c) {
+            if col.holds(pole_freq_hz(p), pole_damping(p), c) {
                 p
             } else {
                 warnings.push(format!(
-                    "the refinement moved the pole at {:.3} Hz (zeta {:.3} %) to {f:.3} Hz (zeta \
-                     {:.3} %), out of its column in the diagram ({:.3}-{:.3} Hz, zeta {:.3}-{:.3} \
-                     %): the diagram's pole is kept",
-                    col.freq_hz,
-                    100.0 * col.damping,
-                    100.0 * z,
-                    col.freq_range_hz[0],
-                    col.freq_range_hz[1],
-                    100.0 * col.damping_range[0],
-                    100.0 * col.damping_range[1],
+                    "{}: the diagram's pole is kept",
+                    out_of_column(col, p)
                 ));
                 col.pole
             }
@@ -350,6 +342,23 @@ fn keep_poles_in_their_columns(
     } else {
         Ok((refit(&poles)?, warnings))
     }
+}
+
+/// "the refinement moved the pole at … to …, out of its column in the diagram (…)": the start of
+/// a warning about the refined pole `p` of the column `col` it left.
+fn out_of_column(col: &SelectedPole, p: Complex64) -> String {
+    format!(
+        "the refinement moved the pole at {:.3} Hz (zeta {:.3} %) to {:.3} Hz (zeta {:.3} %), out \
+         of its column in the diagram ({:.3}-{:.3} Hz, zeta {:.3}-{:.3} %)",
+        col.freq_hz,
+        100.0 * col.damping,
+        pole_freq_hz(p),
+        100.0 * pole_damping(p),
+        col.freq_range_hz[0],
+        col.freq_range_hz[1],
+        100.0 * col.damping_range[0],
+        100.0 * col.damping_range[1],
+    )
 }
 
 /// Participation factors of mode r (see [`Mode::participation`]): power iteration on RᴴR with
@@ -584,31 +593,20 @@ fn fit_selected(
     };
     let (fitted, t) = match (estimator, context) {
         (PoleEstimator::Checked, Some(c)) => {
-            // The check's model needs the diagram's poles only: built on another thread while
-            // this one refines.
-            let mut check = None;
-            let refined = rayon::in_place_scope(|scope| {
-                scope.spawn(|_| {
-                    check = Some(RefinementCheck::new(
-                        freqs,
-                        curves,
-                        quantity,
-                        &poles,
-                        band,
-                        s.refine_lines,
-                        c,
-                    ));
-                });
-                refine()
-            })?;
+            let (refined, check) =
+                refined_beside_the_check(data, &poles, s.refine_lines, c, refine)?;
             timings.refinement += lap(&mut clock);
             // The scope has run the spawned check; without it (never) the diagram's poles.
+            let lost = left_their_columns(&refined, selected, s);
             let fit = match &check {
-                Some(check) => check.fit(&refined)?,
+                Some(check) => check.fit(&refined, &lost)?,
                 None => lsfd(freqs, curves, quantity, &poles, band)?,
             };
             timings.check += lap(&mut clock);
-            in_columns(fit, Some(refined), &mut clock)?
+            let lost_warnings = lost_pole_warnings(&refined, &lost, selected);
+            let (mut fitted, t) = in_columns(fit, Some(refined), &mut clock)?;
+            fitted.warnings.extend(lost_warnings);
+            (fitted, t)
         }
         _ => {
             let fit = lsfd(freqs, curves, quantity, &refine()?, band)?;
@@ -618,6 +616,66 @@ fn fit_selected(
     };
     timings.residues += t;
     Ok(fitted)
+}
+
+/// The poles `refine` returns, and the check of the diagram's `poles` built on another thread
+/// while this one refines (the check's model needs the diagram's poles only); None in place of
+/// the check only where the scope did not run it.
+fn refined_beside_the_check<'a>(
+    data: BandCurves<'a>,
+    poles: &[Complex64],
+    fit_lines: RefineLines,
+    context: &'a LscfContext,
+    refine: impl FnOnce() -> Result<Vec<Complex64>, EmaError>,
+) -> Result<(Vec<Complex64>, Option<RefinementCheck<'a>>), EmaError> {
+    let mut check = None;
+    let refined = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| {
+            check = Some(RefinementCheck::new(
+                data.freqs_hz,
+                data.curves,
+                data.quantity,
+                poles,
+                data.band_hz,
+                fit_lines,
+                context,
+            ));
+        });
+        refine()
+    })?;
+    Ok((refined, check))
+}
+
+/// For each refined pole, whether it left its column in the diagram ([`SelectedPole::holds`]).
+fn left_their_columns(
+    refined: &[Complex64],
+    selected: &[SelectedPole],
+    s: &EmaSettings,
+) -> Vec<bool> {
+    refined
+        .iter()
+        .zip(selected)
+        .map(|(&p, col)| !col.holds(pole_freq_hz(p), pole_damping(p), &s.criteria))
+        .collect()
+}
+
+/// One warning per refined pole the refinement `lost` (left its column): the check keeps its
+/// diagram pole and takes no refined pole beside it ([`RefinementCheck::taken`]).
+fn lost_pole_warnings(
+    refined: &[Complex64],
+    lost: &[bool],
+    selected: &[SelectedPole],
+) -> Vec<String> {
+    (0..refined.len())
+        .filter(|&r| lost[r])
+        .map(|r| {
+            format!(
+                "{}: the diagram's pole is kept, and no refined pole whose half-power band \
+                 overlaps its own is taken",
+                out_of_column(&selected[r], refined[r])
+            )
+        })
+        .collect()
 }
 
 /// The modal model of the selected poles ([`fit_selected`]) and what the refinement made of
@@ -791,6 +849,7 @@ fn cmif_curves(
     scale: f64,
 ) -> Vec<Vec<f64>> {
     (0..lines)
+        .into_par_iter()
         .map(|k| {
             let h: Vec<Complex64> = curves.iter().map(|c| c[k]).collect();
             let mut sigma = cmif_line(&h, references);
