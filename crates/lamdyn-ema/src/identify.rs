@@ -320,28 +320,27 @@ fn keep_poles_in_their_columns(
     c: &StabilityCriteria,
     refit: impl Fn(&[Complex64]) -> Result<ModalFit, EmaError>,
 ) -> Result<(ModalFit, Vec<String>), EmaError> {
-    let mut warnings = Vec::new();
-    let poles: Vec<Complex64> = fit
-        .poles
-        .iter()
-        .zip(selected)
-        .map(|(&p, col)| {
-            if col.holds(pole_freq_hz(p), pole_damping(p), c) {
-                p
+    let left = left_their_columns(&fit.poles, selected, c);
+    if !left.contains(&true) {
+        return Ok((fit, vec![]));
+    }
+    let warnings = (0..left.len())
+        .filter(|&r| left[r])
+        .map(|r| {
+            let moved = out_of_column(&selected[r], fit.poles[r]);
+            format!("{moved}: the diagram's pole is kept")
+        })
+        .collect();
+    let poles: Vec<Complex64> = (0..left.len())
+        .map(|r| {
+            if left[r] {
+                selected[r].pole
             } else {
-                warnings.push(format!(
-                    "{}: the diagram's pole is kept",
-                    out_of_column(col, p)
-                ));
-                col.pole
+                fit.poles[r]
             }
         })
         .collect();
-    if warnings.is_empty() {
-        Ok((fit, warnings))
-    } else {
-        Ok((refit(&poles)?, warnings))
-    }
+    Ok((refit(&poles)?, warnings))
 }
 
 /// "the refinement moved the pole at … to …, out of its column in the diagram (…)": the start of
@@ -530,7 +529,8 @@ impl<'a> BandCurves<'a> {
 /// The modal model of the selected poles by `s.estimator` (the diagram's poles when
 /// `s.refine_iterations` is 0; the check needs `context`, without it the refined poles are
 /// taken), each refined pole that left its column put back ([`keep_poles_in_their_columns`]);
-/// with one warning per pole put back.
+/// with one warning per refined pole that left its column (with the check, which keeps the
+/// diagram's pole of such a pole and of its neighbours, [`lost_pole_warnings`]).
 fn fit_selected(
     data: BandCurves<'_>,
     selected: &[SelectedPole],
@@ -597,7 +597,7 @@ fn fit_selected(
                 refined_beside_the_check(data, &poles, s.refine_lines, c, refine)?;
             timings.refinement += lap(&mut clock);
             // The scope has run the spawned check; without it (never) the diagram's poles.
-            let lost = left_their_columns(&refined, selected, s);
+            let lost = left_their_columns(&refined, selected, &s.criteria);
             let fit = match &check {
                 Some(check) => check.fit(&refined, &lost)?,
                 None => lsfd(freqs, curves, quantity, &poles, band)?,
@@ -646,16 +646,17 @@ fn refined_beside_the_check<'a>(
     Ok((refined, check))
 }
 
-/// For each refined pole, whether it left its column in the diagram ([`SelectedPole::holds`]).
+/// For each refined pole (index-aligned with `selected`), whether it left its column in the
+/// diagram ([`SelectedPole::holds`]).
 fn left_their_columns(
     refined: &[Complex64],
     selected: &[SelectedPole],
-    s: &EmaSettings,
+    c: &StabilityCriteria,
 ) -> Vec<bool> {
     refined
         .iter()
         .zip(selected)
-        .map(|(&p, col)| !col.holds(pole_freq_hz(p), pole_damping(p), &s.criteria))
+        .map(|(&p, col)| !col.holds(pole_freq_hz(p), pole_damping(p), c))
         .collect()
 }
 
