@@ -172,8 +172,8 @@ impl LagSums {
     }
 }
 
-/// One thread's FFT input and scratch, reused from one lag sum to the next (each is as long as
-/// the FFT: 1.6 MB on 50 000 lines, where fresh pages cost more than the transform).
+/// One thread's FFT input and scratch, reused from one lag sum to the next: each is as long as
+/// the FFT, and fresh pages for every sum cost more than reuse (docs/ema.md, "Whole process").
 #[derive(Default)]
 struct FftBuffers {
     data: Vec<Complex64>,
