@@ -248,7 +248,7 @@ fn stays_with_its_own(diagram: &[Complex64], refined: &[Complex64]) -> Vec<bool>
 /// For each diagram pole, whether the refinement lost it (`lost`: it left its column) or lost
 /// a pole whose half-power band overlaps its own ([`bands_overlap`]); module docs, "Moves that
 /// change the model".
-fn beside_a_lost_pole(diagram: &[Complex64], lost: &[bool]) -> Vec<bool> {
+pub(crate) fn beside_a_lost_pole(diagram: &[Complex64], lost: &[bool]) -> Vec<bool> {
     (0..diagram.len())
         .map(|r| {
             (0..diagram.len()).any(|j| lost[j] && (j == r || bands_overlap(diagram[r], diagram[j])))

@@ -3,7 +3,7 @@
 //! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
 //! correlation with the measured ones, and the CMIF.
 
-use crate::context::{LscfContext, RefinementCheck};
+use crate::context::{LscfContext, RefinementCheck, beside_a_lost_pole};
 use crate::error::{EmaError, invalid};
 use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz, sample_interval};
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
@@ -312,8 +312,10 @@ fn auto_mac(modes: &[Mode]) -> Vec<Vec<f64>> {
 }
 
 /// Each refined pole that left its column in the diagram ([`SelectedPole::holds`]) is
-/// replaced by the diagram's pole and the residues fitted again (`refit`); one warning per
-/// replaced pole.
+/// replaced by the diagram's pole, and so is each refined pole whose diagram pole's half-power
+/// band overlaps that of a pole that left (it was fitted beside a pole standing elsewhere and
+/// may have taken over that pole's mode: [`beside_a_lost_pole`], the check's rule); the residues
+/// are fitted again (`refit`). One warning per pole that left.
 fn keep_poles_in_their_columns(
     fit: ModalFit,
     selected: &[SelectedPole],
@@ -328,13 +330,18 @@ fn keep_poles_in_their_columns(
         .filter(|&r| left[r])
         .map(|r| {
             let moved = out_of_column(&selected[r], fit.poles[r]);
-            format!("{moved}: the diagram's pole is kept")
+            format!(
+                "{moved}: the diagram's pole is kept, and so is that of each pole whose \
+                 half-power band overlaps its own"
+            )
         })
         .collect();
+    let diagram: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
+    let put_back = beside_a_lost_pole(&diagram, &left);
     let poles: Vec<Complex64> = (0..left.len())
         .map(|r| {
-            if left[r] {
-                selected[r].pole
+            if put_back[r] {
+                diagram[r]
             } else {
                 fit.poles[r]
             }
@@ -528,9 +535,10 @@ impl<'a> BandCurves<'a> {
 
 /// The modal model of the selected poles by `s.estimator` (the diagram's poles when
 /// `s.refine_iterations` is 0; the check needs `context`, without it the refined poles are
-/// taken), each refined pole that left its column put back ([`keep_poles_in_their_columns`]);
-/// with one warning per refined pole that left its column (with the check, which keeps the
-/// diagram's pole of such a pole and of its neighbours, [`lost_pole_warnings`]).
+/// taken), each refined pole that left its column put back, and each whose half-power band
+/// overlaps that of such a pole ([`keep_poles_in_their_columns`]); with one warning per refined
+/// pole that left its column (with the check, which keeps those diagram poles itself,
+/// [`lost_pole_warnings`]).
 fn fit_selected(
     data: BandCurves<'_>,
     selected: &[SelectedPole],
