@@ -31,11 +31,13 @@
 //!
 //! **Moves that change the model.** The refinement corrects the diagram's poles; a refined pole
 //! that ends nearer another diagram pole than its own has merged with or swapped for that
-//! neighbour, and is never taken. Nor is a refined pole whose half-power band overlaps that of
-//! a pole the refinement lost (one that left its column in the diagram and is put back): it was
-//! fitted beside a pole standing elsewhere and may have taken over that pole's mode. Where the
-//! context model misfits (heavily damped, overlapping modes: its J at the diagram's poles is
-//! systematic, not noise) such moves can pass the χ² test (docs/ema.md, "Damped poles").
+//! neighbour, and is never taken. A pole the refinement lost (one that left its column in the
+//! diagram) is put back before the check, and so is each refined pole whose half-power band
+//! overlaps that of a lost one (`beside_a_lost_pole`): it was fitted beside a pole standing
+//! elsewhere and may have taken over that pole's mode. A pole put back is the diagram's, and
+//! its trial changes nothing. Where the context model misfits (heavily damped, overlapping
+//! modes: its J at the diagram's poles is systematic, not noise) such moves can pass the χ²
+//! test (docs/ema.md, "Damped poles").
 
 pub use crate::denominator::LscfContext;
 use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
@@ -170,23 +172,22 @@ impl<'a> RefinementCheck<'a> {
         }
     }
 
-    /// The poles taken of `refined` (index-aligned with the diagram's poles; `left_column`: those
-    /// the refinement sent out of their columns in the diagram): each refined pole that keeps to
-    /// its own and is not beside a lost one (module docs, "Moves that change the model") and
-    /// lowers the context's sum of squares significantly by itself; then, of each pair of
+    /// The poles taken of `refined` (index-aligned with the diagram's poles; those the
+    /// refinement lost already put back by the caller, module docs): each refined pole that
+    /// keeps to its own (module docs, "Moves that change the model") and lowers the context's
+    /// sum of squares significantly by itself; then, of each pair of
     /// neighbours whose half-power bands overlap (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which
     /// was taken alone, both refined poles where together they do (coupled in the fit: one of a
     /// close pair moved alone can fit worse); the diagram's pole elsewhere.
-    pub fn taken(&self, refined: &[Complex64], left_column: &[bool]) -> Vec<Complex64> {
+    pub fn taken(&self, refined: &[Complex64]) -> Vec<Complex64> {
         let diagram = &self.diagram;
         let Some((problem, base)) = &self.model else {
             return diagram.clone();
         };
         let variance = base / problem.dof(diagram.len()) as f64;
         let own = stays_with_its_own(diagram, refined);
-        let beside = beside_a_lost_pole(diagram, left_column);
         let significant = |members: &[usize]| {
-            if !members.iter().all(|&r| own[r] && !beside[r]) {
+            if !members.iter().all(|&r| own[r]) {
                 return false;
             }
             let mut trial = diagram.clone();
@@ -212,13 +213,12 @@ impl<'a> RefinementCheck<'a> {
         taken
     }
 
-    /// The modal model of the poles [`Self::taken`] of `refined` and `left_column` ([`lsfd`]
-    /// over the band).
+    /// The modal model of the poles [`Self::taken`] of `refined` ([`lsfd`] over the band).
     ///
     /// # Errors
     /// As [`lsfd`].
-    pub fn fit(&self, refined: &[Complex64], left_column: &[bool]) -> Result<ModalFit, EmaError> {
-        let taken = self.taken(refined, left_column);
+    pub fn fit(&self, refined: &[Complex64]) -> Result<ModalFit, EmaError> {
+        let taken = self.taken(refined);
         lsfd(
             self.freqs_hz,
             self.curves,

@@ -311,43 +311,33 @@ fn auto_mac(modes: &[Mode]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Each refined pole that left its column in the diagram ([`SelectedPole::holds`]) is
-/// replaced by the diagram's pole, and so is each refined pole whose diagram pole's half-power
-/// band overlaps that of a pole that left (it was fitted beside a pole standing elsewhere and
-/// may have taken over that pole's mode: [`beside_a_lost_pole`], the check's rule); the residues
-/// are fitted again (`refit`). One warning per pole that left.
-fn keep_poles_in_their_columns(
-    fit: ModalFit,
+/// The refined poles `refined` (index-aligned with `selected`) with each that left its column in
+/// the diagram ([`SelectedPole::holds`]) replaced by the diagram's pole, and so each whose
+/// diagram pole's half-power band overlaps that of a pole that left (it was fitted beside a pole
+/// standing elsewhere and may have taken over that pole's mode: [`beside_a_lost_pole`]); with
+/// one warning per pole that left.
+fn in_their_columns(
+    refined: &[Complex64],
     selected: &[SelectedPole],
     c: &StabilityCriteria,
-    refit: impl Fn(&[Complex64]) -> Result<ModalFit, EmaError>,
-) -> Result<(ModalFit, Vec<String>), EmaError> {
-    let left = left_their_columns(&fit.poles, selected, c);
-    if !left.contains(&true) {
-        return Ok((fit, vec![]));
-    }
-    let warnings = (0..left.len())
+) -> (Vec<Complex64>, Vec<String>) {
+    let left = left_their_columns(refined, selected, c);
+    let diagram: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
+    let put_back = beside_a_lost_pole(&diagram, &left);
+    let poles = (0..refined.len())
+        .map(|r| if put_back[r] { diagram[r] } else { refined[r] })
+        .collect();
+    let warnings = (0..refined.len())
         .filter(|&r| left[r])
         .map(|r| {
-            let moved = out_of_column(&selected[r], fit.poles[r]);
             format!(
-                "{moved}: the diagram's pole is kept, and so is that of each pole whose \
-                 half-power band overlaps its own"
+                "{}: the diagram's pole is kept, and so is that of each pole whose half-power \
+                 band overlaps its own",
+                out_of_column(&selected[r], refined[r])
             )
         })
         .collect();
-    let diagram: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
-    let put_back = beside_a_lost_pole(&diagram, &left);
-    let poles: Vec<Complex64> = (0..left.len())
-        .map(|r| {
-            if put_back[r] {
-                diagram[r]
-            } else {
-                fit.poles[r]
-            }
-        })
-        .collect();
-    Ok((refit(&poles)?, warnings))
+    (poles, warnings)
 }
 
 /// "the refinement moved the pole at … to …, out of its column in the diagram (…)": the start of
@@ -535,10 +525,8 @@ impl<'a> BandCurves<'a> {
 
 /// The modal model of the selected poles by `s.estimator` (the diagram's poles when
 /// `s.refine_iterations` is 0; the check needs `context`, without it the refined poles are
-/// taken), each refined pole that left its column put back, and each whose half-power band
-/// overlaps that of such a pole ([`keep_poles_in_their_columns`]); with one warning per refined
-/// pole that left its column (with the check, which keeps those diagram poles itself,
-/// [`lost_pole_warnings`]).
+/// taken), the refined poles first put back into their columns ([`in_their_columns`], with one
+/// warning per pole that left its column).
 fn fit_selected(
     data: BandCurves<'_>,
     selected: &[SelectedPole],
@@ -566,26 +554,6 @@ fn fit_selected(
     } else {
         s.estimator
     };
-    let in_columns = |fit: ModalFit, refined: Option<Vec<Complex64>>, clock: &mut Instant| {
-        let (fit, warnings) = keep_poles_in_their_columns(fit, selected, &s.criteria, |p| {
-            lsfd(freqs, curves, quantity, p, band)
-        })?;
-        Ok::<_, EmaError>((
-            SelectedFit {
-                fit,
-                warnings,
-                refined,
-            },
-            lap(clock),
-        ))
-    };
-    if estimator == PoleEstimator::Diagram {
-        on_stage("residues (LSFD)");
-        let fit = lsfd(freqs, curves, quantity, &poles, band)?;
-        let (fitted, t) = in_columns(fit, None, &mut clock)?;
-        timings.residues += t;
-        return Ok(fitted);
-    }
     let refine = || {
         refined_poles(
             freqs,
@@ -599,30 +567,46 @@ fn fit_selected(
             &progress,
         )
     };
-    let (fitted, t) = match (estimator, context) {
+    let fitted = match (estimator, context) {
+        (PoleEstimator::Diagram, _) => {
+            on_stage("residues (LSFD)");
+            let fit = lsfd(freqs, curves, quantity, &poles, band)?;
+            timings.residues += lap(&mut clock);
+            SelectedFit {
+                fit,
+                warnings: vec![],
+                refined: None,
+            }
+        }
         (PoleEstimator::Checked, Some(c)) => {
             let (refined, check) =
                 refined_beside_the_check(data, &poles, s.refine_lines, c, refine)?;
             timings.refinement += lap(&mut clock);
+            let (in_place, warnings) = in_their_columns(&refined, selected, &s.criteria);
             // The scope has run the spawned check; without it (never) the diagram's poles.
-            let lost = left_their_columns(&refined, selected, &s.criteria);
             let fit = match &check {
-                Some(check) => check.fit(&refined, &lost)?,
+                Some(check) => check.fit(&in_place)?,
                 None => lsfd(freqs, curves, quantity, &poles, band)?,
             };
             timings.check += lap(&mut clock);
-            let lost_warnings = lost_pole_warnings(&refined, &lost, selected);
-            let (mut fitted, t) = in_columns(fit, Some(refined), &mut clock)?;
-            fitted.warnings.extend(lost_warnings);
-            (fitted, t)
+            SelectedFit {
+                fit,
+                warnings,
+                refined: Some(refined),
+            }
         }
         _ => {
-            let fit = lsfd(freqs, curves, quantity, &refine()?, band)?;
+            let (in_place, warnings) = in_their_columns(&refine()?, selected, &s.criteria);
             timings.refinement += lap(&mut clock);
-            in_columns(fit, None, &mut clock)?
+            let fit = lsfd(freqs, curves, quantity, &in_place, band)?;
+            timings.residues += lap(&mut clock);
+            SelectedFit {
+                fit,
+                warnings,
+                refined: None,
+            }
         }
     };
-    timings.residues += t;
     Ok(fitted)
 }
 
@@ -665,25 +649,6 @@ fn left_their_columns(
         .iter()
         .zip(selected)
         .map(|(&p, col)| !col.holds(pole_freq_hz(p), pole_damping(p), c))
-        .collect()
-}
-
-/// One warning per refined pole the refinement `lost` (left its column): the check keeps its
-/// diagram pole and takes no refined pole beside it ([`RefinementCheck::taken`]).
-fn lost_pole_warnings(
-    refined: &[Complex64],
-    lost: &[bool],
-    selected: &[SelectedPole],
-) -> Vec<String> {
-    (0..refined.len())
-        .filter(|&r| lost[r])
-        .map(|r| {
-            format!(
-                "{}: the diagram's pole is kept, and no refined pole whose half-power band \
-                 overlaps its own is taken",
-                out_of_column(&selected[r], refined[r])
-            )
-        })
         .collect()
 }
 
