@@ -114,3 +114,21 @@ def test_no_refined_pole_is_taken_beside_a_lost_one(bench, poles):
                 if abs(f0 - fl) < z0 + 0.08 * fl:
                     assert not m["refined"], f"seed {seed}: {f0:.2f} Hz taken beside {fl:.2f} Hz"
     assert lost_seen > 0, "no pole was lost: the case no longer tests the rule"
+
+
+def test_the_paired_bootstrap_tells_scatter_from_a_loss(bench):
+    """The tables' verdicts (tools/ema/damped_bias.py): two estimators with the same error
+    distribution are within the seeds' scatter, one with twice another's error on the same
+    seeds is significantly worse, and a bias shared by both gives a tight ratio."""
+    draw = np.random.default_rng(7)
+    a, b = draw.standard_normal(20), draw.standard_normal(20)
+    ratio, lo, hi = bench.rms_ratio_interval(a, b, np.random.default_rng(0))
+    assert lo < 1.0 < hi, (ratio, lo, hi)
+    ratio, lo, hi = bench.rms_ratio_interval(2.0 * b + 0.2 * a, b, np.random.default_rng(0))
+    assert 1.5 < lo and ratio < hi, (ratio, lo, hi)
+    # A bias of 10 sd shared by both: 5 % more bias is a real loss, and the interval says so.
+    ratio, lo, hi = bench.rms_ratio_interval(10.5 + a, 10.0 + b, np.random.default_rng(0))
+    assert 1.0 < lo < ratio < hi < 1.15, (ratio, lo, hi)
+    # Fewer than five seeds where both found the mode: no verdict.
+    found = np.where(np.arange(20) < 4, a, np.nan)
+    assert bench.rms_ratio_interval(found, b, np.random.default_rng(0)) is None
