@@ -33,7 +33,7 @@
 //! that ends nearer another diagram pole than its own has merged with or swapped for that
 //! neighbour, and is never taken. A pole the refinement lost (one that left its column in the
 //! diagram) is put back before the check, and so is each refined pole whose half-power band
-//! overlaps that of a lost one (`beside_a_lost_pole`): it was fitted beside a pole standing
+//! overlaps that of a lost one (module `columns`): it was fitted beside a pole standing
 //! elsewhere and may have taken over that pole's mode. A pole put back is the diagram's, and
 //! its trial changes nothing. Where the context model misfits (heavily damped, overlapping
 //! modes: its J at the diagram's poles is systematic, not noise) such moves can pass the χ²
@@ -42,6 +42,7 @@
 pub use crate::denominator::LscfContext;
 use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
 use crate::error::EmaError;
+use crate::lscf::half_power_bands_overlap;
 use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
 use crate::projection::apply_transpose_q;
 use crate::thin_qr::ThinQr;
@@ -50,7 +51,6 @@ use faer::linalg::solvers::Qr;
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use rayon::prelude::*;
-use std::f64::consts::PI;
 
 /// The context model on the refinement's lines: the data with the fixed columns projected out.
 /// With the QR F = Q R of the fixed columns F (rows × k), the projection is taken in Q's
@@ -245,31 +245,15 @@ fn stays_with_its_own(diagram: &[Complex64], refined: &[Complex64]) -> Vec<bool>
         .collect()
 }
 
-/// For each diagram pole, whether the refinement lost it (`lost`: it left its column) or lost
-/// a pole whose half-power band overlaps its own ([`bands_overlap`]); module docs, "Moves that
-/// change the model".
-pub(crate) fn beside_a_lost_pole(diagram: &[Complex64], lost: &[bool]) -> Vec<bool> {
-    (0..diagram.len())
-        .map(|r| {
-            (0..diagram.len()).any(|j| lost[j] && (j == r || bands_overlap(diagram[r], diagram[j])))
-        })
-        .collect()
-}
-
-/// Whether the half-power bands of two poles overlap: |f₁ − f₂| < ζ₁f₁ + ζ₂f₂.
-fn bands_overlap(a: Complex64, b: Complex64) -> bool {
-    let half_width = |p: Complex64| -p.re / (2.0 * PI);
-    (b.norm() - a.norm()).abs() / (2.0 * PI) < half_width(a) + half_width(b)
-}
-
-/// Neighbours (by frequency) whose half-power bands overlap ([`bands_overlap`]), as indices
+/// Neighbours (by frequency) whose half-power bands overlap ([`half_power_bands_overlap`]), as
+/// indices
 /// into `poles`.
 fn overlapping_pairs(poles: &[Complex64]) -> Vec<[usize; 2]> {
     let mut order: Vec<usize> = (0..poles.len()).collect();
     order.sort_by(|&a, &b| poles[a].im.total_cmp(&poles[b].im));
     order
         .windows(2)
-        .filter(|w| bands_overlap(poles[w[0]], poles[w[1]]))
+        .filter(|w| half_power_bands_overlap(poles[w[0]], poles[w[1]]))
         .map(|w| [w[0], w[1]])
         .collect()
 }
@@ -285,6 +269,7 @@ fn chi_square_99(dof: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn chi_square_points_match_the_tables() {
@@ -305,19 +290,6 @@ mod tests {
             stays_with_its_own(&diagram, &refined),
             vec![false, true, true]
         );
-    }
-
-    /// Only the lost pole and the poles whose half-power bands overlap its own are marked.
-    #[test]
-    fn poles_beside_a_lost_pole_are_marked() {
-        let pole = |f: f64| Complex64::new(-0.08 * 2.0 * PI * f, 2.0 * PI * f);
-        let diagram = [pole(25.6), pole(102.5), pole(105.6), pole(152.5)];
-        let lost = [false, false, true, false];
-        assert_eq!(
-            beside_a_lost_pole(&diagram, &lost),
-            vec![false, true, true, false]
-        );
-        assert_eq!(beside_a_lost_pole(&diagram, &[false; 4]), vec![false; 4]);
     }
 
     #[test]

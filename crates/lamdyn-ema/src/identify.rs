@@ -3,9 +3,12 @@
 //! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
 //! correlation with the measured ones, and the CMIF.
 
-use crate::context::{LscfContext, RefinementCheck, beside_a_lost_pole};
+use crate::columns::in_their_columns;
+use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
-use crate::lscf::{LscfSettings, lscf, pole_damping, pole_freq_hz, sample_interval};
+use crate::lscf::{
+    LscfSettings, half_power_bands_overlap, lscf, pole_damping, pole_freq_hz, sample_interval,
+};
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
 use crate::quality::{Measured, ModeEvidence, ModeQuality, assess, contributions};
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode, to_unit};
@@ -311,52 +314,6 @@ fn auto_mac(modes: &[Mode]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The refined poles `refined` (index-aligned with `selected`) with each that left its column in
-/// the diagram ([`SelectedPole::holds`]) replaced by the diagram's pole, and so each whose
-/// diagram pole's half-power band overlaps that of a pole that left (it was fitted beside a pole
-/// standing elsewhere and may have taken over that pole's mode: [`beside_a_lost_pole`]); with
-/// one warning per pole that left.
-fn in_their_columns(
-    refined: &[Complex64],
-    selected: &[SelectedPole],
-    c: &StabilityCriteria,
-) -> (Vec<Complex64>, Vec<String>) {
-    let left = left_their_columns(refined, selected, c);
-    let diagram: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
-    let put_back = beside_a_lost_pole(&diagram, &left);
-    let poles = (0..refined.len())
-        .map(|r| if put_back[r] { diagram[r] } else { refined[r] })
-        .collect();
-    let warnings = (0..refined.len())
-        .filter(|&r| left[r])
-        .map(|r| {
-            format!(
-                "{}: the diagram's pole is kept, and so is that of each pole whose half-power \
-                 band overlaps its own",
-                out_of_column(&selected[r], refined[r])
-            )
-        })
-        .collect();
-    (poles, warnings)
-}
-
-/// "the refinement moved the pole at … to …, out of its column in the diagram (…)": the start of
-/// a warning about the refined pole `p` of the column `col` it left.
-fn out_of_column(col: &SelectedPole, p: Complex64) -> String {
-    format!(
-        "the refinement moved the pole at {:.3} Hz (zeta {:.3} %) to {:.3} Hz (zeta {:.3} %), out \
-         of its column in the diagram ({:.3}-{:.3} Hz, zeta {:.3}-{:.3} %)",
-        col.freq_hz,
-        100.0 * col.damping,
-        pole_freq_hz(p),
-        100.0 * pole_damping(p),
-        col.freq_range_hz[0],
-        col.freq_range_hz[1],
-        100.0 * col.damping_range[0],
-        100.0 * col.damping_range[1],
-    )
-}
-
 /// Participation factors of mode r (see [`Mode::participation`]): power iteration on RᴴR with
 /// R the residue matrix (responses × references).
 fn participation(fit: &ModalFit, r: usize, nr: usize, nf: usize) -> Vec<Complex64> {
@@ -638,20 +595,6 @@ fn refined_beside_the_check<'a>(
     Ok((refined, check))
 }
 
-/// For each refined pole (index-aligned with `selected`), whether it left its column in the
-/// diagram ([`SelectedPole::holds`]).
-fn left_their_columns(
-    refined: &[Complex64],
-    selected: &[SelectedPole],
-    c: &StabilityCriteria,
-) -> Vec<bool> {
-    refined
-        .iter()
-        .zip(selected)
-        .map(|(&p, col)| !col.holds(pole_freq_hz(p), pole_damping(p), c))
-        .collect()
-}
-
 /// The modal model of the selected poles ([`fit_selected`]) and what the refinement made of
 /// them.
 struct SelectedFit {
@@ -701,9 +644,8 @@ fn merge_split_modes(
         let (pa, pb) = (fit.poles[r], fit.poles[r + 1]);
         let (fa, fb) = (pole_freq_hz(pa), pole_freq_hz(pb));
         let (za, zb) = (pole_damping(pa), pole_damping(pb));
-        let overlap = (fb - fa).abs() < za * fa + zb * fb;
         let agree = few_curves || mac(&shapes[r], &shapes[r + 1]) >= SPLIT_MAC;
-        if !(overlap && agree) {
+        if !(half_power_bands_overlap(pa, pb) && agree) {
             continue;
         }
         let keep_a = (selected[r].count, size(r)) > (selected[r + 1].count, size(r + 1));

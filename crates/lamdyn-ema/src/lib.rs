@@ -21,6 +21,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod band;
+mod columns;
 mod companion;
 pub mod context;
 mod denominator;

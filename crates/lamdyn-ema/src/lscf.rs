@@ -76,6 +76,13 @@ pub fn pole_damping(p: Complex64) -> f64 {
     -p.re / p.norm()
 }
 
+/// Whether the half-power bands of two poles overlap: |f₁ − f₂| < ζ₁f₁ + ζ₂f₂, with f = |λ|/2π
+/// and ζf = −Re λ/2π (the half-power half-width).
+pub fn half_power_bands_overlap(a: Complex64, b: Complex64) -> bool {
+    let half_width = |p: Complex64| -p.re / (2.0 * PI);
+    (b.norm() - a.norm()).abs() / (2.0 * PI) < half_width(a) + half_width(b)
+}
+
 /// The lag sums of the block Toeplitz matrices for orders up to `n_max` (module docs); `t` and
 /// `s` hold lags m = −n_max..=n_max at index m + n_max.
 struct Sums {
