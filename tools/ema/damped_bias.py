@@ -158,34 +158,50 @@ def table(targets, errors):
 
 
 def rms_ratio_interval(a, b, rng, draws=4000):
-    """RMS of `a` over RMS of `b` (relative errors of two estimators on the same seeds, where
-    both found the mode) and its 95 % interval by the paired bootstrap over the seeds; None
-    where fewer than five seeds found the mode with both."""
+    """RMS of `a` over RMS of `b` (relative errors of two estimators on the same seeds, over the
+    seeds where both found the mode) and its 95 % interval by the paired bootstrap over those
+    seeds: (ratio, low, high); low and high None where fewer than five seeds found the mode with
+    both, and None where none did."""
     both = np.isfinite(a) & np.isfinite(b)
     a, b = a[both], b[both]
-    if len(a) < 5:
+    if len(a) == 0:
         return None
+    ratio = np.sqrt(np.mean(a ** 2) / np.mean(b ** 2))
+    if len(a) < 5:
+        return ratio, None, None
     idx = rng.integers(0, len(a), size=(draws, len(a)))
-    ratio = np.sqrt(np.mean(a[idx] ** 2, axis=1) / np.mean(b[idx] ** 2, axis=1))
-    lo, hi = np.percentile(ratio, [2.5, 97.5])
-    return np.sqrt(np.mean(a ** 2) / np.mean(b ** 2)), lo, hi
+    boot = np.sqrt(np.mean(a[idx] ** 2, axis=1) / np.mean(b[idx] ** 2, axis=1))
+    lo, hi = np.percentile(boot, [2.5, 97.5])
+    return ratio, lo, hi
+
+
+def loss(a, b, rng):
+    """How the errors `a` compare with `b` (the same seeds) where `a`'s RMS is larger: the
+    ratio with its interval and verdict, or the ratio alone over fewer than five seeds; None
+    where `a`'s RMS is not larger or no seed found the mode with both."""
+    r = rms_ratio_interval(a, b, rng)
+    if r is None or r[0] <= 1.0:
+        return None
+    ratio, lo, hi = r
+    if lo is None:
+        found = int((np.isfinite(a) & np.isfinite(b)).sum())
+        return (f"{ratio:.2f} over the {found} seeds where both found the mode "
+                "(too few for an interval)")
+    verdict = "significant" if lo > 1.0 else "within the seeds' scatter"
+    return f"{ratio:.2f} (95 % interval {lo:.2f}-{hi:.2f}, {verdict})"
 
 
 def losses(targets, errors, final="checked"):
     """The final pole's RMS error against the diagram's and sdypy-EMA's, mode by mode and
-    quantity by quantity: each where it is larger, with the ratio's 95 % interval (paired
-    bootstrap over the seeds) and whether that interval lies above 1 (significantly worse)."""
+    quantity by quantity: one line where it is larger (`loss`)."""
     rng = np.random.default_rng(0)
     out = []
     for other in [n for n in ("diagram", "sdypy") if n in errors]:
         for i, t in enumerate(targets):
             for q, name in ((0, "f"), (1, "zeta")):
-                r = rms_ratio_interval(errors[final][:, i, q], errors[other][:, i, q], rng)
-                if r is None or r[0] <= 1.0:
-                    continue
-                verdict = "significant" if r[1] > 1.0 else "within the seeds' scatter"
-                out.append(f"- {t:.1f} Hz, {name}: {final} / {other} RMS {r[0]:.2f} "
-                           f"(95 % interval {r[1]:.2f}-{r[2]:.2f}, {verdict})")
+                text = loss(errors[final][:, i, q], errors[other][:, i, q], rng)
+                if text:
+                    out.append(f"- {t:.1f} Hz, {name}: {final} / {other} RMS {text}")
     return out
 
 

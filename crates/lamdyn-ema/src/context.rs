@@ -175,10 +175,10 @@ impl<'a> RefinementCheck<'a> {
     /// The poles taken of `refined` (index-aligned with the diagram's poles; those the
     /// refinement lost already put back by the caller, module docs): each refined pole that
     /// keeps to its own (module docs, "Moves that change the model") and lowers the context's
-    /// sum of squares significantly by itself; then, of each pair of
-    /// neighbours whose half-power bands overlap (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which
-    /// was taken alone, both refined poles where together they do (coupled in the fit: one of a
-    /// close pair moved alone can fit worse); the diagram's pole elsewhere.
+    /// sum of squares significantly by itself; then, of each pair of neighbours whose
+    /// half-power bands overlap (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which was taken alone,
+    /// both refined poles where together they do (coupled in the fit: one of a close pair moved
+    /// alone can fit worse); the diagram's pole elsewhere.
     pub fn taken(&self, refined: &[Complex64]) -> Vec<Complex64> {
         let diagram = &self.diagram;
         let Some((problem, base)) = &self.model else {
@@ -246,8 +246,7 @@ fn stays_with_its_own(diagram: &[Complex64], refined: &[Complex64]) -> Vec<bool>
 }
 
 /// Neighbours (by frequency) whose half-power bands overlap ([`half_power_bands_overlap`]), as
-/// indices
-/// into `poles`.
+/// indices into `poles`.
 fn overlapping_pairs(poles: &[Complex64]) -> Vec<[usize; 2]> {
     let mut order: Vec<usize> = (0..poles.len()).collect();
     order.sort_by(|&a, &b| poles[a].im.total_cmp(&poles[b].im));
