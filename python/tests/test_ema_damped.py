@@ -134,3 +134,31 @@ def test_the_paired_bootstrap_tells_scatter_from_a_loss(bench):
     ratio, lo, hi = bench.rms_ratio_interval(found, b, np.random.default_rng(0))
     assert lo is None and hi is None
     assert ratio == pytest.approx(np.sqrt(np.mean(a[:4] ** 2) / np.mean(b[:4] ** 2)))
+
+
+def test_one_lscf_over_every_curve_is_sdypys_estimator(bench):
+    """With three references lamdyn's default is PolyMAX, while sdypy-EMA fits one LSCF over
+    every curve; `polymax=False` is that same estimator in lamdyn. On the same noisy FRFs (8 %
+    damping, 1 % noise) its diagram poles agree with sdypy's per seed wherever both find the
+    mode, noise bias included (at 150.6 Hz both put one pole for the pair 150.6 / 152.5 Hz,
+    +0.24 % in f): measured over ten seeds within 7.3e-5 in f and 2.0e-3 in zeta, relative.
+    The rest is the columns: which order each takes (sdypy: the pole nearest the column's mean;
+    lamdyn: the top order), and sdypy's band ends at 199.9 Hz (the poles of one order differ by
+    up to 5.2e-4 with lamdyn's band 20-200 Hz, 1.9e-4 with 20-199.9 Hz). PolyMAX's differ from
+    sdypy's by 2.8e-3 in f at 150.6 Hz, where it resolves the pair. So the three-reference gaps
+    to sdypy in docs/ema.md are PolyMAX against one LSCF, not lamdyn's LSCF."""
+    targets = [t[0] for t in bench.true_modes()]
+    win = bench.windows(targets)
+    both = 0
+    for seed in range(2):
+        f, h = bench.plate_frf(0.08, [0, 5, 10], 0.01, np.random.default_rng(1000 + seed))
+        r = lamdyn.ema(f, h, band_hz=bench.BAND_HZ, orders=(2, 60, 2), near_hz=targets,
+                       window_hz=min(win), refine=False, polymax=False)
+        mine = bench.nearest(r["freq_hz"], r["damping_ratio"], targets, win)
+        theirs = bench.sdypy_poles(f, h, targets)
+        found = np.isfinite(mine[:, 0]) & np.isfinite(theirs[:, 0])
+        both += found.sum()
+        diff = np.abs(mine[found] / theirs[found] - 1)
+        assert np.all(diff[:, 0] < 2e-4), f"seed {seed}: f differs by {diff[:, 0]}"
+        assert np.all(diff[:, 1] < 5e-3), f"seed {seed}: zeta differs by {diff[:, 1]}"
+    assert both >= 6, "sdypy found too few of the modes for the comparison"

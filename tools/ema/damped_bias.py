@@ -2,6 +2,9 @@
 """Bias and scatter of identified poles on virtual tests with modal damping 0.1 %, 2 %, 8 % and
 15 %: lamdyn's diagram pole (LSFD on the stabilization diagram's pole), lamdyn's final pole (the
 refinement) and sdypy-EMA 0.31 (its LSCF, orders 2-60, select_closest_poles), on the same FRFs.
+With three references lamdyn's default is PolyMAX, while sdypy fits one LSCF over every curve;
+the tables then add lamdyn's final pole from that same formulation ("single",
+`--single-reference`), and compare it with sdypy's like with like.
 
 The virtual part is a simply supported plate (modal model, unit modal masses, proportional
 damping): nine modes in the band 20-200 Hz, among them two close pairs (102.5 / 105.6 Hz, 3 %
@@ -15,9 +18,11 @@ Usage: python3 tools/ema/damped_bias.py [--seeds N] [--levels 0.001,0.02,...] [-
   -> markdown tables (docs/ema.md, "Damped poles"): per damping level, reference count and
      noise, per mode: bias and standard deviation of f and zeta relative to the truth over the
      seeds, and how many seeds found the mode; after each noisy table, the modes and quantities
-     where the checked pole's RMS error is larger than the diagram's or sdypy's, with the ratio's
+     where the checked pole's RMS error is larger than the diagram's or sdypy's (and, with
+     three references, where single's is larger than sdypy's), with the ratio's
      95 % interval by the paired bootstrap over the seeds (a ratio of RMS errors over 20 seeds
      scatters by tens of per cent where the errors are scatter, by little where they are bias).
+     Last, the worst mode's RMS error of each estimator in each case (docs/ema.md's table).
 """
 import argparse
 import time
@@ -84,13 +89,15 @@ def nearest(found_f, found_z, targets, win):
     return out
 
 
-def lamdyn_poles(f, h, targets, refine, estimator=None):
+def lamdyn_poles(f, h, targets, refine, estimator=None, polymax=True):
     """lamdyn's poles near each target (the narrowest window of all targets: select_near takes
-    one), NaN where none was found or the identification failed."""
+    one), NaN where none was found or the identification failed. `polymax=False` is one LSCF
+    over every curve with several references (`lamdyn ema --single-reference`)."""
     win = windows(targets)
     try:
         r = lamdyn.ema(f, h, band_hz=BAND_HZ, orders=(2, 60, 2), near_hz=targets,
-                       window_hz=min(win), refine=refine, poles=estimator or "checked")
+                       window_hz=min(win), refine=refine, poles=estimator or "checked",
+                       polymax=polymax)
     except Exception:  # noqa: BLE001 - a failed identification finds nothing
         return np.full((len(targets), 2), np.nan)
     return nearest(r["freq_hz"], r["damping_ratio"], targets, win)
@@ -116,12 +123,17 @@ def sdypy_poles(f, h, targets):
     return nearest(np.asarray(m.nat_freq), np.asarray(m.nat_xi), targets, windows(targets))
 
 
-def run(zeta, references, snr_rel, seeds, with_sdypy=True):
-    """Per estimator: relative errors (seeds, modes, [f, zeta])."""
+def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False):
+    """Per estimator: relative errors (seeds, modes, [f, zeta]). `with_single` adds, with
+    several references, lamdyn's checked pole from one LSCF over every curve ("single"):
+    sdypy-EMA's formulation, where PolyMAX is lamdyn's default."""
     modes = true_modes()
     targets = [t[0] for t in modes]
     truth = np.array([[t, zeta] for t in targets])
     errors = {"diagram": [], "refined": [], "checked": []}
+    single = with_single and len(references) > 1
+    if single:
+        errors["single"] = []
     if with_sdypy:
         errors["sdypy"] = []
     for seed in range(seeds):
@@ -130,6 +142,8 @@ def run(zeta, references, snr_rel, seeds, with_sdypy=True):
         errors["diagram"].append(lamdyn_poles(f, h, targets, refine=False) / truth - 1)
         for e in ("refined", "checked"):
             errors[e].append(lamdyn_poles(f, h, targets, True, e) / truth - 1)
+        if single:
+            errors["single"].append(lamdyn_poles(f, h, targets, True, polymax=False) / truth - 1)
         if with_sdypy:
             errors["sdypy"].append(sdypy_poles(f, h, targets) / truth - 1)
     return targets, {k: np.array(v) for k, v in errors.items()}
@@ -191,12 +205,12 @@ def loss(a, b, rng):
     return f"{ratio:.2f} (95 % interval {lo:.2f}-{hi:.2f}, {verdict})"
 
 
-def losses(targets, errors, final="checked"):
-    """The final pole's RMS error against the diagram's and sdypy-EMA's, mode by mode and
-    quantity by quantity: one line where it is larger (`loss`)."""
+def losses(targets, errors, final="checked", others=("diagram", "sdypy")):
+    """The final pole's RMS error against the diagram's and sdypy-EMA's (or `others`), mode by
+    mode and quantity by quantity: one line where it is larger (`loss`)."""
     rng = np.random.default_rng(0)
     out = []
-    for other in [n for n in ("diagram", "sdypy") if n in errors]:
+    for other in [n for n in others if n in errors]:
         for i, t in enumerate(targets):
             for q, name in ((0, "f"), (1, "zeta")):
                 text = loss(errors[final][:, i, q], errors[other][:, i, q], rng)
@@ -205,28 +219,72 @@ def losses(targets, errors, final="checked"):
     return out
 
 
+def worst_mode(errors):
+    """Per estimator: the worst mode's RMS error of f and zeta over the seeds, % (None where it
+    found no mode), and how many modes it found at all."""
+    out = {}
+    for name, e in errors.items():
+        found = np.isfinite(e[:, :, 0]).any(axis=0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a mode no seed found
+            r = 100 * rms(e)
+        out[name] = (np.nanmax(r, axis=0) if found.any() else None, int(found.sum()))
+    return out
+
+
+def summary(rows):
+    """The markdown table of docs/ema.md, "Damped poles": per case, the worst mode's RMS error
+    of f / zeta (%) of each estimator, with the modes found by single and sdypy."""
+    names = ("diagram", "refined", "checked", "single", "sdypy")
+    lines = ["| zeta | refs | noise | " + " | ".join(names) + " |", "|---" * (3 + len(names)) + "|"]
+    for (zeta, refs, snr), worst in rows:
+        cells = []
+        for n in names:
+            w, found = worst.get(n, (None, 0))
+            text = "–" if w is None else f"{w[0]:.3f} / {w[1]:.2f}" if w[1] < 10 else f"{w[0]:.3f} / {w[1]:.1f}"
+            cells.append(text + (f" ({found})" if n in ("single", "sdypy") and w is not None else ""))
+        noise = "none" if snr == 0 else f"{100 * snr:g} %"
+        lines.append(f"| {100 * zeta:g} % | {refs} | {noise} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def report(zeta, refs, snr, seeds, with_sdypy):
+    """Prints one case's table and, with noise, its lists of losses; returns its worst modes."""
+    t = time.perf_counter()
+    targets, errors = run(zeta, refs, snr, seeds, with_sdypy, with_single=True)
+    print(f"\n### zeta {100 * zeta:g} %, {len(refs)} reference(s), "
+          f"{'noise-free' if snr == 0 else f'{100 * snr:g} % noise, {seeds} seeds'}"
+          f" ({time.perf_counter() - t:.0f} s)\n")
+    print(table(targets, errors))
+    if snr > 0:
+        worse = losses(targets, errors)
+        if worse:
+            print("\nWhere the checked pole's RMS error is larger (paired bootstrap "
+                  "over the seeds):\n" + "\n".join(worse))
+        else:
+            print("\nThe checked pole's RMS error is nowhere larger.")
+        if "single" in errors and "sdypy" in errors:
+            like = losses(targets, errors, "single", ("sdypy",))
+            print("\nLike with like, one LSCF over every curve (single) against sdypy: "
+                  + ("where its RMS error is larger:\n" + "\n".join(like) if like
+                     else "its RMS error is nowhere larger."))
+    return worst_mode(errors)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--levels", default="0.001,0.02,0.08,0.15")
     ap.add_argument("--no-sdypy", action="store_true")
     a = ap.parse_args()
+    rows = []
     for zeta in map(float, a.levels.split(",")):
         for refs in ([0], [0, 5, 10]):
             for snr in (0.0, 0.01):
-                t = time.perf_counter()
-                targets, errors = run(zeta, refs, snr, 1 if snr == 0 else a.seeds, not a.no_sdypy)
-                print(f"\n### zeta {100 * zeta:g} %, {len(refs)} reference(s), "
-                      f"{'noise-free' if snr == 0 else f'{100 * snr:g} % noise, {a.seeds} seeds'}"
-                      f" ({time.perf_counter() - t:.0f} s)\n")
-                print(table(targets, errors))
-                if snr > 0:
-                    worse = losses(targets, errors)
-                    if worse:
-                        print("\nWhere the checked pole's RMS error is larger (paired bootstrap "
-                              "over the seeds):\n" + "\n".join(worse))
-                    else:
-                        print("\nThe checked pole's RMS error is nowhere larger.")
+                seeds = 1 if snr == 0 else a.seeds
+                rows.append(((zeta, len(refs), snr), report(zeta, refs, snr, seeds, not a.no_sdypy)))
+    print("\n### Worst mode's RMS error of f / zeta, % (modes found)\n")
+    print(summary(rows))
 
 
 if __name__ == "__main__":
