@@ -232,17 +232,23 @@ def worst_mode(errors):
     return out
 
 
+def summary_cell(worst, with_count):
+    """One estimator's cell of `summary`: worst f / zeta RMS error, %, and the modes found."""
+    w, found = worst
+    if w is None:
+        return "–"
+    text = f"{w[0]:.3f} / {w[1]:.2f}" if w[1] < 10 else f"{w[0]:.3f} / {w[1]:.1f}"
+    return text + (f" ({found})" if with_count else "")
+
+
 def summary(rows):
     """The markdown table of docs/ema.md, "Damped poles": per case, the worst mode's RMS error
     of f / zeta (%) of each estimator, with the modes found by single and sdypy."""
     names = ("diagram", "refined", "checked", "single", "sdypy")
-    lines = ["| zeta | refs | noise | " + " | ".join(names) + " |", "|---" * (3 + len(names)) + "|"]
+    lines = ["| ζ | refs | noise | diagram | refined | checked | single (modes found) "
+             "| sdypy-EMA (modes found) |", "|---" * (3 + len(names)) + "|"]
     for (zeta, refs, snr), worst in rows:
-        cells = []
-        for n in names:
-            w, found = worst.get(n, (None, 0))
-            text = "–" if w is None else f"{w[0]:.3f} / {w[1]:.2f}" if w[1] < 10 else f"{w[0]:.3f} / {w[1]:.1f}"
-            cells.append(text + (f" ({found})" if n in ("single", "sdypy") and w is not None else ""))
+        cells = [summary_cell(worst.get(n, (None, 0)), n in ("single", "sdypy")) for n in names]
         noise = "none" if snr == 0 else f"{100 * snr:g} %"
         lines.append(f"| {100 * zeta:g} % | {refs} | {noise} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -282,7 +288,8 @@ def main():
         for refs in ([0], [0, 5, 10]):
             for snr in (0.0, 0.01):
                 seeds = 1 if snr == 0 else a.seeds
-                rows.append(((zeta, len(refs), snr), report(zeta, refs, snr, seeds, not a.no_sdypy)))
+                worst = report(zeta, refs, snr, seeds, not a.no_sdypy)
+                rows.append(((zeta, len(refs), snr), worst))
     print("\n### Worst mode's RMS error of f / zeta, % (modes found)\n")
     print(summary(rows))
 
