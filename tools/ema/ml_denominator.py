@@ -13,12 +13,14 @@ nearest its frequency (so the table compares the estimators, not a selection).
 
 Usage: python3 tools/ema/ml_denominator.py ZETA REFS NOISE SEEDS [ORDER]
   e.g. `python3 tools/ema/ml_denominator.py 0.02 1 0.01 20` -> per mode the RMS error of f and
-  zeta (%) over the seeds, LSCF at the order against the ML step from it.
+  zeta (%) over the seeds: LSCF at the order, its generalised total-least-squares variant
+  (GTLS: the same normal equations, another constraint), and the ML step from the LSCF.
 """
 import os
 import sys
 
 import numpy as np
+import scipy.linalg
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import damped_bias as db  # noqa: E402
@@ -32,14 +34,24 @@ def lscf(f, h, band, order):
     dt = 1 / (2 * band[1])
     z = np.exp(1j * 2 * np.pi * f * dt)
     phi = z[:, None] ** np.arange(order + 1)[None, :]
-    r_inv = np.linalg.inv(np.real(phi.conj().T @ phi))
+    r = np.real(phi.conj().T @ phi)
+    r_inv = np.linalg.inv(r)
     normal = np.zeros((order + 1, order + 1))
     for curve in h:
         s = -np.real(phi.conj().T @ (curve[:, None] * phi))
         t = np.real(phi.conj().T @ ((np.abs(curve) ** 2)[:, None] * phi))
         normal += t - s.T @ r_inv @ s
     a = np.append(np.linalg.solve(normal[:-1, :-1], -normal[:-1, -1]), 1.0)
-    return a, z, h, dt
+    return a, z, h, dt, (normal, r)
+
+
+def gtls(normal, r):
+    """The generalised total-least-squares denominator: the a minimising aᵀ M a / aᵀ R a (M the
+    reduced normal matrix, R = Re ΦᴴΦ, the noise's metric for white noise of equal variance on
+    every line; Verboven 2002, sec. 5.3), scaled to a_n = 1. Where the noise is that white,
+    the LS estimate's noise bias (E M = M_true + σ² R, less the numerators' share) is removed."""
+    _, vectors = scipy.linalg.eigh(normal, r)
+    return vectors[:, 0] / vectors[-1, 0]
 
 
 def poles(a, dt):
@@ -105,20 +117,22 @@ def main():
     references = [0] if refs == 1 else [0, 5, 10]
     targets = [t[0] for t in db.true_modes()]
     truth = np.array([[t, zeta] for t in targets])
-    errors = {"lscf": [], "ml": []}
+    errors = {"lscf": [], "gtls": [], "ml": []}
     for seed in range(seeds):
         f, h = db.plate_frf(zeta, references, noise, np.random.default_rng(1000 + seed))
         curves = h.reshape(-1, h.shape[2])
         curves = curves / np.max(np.abs(curves))
-        a, z, band_curves, dt = lscf(f, curves, db.BAND_HZ, order)
+        a, z, band_curves, dt, normal = lscf(f, curves, db.BAND_HZ, order)
         errors["lscf"].append(nearest(poles(a, dt), targets) / truth - 1)
+        errors["gtls"].append(nearest(poles(gtls(*normal), dt), targets) / truth - 1)
         errors["ml"].append(nearest(poles(output_error_step(a, z, band_curves), dt), targets) / truth - 1)
     rms = {k: 100 * np.sqrt(np.mean(np.array(v) ** 2, axis=0)) for k, v in errors.items()}
     print(f"zeta {100 * zeta:g} %, {refs} reference(s), noise {100 * noise:g} %, {seeds} seed(s), order {order}")
-    print("| mode f [Hz] | LSCF f / zeta RMS error [%] | ML step f / zeta RMS error [%] |")
-    print("|---|---|---|")
+    print("| mode f [Hz] | LSCF f / zeta RMS error [%] | GTLS f / zeta RMS error [%] "
+          "| ML step f / zeta RMS error [%] |")
+    print("|---|---|---|---|")
     for i, t in enumerate(targets):
-        print(f"| {t:.1f} | {rms['lscf'][i, 0]:.4f} / {rms['lscf'][i, 1]:.3f} | {rms['ml'][i, 0]:.4f} / {rms['ml'][i, 1]:.3f} |")
+        print(f"| {t:.1f} | " + " | ".join(f"{rms[k][i, 0]:.4f} / {rms[k][i, 1]:.3f}" for k in errors) + " |")
 
 
 if __name__ == "__main__":
