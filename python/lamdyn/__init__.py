@@ -317,7 +317,9 @@ def ema(
     """Modal identification of FRFs, as ``lamdyn ema``.
 
     Poles by PolyMAX (several references) or LSCF over ``orders`` (lowest, highest, step; the
-    default matches sdypy-EMA's ``pol_order_high=30``), the stable columns of the
+    default matches sdypy-EMA's ``pol_order_high=30``; ``polymax=False``: one LSCF over every
+    curve, sdypy-EMA's formulation, better in f at isolated damped modes, worse in damping and
+    blind to close pairs PolyMAX resolves: docs/ema.md, "Damped poles"), the stable columns of the
     stabilization diagram selected automatically (or the stable pole nearest each of
     ``near_hz``), then LSFD residues and a Levenberg-Marquardt refinement of the poles,
     each refined pole kept where it fits significantly better than the diagram's in the

@@ -200,7 +200,9 @@ pub struct EmaArgs {
     /// Record length, s [default: the longest every hit holds].
     #[arg(long, value_name = "S", value_parser = finite)]
     pub record_s: Option<f64>,
-    /// With several references, one LSCF over every curve instead of PolyMAX.
+    /// With several references, one LSCF over every curve instead of PolyMAX (sdypy-EMA's
+    /// formulation): on damped modes better in f at isolated modes, worse in damping, and
+    /// blind to close pairs that PolyMAX resolves (docs/ema.md, "Damped poles").
     #[arg(long)]
     pub single_reference: bool,
     /// Folder for the results: modes.csv, diagram.csv, result.json and the stabilization
