@@ -103,9 +103,10 @@ def lamdyn_poles(f, h, targets, refine, estimator=None, polymax=True):
     return nearest(r["freq_hz"], r["damping_ratio"], targets, win)
 
 
-def sdypy_poles(f, h, targets):
-    """sdypy-EMA's poles near each target: LSCF over every curve (orders 2-60), then
-    select_closest_poles."""
+def sdypy_model(f, h, targets):
+    """sdypy-EMA's model of the FRFs: LSCF over every curve (orders 2-60), then
+    select_closest_poles at the targets (its picks in `nat_freq`, `nat_xi`; every order's poles
+    in `all_poles`). Raises what sdypy raises."""
     import sdypy.EMA as EMA
 
     curves = h.reshape(-1, h.shape[2])
@@ -113,13 +114,19 @@ def sdypy_poles(f, h, targets):
     frf = np.concatenate([np.zeros((curves.shape[0], 1), complex), curves], axis=1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        try:
-            m = EMA.Model(frf=frf, freq=freq, lower=BAND_HZ[0], upper=BAND_HZ[1], pol_order_high=30,
-                          frf_type="accelerance")
-            m.get_poles(show_progress=False)
-            m.select_closest_poles(list(targets))
-        except Exception:  # noqa: BLE001
-            return np.full((len(targets), 2), np.nan)
+        m = EMA.Model(frf=frf, freq=freq, lower=BAND_HZ[0], upper=BAND_HZ[1], pol_order_high=30,
+                      frf_type="accelerance")
+        m.get_poles(show_progress=False)
+        m.select_closest_poles(list(targets))
+    return m
+
+
+def sdypy_poles(f, h, targets):
+    """sdypy-EMA's poles near each target (`sdypy_model`), NaN where it failed or found none."""
+    try:
+        m = sdypy_model(f, h, targets)
+    except Exception:  # noqa: BLE001 - a failed identification finds nothing
+        return np.full((len(targets), 2), np.nan)
     return nearest(np.asarray(m.nat_freq), np.asarray(m.nat_xi), targets, windows(targets))
 
 

@@ -9,7 +9,6 @@ Usage: python3 tools/ema/sdypy_pick_order.py ZETA REFERENCES MODE_HZ [SEEDS]   (
      lowest and highest order, and the range of its frequencies), in %.
 """
 import sys
-import warnings
 
 import numpy as np
 
@@ -19,17 +18,7 @@ import lamdyn
 
 def sdypy_pick(f, h, targets, mode_hz):
     """sdypy's pick nearest `mode_hz` (Hz) and the order of the diagram it is a pole of."""
-    import sdypy.EMA as EMA
-
-    curves = h.reshape(-1, h.shape[2])
-    freq = np.concatenate([[0.0], f])
-    frf = np.concatenate([np.zeros((curves.shape[0], 1), complex), curves], axis=1)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        m = EMA.Model(frf=frf, freq=freq, lower=bench.BAND_HZ[0], upper=bench.BAND_HZ[1],
-                      pol_order_high=30, frf_form="accelerance")
-        m.get_poles(show_progress=False)
-        m.select_closest_poles(list(targets))
+    m = bench.sdypy_model(f, h, targets)
     picked = min(m.nat_freq, key=lambda x: abs(x - mode_hz))
     orders = [2 * (i + 1) for i, p in enumerate(m.all_poles)
               if np.any(np.abs(np.abs(np.asarray(p)) / (2 * np.pi) - picked) < 1e-9 * picked)]
