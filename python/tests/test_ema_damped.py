@@ -101,8 +101,7 @@ def test_no_refined_pole_is_taken_beside_a_lost_one(bench, poles):
     lost_seen = 0
     for seed in range(4):
         f, h = bench.plate_frf(0.08, [0], 0.01, np.random.default_rng(1000 + seed))
-        r = lamdyn.ema(f, h, band_hz=bench.BAND_HZ, orders=(2, 60, 2), near_hz=targets,
-                       window_hz=min(bench.windows(targets)), poles=poles)
+        r = bench.lamdyn_ema(f, h, targets, poles=poles)
         lost = [float(w.split(" Hz")[0].rsplit(" ", 1)[1]) for w in r["warnings"]
                 if "out of its column" in w]
         lost_seen += len(lost)
@@ -152,8 +151,7 @@ def test_one_lscf_over_every_curve_is_sdypys_estimator(bench):
     both = 0
     for seed in range(2):
         f, h = bench.plate_frf(0.08, [0, 5, 10], 0.01, np.random.default_rng(1000 + seed))
-        r = lamdyn.ema(f, h, band_hz=bench.BAND_HZ, orders=(2, 60, 2), near_hz=targets,
-                       window_hz=min(win), refine=False, polymax=False)
+        r = bench.lamdyn_ema(f, h, targets, refine=False, polymax=False)
         mine = bench.nearest(r["freq_hz"], r["damping_ratio"], targets, win)
         theirs = bench.sdypy_poles(f, h, targets)
         found = np.isfinite(mine[:, 0]) & np.isfinite(theirs[:, 0])

@@ -89,18 +89,24 @@ def nearest(found_f, found_z, targets, win):
     return out
 
 
+def lamdyn_ema(f, h, targets, band=BAND_HZ, **options):
+    """`lamdyn.ema` as the tables run it: orders 2-60, each target picked (`near_hz`) within the
+    narrowest of their windows (select_near takes one); `options` go to `ema` as they are.
+    Raises what `ema` raises."""
+    return lamdyn.ema(f, h, band_hz=band, orders=(2, 60, 2), near_hz=targets,
+                      window_hz=min(windows(targets)), **options)
+
+
 def lamdyn_poles(f, h, targets, refine, estimator=None, polymax=True):
-    """lamdyn's poles near each target (the narrowest window of all targets: select_near takes
-    one), NaN where none was found or the identification failed. `polymax=False` is one LSCF
-    over every curve with several references (`lamdyn ema --single-reference`)."""
-    win = windows(targets)
+    """lamdyn's poles near each target (`lamdyn_ema`), NaN where none was found or the
+    identification failed. `polymax=False` is one LSCF over every curve with several
+    references (`lamdyn ema --single-reference`)."""
     try:
-        r = lamdyn.ema(f, h, band_hz=BAND_HZ, orders=(2, 60, 2), near_hz=targets,
-                       window_hz=min(win), refine=refine, poles=estimator or "checked",
+        r = lamdyn_ema(f, h, targets, refine=refine, poles=estimator or "checked",
                        polymax=polymax)
     except Exception:  # noqa: BLE001 - a failed identification finds nothing
         return np.full((len(targets), 2), np.nan)
-    return nearest(r["freq_hz"], r["damping_ratio"], targets, win)
+    return nearest(r["freq_hz"], r["damping_ratio"], targets, windows(targets))
 
 
 def sdypy_model(f, h, targets):
@@ -248,14 +254,19 @@ def summary_cell(worst, with_count):
     return text + (f" ({found})" if with_count else "")
 
 
+#: The estimators of `summary`, its column headings, and whether the column counts the modes found.
+SUMMARY_COLUMNS = (("diagram", "diagram", False), ("refined", "refined", False),
+                   ("checked", "checked", False), ("single", "single (modes found)", True),
+                   ("sdypy", "sdypy-EMA (modes found)", True))
+
+
 def summary(rows):
     """The markdown table of docs/ema.md, "Damped poles": per case, the worst mode's RMS error
     of f / zeta (%) of each estimator, with the modes found by single and sdypy."""
-    names = ("diagram", "refined", "checked", "single", "sdypy")
-    lines = ["| ζ | refs | noise | diagram | refined | checked | single (modes found) "
-             "| sdypy-EMA (modes found) |", "|---" * (3 + len(names)) + "|"]
+    lines = ["| ζ | refs | noise | " + " | ".join(h for _, h, _ in SUMMARY_COLUMNS) + " |",
+             "|---" * (3 + len(SUMMARY_COLUMNS)) + "|"]
     for (zeta, refs, snr), worst in rows:
-        cells = [summary_cell(worst.get(n, (None, 0)), n in ("single", "sdypy")) for n in names]
+        cells = [summary_cell(worst.get(n, (None, 0)), count) for n, _, count in SUMMARY_COLUMNS]
         noise = "none" if snr == 0 else f"{100 * snr:g} %"
         lines.append(f"| {100 * zeta:g} % | {refs} | {noise} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

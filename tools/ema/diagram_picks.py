@@ -14,7 +14,6 @@ import sys
 import numpy as np
 
 import damped_bias as bench
-import lamdyn
 
 PICKS = ("top order", "median", "nearest mean", "sdypy")
 
@@ -35,8 +34,7 @@ def column_picks(column, target, window):
 def seed_errors(zeta, references, seed, targets, window):
     """Relative errors (picks, modes, [f, zeta]) of one noise seed; NaN where nothing was found."""
     f, h = bench.plate_frf(zeta, references, 0.01, np.random.default_rng(1000 + seed))
-    r = lamdyn.ema(f, h, band_hz=bench.BAND_HZ, orders=(2, 60, 2), near_hz=targets,
-                   window_hz=window, refine=False)
+    r = bench.lamdyn_ema(f, h, targets, refine=False)
     stable = [p for p in r["diagram"] if p["stability"] != "New"]
     found = np.full((len(PICKS), len(targets), 2), np.nan)
     # The top-order pick is lamdyn's own (`near_hz`): the diagram pole it reports.

@@ -31,8 +31,7 @@ def band_errors(f, h, band, targets, truth):
     out = []
     for _, refine, poles in ESTIMATORS:
         try:
-            r = lamdyn.ema(f, h, band_hz=band, orders=(2, 60, 2), near_hz=picked,
-                           window_hz=min(bench.windows(picked)), refine=refine, poles=poles)
+            r = bench.lamdyn_ema(f, h, picked, band, refine=refine, poles=poles)
             found = bench.nearest(r["freq_hz"], r["damping_ratio"], targets, win)
         except lamdyn.LamdynError:
             found = np.full((len(targets), 2), np.nan)

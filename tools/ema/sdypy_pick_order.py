@@ -13,7 +13,6 @@ import sys
 import numpy as np
 
 import damped_bias as bench
-import lamdyn
 
 
 def sdypy_pick(f, h, targets, mode_hz):
@@ -40,8 +39,7 @@ def main():
     for seed in range(1000, 1000 + seeds):
         f, h = bench.plate_frf(zeta, refs, 0.01, np.random.default_rng(seed))
         picked, order = sdypy_pick(f, h, targets, truth)
-        r = lamdyn.ema(f, h, band_hz=bench.BAND_HZ, orders=(2, 60, 2), near_hz=targets,
-                       window_hz=min(win), refine=False, polymax=False)
+        r = bench.lamdyn_ema(f, h, targets, refine=False, polymax=False)
         column = [p for p in r["diagram"]
                   if p["stability"] != "New" and abs(p["freq_hz"] - truth) < min(win)]
         same = [p["freq_hz"] for p in column if p["order"] == order]
