@@ -15,6 +15,7 @@ its pole nearest each true frequency (lamdyn: `near_hz`, a window of 40 % of the
 nearest neighbour, at most 5 % of f), so the table compares estimators, not selections.
 
 Usage: python3 tools/ema/damped_bias.py [--seeds N] [--levels 0.001,0.02,...] [--no-sdypy]
+                                        [--save FILE.npz]
   -> markdown tables (docs/ema.md, "Damped poles"): per damping level, reference count and
      noise, per mode: bias and standard deviation of f and zeta relative to the truth over the
      seeds, and how many seeds found the mode; after each noisy table, the modes and quantities
@@ -23,6 +24,8 @@ Usage: python3 tools/ema/damped_bias.py [--seeds N] [--levels 0.001,0.02,...] [-
      95 % interval by the paired bootstrap over the seeds (a ratio of RMS errors over 20 seeds
      scatters by tens of per cent where the errors are scatter, by little where they are bias).
      Last, the worst mode's RMS error of each estimator in each case (docs/ema.md's table).
+     With --save, every case's errors too, for comparing two builds mode by mode
+     (tools/ema/compare_builds.py).
 """
 import argparse
 import time
@@ -272,8 +275,15 @@ def summary(rows):
     return "\n".join(lines)
 
 
+def case_key(zeta, refs, snr):
+    """The name of one case in the file `--save` writes: zeta, references, noise, e.g.
+    "zeta0.08_refs3_noise0.01"."""
+    return f"zeta{zeta:g}_refs{refs}_noise{snr:g}"
+
+
 def report(zeta, refs, snr, seeds, with_sdypy):
-    """Prints one case's table and, with noise, its lists of losses; returns its worst modes."""
+    """Prints one case's table and, with noise, its lists of losses; returns its worst modes
+    and its errors (`run`)."""
     t = time.perf_counter()
     targets, errors = run(zeta, refs, snr, seeds, with_sdypy, with_single=True)
     print(f"\n### zeta {100 * zeta:g} %, {len(refs)} reference(s), "
@@ -292,7 +302,7 @@ def report(zeta, refs, snr, seeds, with_sdypy):
             print("\nLike with like, one LSCF over every curve (single) against sdypy: "
                   + ("where its RMS error is larger:\n" + "\n".join(like) if like
                      else "its RMS error is nowhere larger."))
-    return worst_mode(errors)
+    return worst_mode(errors), errors
 
 
 def main():
@@ -300,16 +310,23 @@ def main():
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--levels", default="0.001,0.02,0.08,0.15")
     ap.add_argument("--no-sdypy", action="store_true")
+    ap.add_argument("--save", metavar="FILE.npz",
+                    help="also write every case's relative errors (seeds x modes x [f, zeta]) "
+                         "per estimator, for tools/ema/compare_builds.py")
     a = ap.parse_args()
-    rows = []
+    rows, saved = [], {}
     for zeta in map(float, a.levels.split(",")):
         for refs in ([0], [0, 5, 10]):
             for snr in (0.0, 0.01):
                 seeds = 1 if snr == 0 else a.seeds
-                worst = report(zeta, refs, snr, seeds, not a.no_sdypy)
+                worst, errors = report(zeta, refs, snr, seeds, not a.no_sdypy)
                 rows.append(((zeta, len(refs), snr), worst))
+                for name, e in errors.items():
+                    saved[f"{case_key(zeta, len(refs), snr)}/{name}"] = e
     print("\n### Worst mode's RMS error of f / zeta, % (modes found)\n")
     print(summary(rows))
+    if a.save:
+        np.savez(a.save, **saved)
 
 
 if __name__ == "__main__":

@@ -29,6 +29,13 @@
 //! diagram's poles already fit the context model, and the refinement's moves bring no
 //! significant drop; with noise the linearised estimator's bias does.
 //!
+//! **Each curve in units of its noise.** The χ² test holds where every residual has one
+//! variance. Curves measured with different noise (channels of different sensitivity, noise in
+//! proportion to each curve's level) are weighted by 1/σ̂ of each, σ̂ its line-to-line noise
+//! estimate (module `noise`); J is then the sum of squares of the weighted residuals, and the
+//! test's decision does not depend on any curve's scale or units. The refinement itself stays
+//! unweighted: weighting it too traded modes for others (docs/ema.md, "Damped poles").
+//!
 //! **Moves that change the model.** The refinement corrects the diagram's poles; a refined pole
 //! that ends nearer another diagram pole than its own has merged with or swapped for that
 //! neighbour, and is never taken. A pole the refinement lost (one that left its column in the
@@ -44,6 +51,7 @@ use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
 use crate::error::EmaError;
 use crate::lscf::half_power_bands_overlap;
 use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
+use crate::noise::noise_weights;
 use crate::projection::apply_transpose_q;
 use crate::thin_qr::ThinQr;
 use faer::Mat;
@@ -69,10 +77,12 @@ struct ContextProblem<'a> {
 }
 
 impl<'a> ContextProblem<'a> {
-    /// The problem on `lines` with the roots of `context` fixed but those of `poles`.
+    /// The problem on `lines` with the roots of `context` fixed but those of `poles`, curve o
+    /// weighted by `weights[o]` (its residuals and sums of squares in units of its noise).
     fn new(
         freqs_hz: &[f64],
         curves: &[&[Complex64]],
+        weights: &[f64],
         lines: &[usize],
         context: &'a LscfContext,
         poles: &[Complex64],
@@ -83,7 +93,7 @@ impl<'a> ContextProblem<'a> {
         let rows = 2 * lines.len();
         let fixed = scaled_real_matrix(&cols, rows).qr();
         let b = Mat::from_fn(rows, curves.len(), |row, o| {
-            let h = curves[o][lines[row / 2]];
+            let h = curves[o][lines[row / 2]] * weights[o];
             if row % 2 == 0 { h.re } else { h.im }
         });
         let data = projected_out(&fixed, b);
@@ -160,7 +170,8 @@ impl<'a> RefinementCheck<'a> {
     ) -> Self {
         let band = crate::band::positive_lines(freqs_hz, band_hz);
         let lines = refinement_lines(freqs_hz, &band, diagram, fit_lines);
-        let problem = ContextProblem::new(freqs_hz, curves, &lines, context, diagram);
+        let weights = noise_weights(curves, &band);
+        let problem = ContextProblem::new(freqs_hz, curves, &weights, &lines, context, diagram);
         let model = problem.cost(diagram).map(|base| (problem, base));
         Self {
             freqs_hz,
@@ -268,6 +279,7 @@ fn chi_square_99(dof: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::noise::tests::gaussian_sequence;
     use std::f64::consts::PI;
 
     #[test]
@@ -289,6 +301,53 @@ mod tests {
             stays_with_its_own(&diagram, &refined),
             vec![false, true, true]
         );
+    }
+
+    /// Two curves of one mode in the context model's own form (direct term and one pair of
+    /// partial fractions), one with a thousandth of the other's noise. The diagram's pole is
+    /// off by so little that the loud curve cannot tell (its misfit a quarter of its noise
+    /// variance), the quiet one by thousands of its variances: the refined pole is taken, and
+    /// so it is with the quiet curve scaled by 1000. Unweighted, the pooled variance is the
+    /// loud curve's and the pole was refused unscaled, taken scaled.
+    #[test]
+    fn a_quiet_curve_is_heard_beside_a_loud_one() {
+        let pole = |f: f64| Complex64::new(-0.02 * 2.0 * PI * f, 2.0 * PI * f);
+        let context = LscfContext {
+            dt: 1.0 / 140.0,
+            roots: vec![],
+        };
+        let freqs: Vec<f64> = (0..=7000).map(|k| 0.01 * f64::from(k)).collect();
+        let (band, every) = ([30.0, 70.0], RefineLines::All);
+        let all: Vec<usize> = (0..freqs.len()).collect();
+        let (g1, g2) = pair_columns(&context.omega(&freqs, &all), context.root(pole(50.0)));
+        let clean: Vec<Complex64> = g1.iter().zip(&g2).map(|(a, b)| a + 0.3 * b).collect();
+        let lines = crate::band::positive_lines(&freqs, band);
+        let misfit = |df: f64| {
+            let problem = ContextProblem::new(&freqs, &[&clean], &[1.0], &lines, &context, &[]);
+            problem.cost(&[pole(50.0 * (1.0 + df))]).unwrap()
+        };
+        let rms =
+            (lines.iter().map(|&k| clean[k].norm_sqr()).sum::<f64>() / lines.len() as f64).sqrt();
+        let (quiet, loud) = (1e-4 * rms, 0.1 * rms);
+        let df = 1e-5 * (0.25 * loud * loud / misfit(1e-5)).sqrt();
+        let (mut noise_a, mut noise_b) = (gaussian_sequence(5), gaussian_sequence(6));
+        let a: Vec<Complex64> = clean.iter().map(|h| h + quiet * noise_a()).collect();
+        let b: Vec<Complex64> = clean.iter().map(|h| h + loud * noise_b()).collect();
+        let a_scaled: Vec<Complex64> = a.iter().map(|h| h * 1000.0).collect();
+        let (diagram, refined) = ([pole(50.0 * (1.0 + df))], [pole(50.0)]);
+        for quiet_curve in [&a, &a_scaled] {
+            let curves: [&[Complex64]; 2] = [quiet_curve, &b];
+            let check = RefinementCheck::new(
+                &freqs,
+                &curves,
+                Quantity::Receptance,
+                &diagram,
+                band,
+                every,
+                &context,
+            );
+            assert_eq!(check.taken(&refined), refined.to_vec());
+        }
     }
 
     #[test]

@@ -11,6 +11,7 @@
 //! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
 //! | `denominator` | the LSCF model's roots and their partial-fraction columns |
 //! | [`context`] | the refined poles checked in the LSCF model's context (its other roots fixed) |
+//! | `noise` | each curve's noise level from its line-to-line second differences |
 //! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
 //! | [`spectra`] | H1/H2/Hv and coherence from hammer hits, force and exponential windows |
@@ -29,6 +30,7 @@ mod error;
 pub mod identify;
 pub mod lscf;
 pub mod lsfd;
+mod noise;
 mod projection;
 pub mod quality;
 pub mod shapes;
