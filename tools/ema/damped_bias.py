@@ -52,8 +52,11 @@ def true_modes(band=BAND_HZ):
     return [t for t in MODES if band[0] <= t[0] <= band[1]]
 
 
-def plate_frf(zeta, references, snr_rel, rng):
-    """Accelerance FRFs, shape (responses, references, lines), and the lines, Hz."""
+def plate_frf(zeta, references, snr_rel, rng, channel_noise=False):
+    """Accelerance FRFs, shape (responses, references, lines), and the lines, Hz. The noise is
+    `snr_rel` times each curve's RMS over the band, or with `channel_noise` times the RMS of all
+    curves times 10^u, u uniform in [-0.5, 0.5] and fixed per curve (channels whose noise does
+    not follow their level)."""
     f = np.arange(1, int(F_MAX_HZ / DF_HZ) + 1) * DF_HZ
     w = 2 * np.pi * f
     phi = np.array([[np.sin(m * np.pi * x) * np.sin(n * np.pi * y / 0.8) for (x, y) in POINTS]
@@ -65,7 +68,11 @@ def plate_frf(zeta, references, snr_rel, rng):
         h += np.einsum("o,j,k->ojk", phi[r], phi[r, references], -w * w / den)
     if snr_rel > 0:
         band = (f >= BAND_HZ[0]) & (f <= BAND_HZ[1])
-        rms = np.sqrt(np.mean(np.abs(h[:, :, band]) ** 2, axis=2, keepdims=True))
+        if channel_noise:
+            u = np.random.default_rng(0).uniform(-0.5, 0.5, size=h.shape[:2] + (1,))
+            rms = np.sqrt(np.mean(np.abs(h[:, :, band]) ** 2)) * 10 ** u
+        else:
+            rms = np.sqrt(np.mean(np.abs(h[:, :, band]) ** 2, axis=2, keepdims=True))
         noise = rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)
         h = h + snr_rel * rms * noise / np.sqrt(2)
     return f, h
@@ -139,7 +146,8 @@ def sdypy_poles(f, h, targets):
     return nearest(np.asarray(m.nat_freq), np.asarray(m.nat_xi), targets, windows(targets))
 
 
-def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False):
+def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False,
+        channel_noise=False):
     """Per estimator: relative errors (seeds, modes, [f, zeta]). `with_single` adds, with
     several references, lamdyn's checked pole from one LSCF over every curve ("single"):
     sdypy-EMA's formulation, where PolyMAX is lamdyn's default."""
@@ -154,7 +162,7 @@ def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False):
         errors["sdypy"] = []
     for seed in range(seeds):
         rng = np.random.default_rng(1000 + seed)
-        f, h = plate_frf(zeta, references, snr_rel, rng)
+        f, h = plate_frf(zeta, references, snr_rel, rng, channel_noise)
         errors["diagram"].append(lamdyn_poles(f, h, targets, refine=False) / truth - 1)
         for e in ("refined", "checked"):
             errors[e].append(lamdyn_poles(f, h, targets, True, e) / truth - 1)
@@ -281,11 +289,11 @@ def case_key(zeta, refs, snr):
     return f"zeta{zeta:g}_refs{refs}_noise{snr:g}"
 
 
-def report(zeta, refs, snr, seeds, with_sdypy):
+def report(zeta, refs, snr, seeds, with_sdypy, channel_noise=False):
     """Prints one case's table and, with noise, its lists of losses; returns its worst modes
     and its errors (`run`)."""
     t = time.perf_counter()
-    targets, errors = run(zeta, refs, snr, seeds, with_sdypy, with_single=True)
+    targets, errors = run(zeta, refs, snr, seeds, with_sdypy, True, channel_noise)
     print(f"\n### zeta {100 * zeta:g} %, {len(refs)} reference(s), "
           f"{'noise-free' if snr == 0 else f'{100 * snr:g} % noise, {seeds} seeds'}"
           f" ({time.perf_counter() - t:.0f} s)\n")
@@ -313,13 +321,15 @@ def main():
     ap.add_argument("--save", metavar="FILE.npz",
                     help="also write every case's relative errors (seeds x modes x [f, zeta]) "
                          "per estimator, for tools/ema/compare_builds.py")
+    ap.add_argument("--channel-noise", action="store_true",
+                    help="noise per curve independent of its level (plate_frf)")
     a = ap.parse_args()
     rows, saved = [], {}
     for zeta in map(float, a.levels.split(",")):
         for refs in ([0], [0, 5, 10]):
             for snr in (0.0, 0.01):
                 seeds = 1 if snr == 0 else a.seeds
-                worst, errors = report(zeta, refs, snr, seeds, not a.no_sdypy)
+                worst, errors = report(zeta, refs, snr, seeds, not a.no_sdypy, a.channel_noise)
                 rows.append(((zeta, len(refs), snr), worst))
                 for name, e in errors.items():
                     saved[f"{case_key(zeta, len(refs), snr)}/{name}"] = e
