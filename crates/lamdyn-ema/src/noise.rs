@@ -41,9 +41,9 @@ pub(crate) fn line_noise_variance(curve: &[Complex64], lines: &[usize]) -> Optio
 
 /// Weights that make every curve's noise alike: √(mean σ̂²)/σ̂ of each curve, σ̂² its
 /// [`line_noise_variance`] and the mean over the curves, so that every weighted curve's noise
-/// variance is about the mean σ̂². σ̂² is floored at 1e-12 of the largest (a curve of zeros or of exact
-/// values does not take an unbounded weight). All ones where any curve has no estimate or every
-/// σ̂² is zero.
+/// variance is about the mean σ̂². σ̂² is floored at 1e-12 of the largest (a curve of zeros or
+/// of exact values does not take an unbounded weight). All ones where any curve has no estimate
+/// or every σ̂² is zero.
 pub(crate) fn noise_weights(curves: &[&[Complex64]], lines: &[usize]) -> Vec<f64> {
     let ones = vec![1.0; curves.len()];
     let Some(variances) = curves
