@@ -12,7 +12,7 @@ import argparse
 
 import numpy as np
 
-from damped_bias import rms_ratio_interval, true_modes
+from damped_bias import rms, rms_ratio_interval, true_modes
 
 #: Changes of an RMS error below this fraction are rounding (FRFs computed in another order
 #: differ in the last bits, and so do the poles), not the build's: never listed or counted.
@@ -39,8 +39,7 @@ def changes(before, after, estimator, show_all, rng):
                 significant = lo > 1.0 or hi < 1.0
                 if not significant and not show_all:
                     continue
-                rms_a = 100 * np.sqrt(np.nanmean(a[:, i, q] ** 2))
-                rms_b = 100 * np.sqrt(np.nanmean(b[:, i, q] ** 2))
+                rms_a, rms_b = 100 * rms(a[:, i, q]), 100 * rms(b[:, i, q])
                 mark = ""
                 if significant:
                     better, worse = (better + 1, worse) if ratio < 1 else (better, worse + 1)

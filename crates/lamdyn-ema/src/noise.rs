@@ -65,22 +65,14 @@ pub(crate) fn noise_weights(curves: &[&[Complex64]], lines: &[usize]) -> Vec<f64
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use lamdyn_fit::synthetic::Normal;
     use std::f64::consts::PI;
 
-    /// Standard complex normal numbers (each part of unit variance) from a fixed linear
-    /// congruential sequence (Box–Muller), for tests.
+    /// Standard complex normal numbers (each part of unit variance), seeded: the project's
+    /// generator ([`lamdyn_fit::synthetic::Normal`]).
     pub(crate) fn gaussian_sequence(seed: u64) -> impl FnMut() -> Complex64 {
-        let mut state = seed;
-        let mut uniform = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        move || {
-            let (u1, u2) = (uniform(), uniform());
-            Complex64::from_polar((-2.0 * u1.ln()).sqrt(), 2.0 * PI * u2)
-        }
+        let mut normal = Normal::new(seed);
+        move || Complex64::new(normal.sample(), normal.sample())
     }
 
     /// A two-mode accelerance on 0.1 Hz lines (0.1–250 Hz) plus complex white noise of standard
@@ -102,9 +94,10 @@ pub(crate) mod tests {
     #[test]
     fn the_noise_of_a_damped_curve_is_found() {
         let lines: Vec<usize> = (0..2500).collect();
-        // 2 % damping: the peaks span 16 and 52 lines. The sample median of 5000 values
-        // scatters by 1.7 % (1σ); the FRF's own curvature adds a bias that grows as the noise
-        // falls (measured: +1.3, +3.8, +11 % at σ = 0.1, 0.01, 0.001 of the curve's level).
+        // 2 % damping: the peaks span 16 and 52 lines. The median of the 5000 overlapping
+        // second differences scatters by 2.1 % (1σ, 200 seeds); the FRF's own curvature adds a
+        // bias that grows as the noise falls (measured: +1.8, +2.9, +12.5 % at σ = 0.1, 0.01,
+        // 0.001 of the curve's level).
         for (sigma, bias) in [(0.1, 0.05), (1e-2, 0.08), (1e-3, 0.15)] {
             let got = line_noise_variance(&noisy_curve(sigma, 0.02, 7), &lines).unwrap();
             let ratio = got.sqrt() / sigma;
@@ -118,7 +111,7 @@ pub(crate) mod tests {
     #[test]
     fn sharp_peaks_do_not_carry_the_estimate() {
         // 0.1 % damping: each peak is narrower than a line, and its lines' second differences
-        // are up to thousands of σ; they shift the median by 7.8 %.
+        // are up to thousands of σ; they shift the median by 7.4 %.
         let lines: Vec<usize> = (0..2500).collect();
         let got = line_noise_variance(&noisy_curve(1e-2, 0.001, 3), &lines).unwrap();
         let ratio = got.sqrt() / 1e-2;
@@ -127,7 +120,9 @@ pub(crate) mod tests {
 
     #[test]
     fn weights_equalise_the_curves_noise() {
-        let (quiet, loud) = (noisy_curve(1e-3, 0.02, 1), noisy_curve(4e-3, 0.02, 2));
+        // Noise where σ̂ is the noise's, not the curve's curvature (at 0.001 of the level it is
+        // 12.5 % high: the_noise_of_a_damped_curve_is_found).
+        let (quiet, loud) = (noisy_curve(1e-2, 0.02, 1), noisy_curve(4e-2, 0.02, 2));
         let lines: Vec<usize> = (0..2500).collect();
         let w = noise_weights(&[&quiet, &loud], &lines);
         assert!((w[0] / w[1] / 4.0 - 1.0).abs() < 0.08, "{w:?}");
