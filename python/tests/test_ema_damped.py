@@ -161,3 +161,44 @@ def test_one_lscf_over_every_curve_is_sdypys_estimator(bench):
         assert np.all(diff[:, 1] < 5e-3), f"seed {seed}: zeta differs by {diff[:, 1]}"
     # sdypy finds 25.6, 55.6 and 150.6 Hz in each of ten seeds (measured): two seeds give six.
     assert both >= 4, "sdypy found too few of the modes for the comparison"
+
+
+@pytest.fixture(scope="module")
+def coverage_tool(bench):
+    import damped_coverage
+
+    return damped_coverage
+
+
+@pytest.mark.parametrize("zeta", [0.02, 0.08, 0.15])
+def test_pole_intervals_cover_the_damped_plates(coverage_tool, zeta):
+    """Issue 45, item 2, on modes damped 2-15 % (the coverage test of tests/it.rs has 5 % at
+    most): with three references and 1 % noise the 95 % intervals f +- 1.96 sd and
+    zeta +- 1.96 sd of the checked poles hold the truth on at least 90 % of the (mode, seed)
+    cases over 20 seeds, smears apart (the chain leaves them out). Measured (2026-12-01,
+    tools/ema/damped_coverage.py): f / zeta 0.989 / 0.956 at 2 %, 0.924 / 1.000 at 8 % (72.5 Hz,
+    where the check takes a refined pole biased by 2.1 sd, is covered on 7 of 20), 0.994 / 0.968
+    at 15 %. With one reference at 8 % only 0.620 in f: one pole stands for each unresolved
+    pair (150.6 / 152.5 and 175.6 / 180.6 Hz), 4-6 sd from the mode it is matched to, which no
+    noise interval describes (docs/ema.md)."""
+    targets, err, sd, verdict, kind = coverage_tool.intervals(zeta, [0, 5, 10], 20)
+    counted = np.isfinite(err[..., 0]) & np.isfinite(sd).all(axis=-1) & (verdict != "smear")
+    assert counted.sum() >= 0.8 * err.shape[0] * len(targets), counted.sum()
+    hit = coverage_tool.covered(err, sd)[counted]
+    assert hit.mean(axis=0).min() >= 0.9, hit.mean(axis=0)
+
+
+def test_a_pole_that_ran_away_does_not_widen_its_deviation_without_bound(bench):
+    """At 15 % damping with one reference (seed 1000) the refinement sends four poles out of
+    their columns, one of them from 25.6 Hz to 1.1e8 Hz; the diagram's poles are put back, and
+    each one's sd is widened by how far the data pull it, up to its column's edge, not to where
+    the refinement ran (before 2026-12-01: sd(f) 1.1e8 Hz). An sd(f) below 5 % of f and an
+    sd(zeta) below twice zeta still say where the mode is (measured at most 1.5 % and 115 %
+    over the damped plates: tools/ema/damped_coverage.py)."""
+    targets = [t[0] for t in bench.true_modes()]
+    f, h = bench.plate_frf(0.15, [0], 0.01, np.random.default_rng(1000))
+    r = bench.lamdyn_ema(f, h, targets)
+    assert sum("out of its column" in w for w in r["warnings"]) >= 1, r["warnings"]
+    assert len(r["freq_hz"]) > 0
+    assert np.all(r["freq_sd_hz"] < 0.05 * r["freq_hz"]), (r["freq_hz"], r["freq_sd_hz"])
+    assert np.all(r["damping_sd"] < 2 * r["damping_ratio"]), (r["damping_ratio"], r["damping_sd"])

@@ -87,14 +87,21 @@ def windows(targets):
     return out
 
 
+def nearest_index(found_f, targets, win):
+    """Per target: the index of the found pole nearest it within its window, else None."""
+    found_f = np.asarray(found_f)
+    out = []
+    for t, w in zip(targets, win):
+        k = int(np.argmin(np.abs(found_f - t))) if len(found_f) else None
+        out.append(k if k is not None and abs(found_f[k] - t) <= w else None)
+    return out
+
+
 def nearest(found_f, found_z, targets, win):
     """(f, zeta) of the found pole nearest each target within its window, else NaN."""
     out = np.full((len(targets), 2), np.nan)
-    for i, (t, w) in enumerate(zip(targets, win)):
-        if len(found_f) == 0:
-            continue
-        k = int(np.argmin(np.abs(np.asarray(found_f) - t)))
-        if abs(found_f[k] - t) <= w:
+    for i, k in enumerate(nearest_index(found_f, targets, win)):
+        if k is not None:
             out[i] = found_f[k], found_z[k]
     return out
 

@@ -60,6 +60,35 @@ fn out_of_column(col: &SelectedPole, p: Complex64) -> String {
     )
 }
 
+/// The refined poles `refined` (index-aligned with `selected`), each clamped into its column in
+/// the diagram ([`SelectedPole::clamp`]): a pole that left is moved back to the column's edge
+/// where it crossed it, in f and ζ; a pole the column holds is returned as it is. This is the
+/// refinement's estimate limited to where the diagram supports this mode, and so a bounded
+/// measure of how far the data pull the pole from the diagram's (`identify`'s widened
+/// standard deviation).
+pub(crate) fn clamped_to_their_columns(
+    refined: &[Complex64],
+    selected: &[SelectedPole],
+    c: &StabilityCriteria,
+) -> Vec<Complex64> {
+    refined
+        .iter()
+        .zip(selected)
+        .map(|(&p, col)| {
+            let (f, z) = col.clamp(pole_freq_hz(p), pole_damping(p), c);
+            pole_of(f, z)
+        })
+        .collect()
+}
+
+/// The pole λ = ω(−ζ + i√(1 − ζ²)), ω = 2πf, of frequency f (Hz, |λ|/2π) and damping ratio ζ
+/// (−Re λ/|λ|); ζ is taken within [0, 1].
+fn pole_of(freq_hz: f64, damping: f64) -> Complex64 {
+    let w = 2.0 * std::f64::consts::PI * freq_hz;
+    let z = damping.clamp(0.0, 1.0);
+    Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
+}
+
 /// For each refined pole (index-aligned with `selected`), whether it left its column in the
 /// diagram ([`SelectedPole::holds`]).
 fn left_their_columns(
@@ -101,5 +130,39 @@ mod tests {
             vec![false, true, true, false]
         );
         assert_eq!(beside_a_lost_pole(&diagram, &[false; 4]), vec![false; 4]);
+    }
+
+    /// A refined pole inside its column comes back as it is (to rounding); one that ran away
+    /// comes back on its column's edge, with the frequency and damping that `pole_of` was
+    /// given.
+    #[test]
+    fn refined_poles_are_clamped_into_their_columns() {
+        let c = StabilityCriteria::default();
+        let col = |f: f64, z: f64| SelectedPole {
+            pole: pole_of(f, z),
+            freq_hz: f,
+            damping: z,
+            count: 10,
+            spread_hz: 0.1,
+            freq_range_hz: [f - 0.05, f + 0.05],
+            damping_range: [z - 0.001, z + 0.001],
+            pick: crate::stabilization::Pick::Auto,
+        };
+        let selected = [col(25.6, 0.15), col(75.0, 0.011)];
+        let inside = pole_of(25.7, 0.16);
+        let runaway = pole_of(1.1e8, 0.0);
+        let out = clamped_to_their_columns(&[inside, runaway], &selected, &c);
+        assert!(
+            (out[0] - inside).norm() < 1e-9 * inside.norm(),
+            "{:?}",
+            out[0]
+        );
+        let (f, z) = (pole_freq_hz(out[1]), pole_damping(out[1]));
+        assert!(
+            (f - 75.80).abs() < 1e-9 && (z - 0.0045).abs() < 1e-12,
+            "{f} {z}"
+        );
+        assert!((pole_freq_hz(pole_of(40.0, 0.2)) - 40.0).abs() < 1e-12);
+        assert!((pole_damping(pole_of(40.0, 0.2)) - 0.2).abs() < 1e-12);
     }
 }

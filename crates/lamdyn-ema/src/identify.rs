@@ -3,7 +3,7 @@
 //! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
 //! correlation with the measured ones, and the CMIF.
 
-use crate::columns::in_their_columns;
+use crate::columns::{clamped_to_their_columns, in_their_columns};
 use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
 use crate::lscf::{
@@ -549,7 +549,7 @@ fn fit_selected(
             SelectedFit {
                 fit,
                 warnings,
-                refined: Some(refined),
+                refined: Some(clamped_to_their_columns(&refined, selected, &s.criteria)),
             }
         }
         _ => {
@@ -602,14 +602,17 @@ struct SelectedFit {
     /// One line per refined pole put back into its column.
     warnings: Vec<String>,
     /// With the checked estimator: the refined poles, index-aligned with the selection, taken
-    /// or not.
+    /// or not, each clamped into its column ([`clamped_to_their_columns`]): a pole that left
+    /// its column is no estimate of this mode, only of the direction the data pull it.
     refined: Option<Vec<Complex64>>,
 }
 
 /// The standard deviation `sd` of a mode whose reported pole `pole` is the diagram's while the
-/// refinement found `refined`: widened by the two estimates' difference,
-/// √(sd² + (diagram − refined)²), in f and ζ. The check found neither significantly better, so
-/// the truth may lie by either; `sd` is the refinement's and describes its scatter only.
+/// refinement found `refined` (clamped into the pole's column: [`clamped_to_their_columns`]):
+/// widened by the two estimates' difference, √(sd² + (diagram − refined)²), in f and ζ. The
+/// check found neither significantly better, or the refinement left the column, so the truth
+/// may lie by either; `sd` is the noise's part at `pole` and describes its scatter only. The
+/// clamp keeps a pole that ran away from widening the deviation beyond the column's reach.
 fn widened_by_the_refinement(sd: PoleSd, pole: Complex64, refined: Complex64) -> PoleSd {
     let spread = |s: f64, d: f64| s.hypot(d);
     PoleSd {
@@ -807,7 +810,7 @@ struct ModeSources<'a> {
     references: usize,
     /// The selection, index-aligned with the fit's poles.
     selected: &'a [SelectedPole],
-    /// With the checked estimator: the refined poles, taken or not.
+    /// With the checked estimator: the refined poles clamped into their columns, taken or not.
     refined: Option<&'a [Complex64]>,
     /// The poles' standard deviations.
     deviations: Option<&'a [PoleSd]>,

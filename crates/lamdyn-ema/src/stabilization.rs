@@ -197,11 +197,29 @@ impl SelectedPole {
     /// of per cent on a close pair) is what the refinement is for; a refined pole outside this
     /// has run away (noise, a neighbouring mode) and is not to be kept.
     pub fn holds(&self, freq_hz: f64, damping: f64, c: &StabilityCriteria) -> bool {
+        let [freq, damp] = self.bounds(c);
+        (freq[0]..=freq[1]).contains(&freq_hz) && (damp[0]..=damp[1]).contains(&damping)
+    }
+
+    /// The point of this pole's column ([`Self::holds`]) nearest (Hz, damping ratio): each of
+    /// the two clamped into the column's widened range; a point the column holds is returned
+    /// as it is.
+    pub fn clamp(&self, freq_hz: f64, damping: f64, c: &StabilityCriteria) -> (f64, f64) {
+        let [freq, damp] = self.bounds(c);
+        // max then min rather than `f64::clamp`, which panics on bounds out of order.
+        (
+            freq_hz.max(freq[0]).min(freq[1]),
+            damping.max(damp[0]).min(damp[1]),
+        )
+    }
+
+    /// The column's widened ranges of frequency (Hz) and damping ratio ([`Self::holds`]).
+    fn bounds(&self, c: &StabilityCriteria) -> [[f64; 2]; 2] {
         let [f0, f1] = self.freq_range_hz;
         let [d0, d1] = self.damping_range;
         let wf = (f1 - f0).max(c.freq_tol * self.freq_hz);
         let wd = (d1 - d0).max(0.5 * self.damping);
-        (f0 - wf..=f1 + wf).contains(&freq_hz) && (d0 - wd..=d1 + wd).contains(&damping)
+        [[f0 - wf, f1 + wf], [d0 - wd, d1 + wd]]
     }
 }
 
@@ -486,5 +504,33 @@ mod tests {
         // A column with a wide damping scatter allows as much again.
         let wide = column([74.9, 75.1], [0.01, 0.03]);
         assert!(wide.holds(75.0, 0.045, &c) && !wide.holds(75.0, 0.06, &c));
+    }
+
+    /// The clamp returns a point its column holds unchanged, moves one outside onto the edge
+    /// of the widened ranges (each quantity alone), and the point it returns is held.
+    #[test]
+    fn a_runaway_pole_is_clamped_onto_its_columns_edge() {
+        let c = StabilityCriteria::default();
+        let col = column([74.95, 75.05], [0.010, 0.012]);
+        assert_eq!(col.clamp(75.5, 0.0115, &c), (75.5, 0.0115));
+        // Frequency allowance 1 % of 75 Hz = 0.75 Hz beyond 75.05; damping half of 0.011.
+        let (f, z) = col.clamp(135.7, 0.73, &c);
+        assert!(
+            (f - 75.8).abs() < 1e-12 && (z - 0.0175).abs() < 1e-12,
+            "{f} {z}"
+        );
+        assert!(col.holds(f, z, &c));
+        let (f, z) = col.clamp(1.1e8, 0.0111, &c);
+        assert!((f - 75.8).abs() < 1e-12 && z == 0.0111, "{f} {z}");
+        let (f, z) = col.clamp(10.0, 0.0, &c);
+        assert!(
+            (f - 74.2).abs() < 1e-12 && (z - 0.0045).abs() < 1e-12,
+            "{f} {z}"
+        );
+        // A column without poles (empty ranges) has bounds out of order: the clamp does not
+        // panic (`f64::clamp` would), and what it returns is not held either.
+        let empty = column([f64::INFINITY, f64::NEG_INFINITY], [0.01, 0.01]);
+        let (f, z) = empty.clamp(75.0, 0.01, &c);
+        assert!(!empty.holds(f, z, &c) && !empty.holds(75.0, 0.01, &c));
     }
 }
