@@ -252,6 +252,11 @@ class EmaResult(_Fields):
         diagram_freq_hz, diagram_damping_ratio: the stabilization diagram's pole each mode
             started from, Hz and ratio.
         refined: whether the reported pole is the refined one (bool array).
+        refined_freq_hz, refined_damping_ratio: the pole the refinement reached, taken or not
+            (NaN without refinement).
+        refinement: what became of it, per mode: "taken", "not better" (the check kept the
+            diagram's), "left its column" or "beside a lost pole" (the diagram's put back), or
+            "none".
         auto_mac: MAC of the shapes with each other, modes x modes.
         cmif: the CMIF, lines x singular values (in the data's units).
         modes: each mode in full as the CLI's result.json has it (list of dicts).
@@ -282,6 +287,9 @@ class EmaResult(_Fields):
     diagram_freq_hz: np.ndarray
     diagram_damping_ratio: np.ndarray
     refined: np.ndarray
+    refined_freq_hz: np.ndarray
+    refined_damping_ratio: np.ndarray
+    refinement: list
     auto_mac: np.ndarray
     cmif: np.ndarray
     modes: list
@@ -295,6 +303,11 @@ class EmaResult(_Fields):
     missing_hz: list
     warnings: list
     timings: dict
+
+
+#: ``refinement`` labels of :func:`ema` by the outcome's name in the JSON.
+_OUTCOMES = {"Taken": "taken", "NotBetter": "not better", "LeftItsColumn": "left its column",
+             "BesideALostPole": "beside a lost pole"}
 
 
 def ema(
@@ -333,7 +346,10 @@ def ema(
     NaN without refinement), ``verdict`` (per mode: "sound", "doubtful" or "smear", the
     reasons in ``modes[k]["quality"]``), ``diagram_freq_hz`` and ``diagram_damping_ratio`` (the
     diagram's pole each mode started from) and ``refined`` (whether the reported pole is the
-    refined one), ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
+    refined one), ``refined_freq_hz`` and ``refined_damping_ratio`` (the pole the refinement
+    reached, taken or not; NaN without refinement) and ``refinement`` (what became of it:
+    "taken", "not better" — the check kept the diagram's —, "left its column" or "beside a
+    lost pole" — the diagram's put back —, or "none"), ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
     ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json). The CMIF peaks
     listed are those whose topographic prominence in the band (as ``scipy.signal.find_peaks``
     on log sigma_1) is at least the factor ``cmif_prominence``. ``driving`` names the
@@ -382,6 +398,11 @@ def ema(
     r["diagram_freq_hz"] = np.abs(diagram_poles) / (2 * np.pi)
     r["diagram_damping_ratio"] = -diagram_poles.real / np.maximum(np.abs(diagram_poles), 1e-300)
     r["refined"] = np.array([bool(m["refined"]) for m in modes_], dtype=bool)
+    refinement = [m.get("refinement") for m in modes_]
+    refined_poles = np.array([complex(*q["pole"]) if q else np.nan for q in refinement])
+    r["refined_freq_hz"] = np.abs(refined_poles) / (2 * np.pi)
+    r["refined_damping_ratio"] = -refined_poles.real / np.maximum(np.abs(refined_poles), 1e-300)
+    r["refinement"] = [_OUTCOMES[q["outcome"]] if q else "none" for q in refinement]
     r["auto_mac"] = np.array(r["auto_mac"])
     r["cmif"] = np.array(r["cmif"])
     return _typed(EmaResult, r)

@@ -5,10 +5,10 @@ three references, 1 % noise, the same seeds), with lamdyn's default, checked pol
 each true mode as the tables there pick them. Issue 45, item 2, asks for 90 % at least.
 
 A pole whose verdict is "smear" is counted apart: the chain leaves it out by default, and its
-deviation does not describe one mode. Each pole is also classed by where it came from:
-"refined" (the check took the refined pole), "diagram" (the check kept the diagram's pole) and
-"left" (the diagram's pole was put back because the refinement left its column; recognised by
-lamdyn's warning, which names the diagram pole's frequency).
+deviation does not describe one mode. Each pole is also classed by where it came from
+(`lamdyn.ema`'s `refinement`): "refined" (the check took the refined pole), "diagram" (the
+check kept the diagram's pole) and "put back" (the diagram's pole, put back because the
+refinement left its column or moved a pole beside one that left).
 
 Usage: python3 tools/ema/damped_coverage.py [--seeds N] [--levels 0.001,0.02,...]
   -> markdown (docs/ema.md, "Standard deviations of each pole"): per case, the poles counted,
@@ -17,7 +17,6 @@ Usage: python3 tools/ema/damped_coverage.py [--seeds N] [--levels 0.001,0.02,...
      the predicted sd, and the mean error over it (a bias where near the first).
 """
 import argparse
-import re
 import sys
 from pathlib import Path
 
@@ -27,18 +26,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import damped_bias as db  # noqa: E402
 
 #: Classes of the pole each mode reports (module docs).
-CLASSES = ("refined", "diagram", "left")
-
-
-def moved_from(warnings):
-    """The diagram poles' frequencies (Hz, as printed to 1 mHz) that lamdyn's warnings say the
-    refinement moved out of their columns."""
-    out = []
-    for w in warnings:
-        m = re.search(r"moved the pole at ([0-9.]+) Hz", w)
-        if m:
-            out.append(float(m.group(1)))
-    return out
+CLASSES = ("refined", "diagram", "put back")
+#: The class of each `lamdyn.ema` refinement outcome.
+CLASS_OF = {"taken": "refined", "not better": "diagram", "none": "diagram",
+            "left its column": "put back", "beside a lost pole": "put back"}
 
 
 def intervals(zeta, references, seeds, snr_rel=0.01):
@@ -52,15 +43,14 @@ def intervals(zeta, references, seeds, snr_rel=0.01):
     for s in range(seeds):
         f, h = db.plate_frf(zeta, references, snr_rel, np.random.default_rng(1000 + s))
         r = db.lamdyn_ema(f, h, targets, refine=True, poles="checked")
-        found, left = r["freq_hz"], moved_from(r["warnings"])
+        found = r["freq_hz"]
         for i, k in enumerate(db.nearest_index(found, targets, win)):
             if k is None:
                 continue
             err[s, i] = found[k] - targets[i], r["damping_ratio"][k] - zeta
             sd[s, i] = r["freq_sd_hz"][k], r["damping_sd"][k]
             verdict[s, i] = r["verdict"][k]
-            gone = any(abs(x - r["diagram_freq_hz"][k]) < 1.5e-3 for x in left)
-            kind[s, i] = "refined" if r["refined"][k] else "left" if gone else "diagram"
+            kind[s, i] = CLASS_OF[r["refinement"][k]]
     return targets, err, sd, verdict, kind
 
 

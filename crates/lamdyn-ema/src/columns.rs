@@ -13,6 +13,27 @@
 use crate::lscf::{half_power_bands_overlap, pole_damping, pole_freq_hz};
 use crate::stabilization::{SelectedPole, StabilityCriteria};
 use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+/// Why the diagram's pole was put back in place of a refined pole ([`in_their_columns`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PutBack {
+    /// The refined pole left its column in the diagram.
+    LeftItsColumn,
+    /// Its diagram pole's half-power band overlaps that of a pole that left its column.
+    BesideALostPole,
+}
+
+/// The refined poles held to their columns ([`in_their_columns`]), index-aligned with the
+/// selection.
+pub(crate) struct HeldPoles {
+    /// The refined pole, or the diagram's where it was put back.
+    pub poles: Vec<Complex64>,
+    /// Why each pole was put back; None where the refined pole stays.
+    pub put_back: Vec<Option<PutBack>>,
+    /// One line per pole that left its column.
+    pub warnings: Vec<String>,
+}
 
 /// The refined poles `refined` (index-aligned with `selected`) with each that left its column in
 /// the diagram ([`SelectedPole::holds`]) replaced by the diagram's pole, and so each whose
@@ -23,12 +44,23 @@ pub(crate) fn in_their_columns(
     refined: &[Complex64],
     selected: &[SelectedPole],
     c: &StabilityCriteria,
-) -> (Vec<Complex64>, Vec<String>) {
+) -> HeldPoles {
     let left = left_their_columns(refined, selected, c);
     let diagram: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
-    let put_back = beside_a_lost_pole(&diagram, &left);
+    let put_back: Vec<Option<PutBack>> = beside_a_lost_pole(&diagram, &left)
+        .into_iter()
+        .zip(&left)
+        .map(|(beside, &gone)| match (gone, beside) {
+            (true, _) => Some(PutBack::LeftItsColumn),
+            (false, true) => Some(PutBack::BesideALostPole),
+            (false, false) => None,
+        })
+        .collect();
     let poles = (0..refined.len())
-        .map(|r| if put_back[r] { diagram[r] } else { refined[r] })
+        .map(|r| match put_back[r] {
+            Some(_) => diagram[r],
+            None => refined[r],
+        })
         .collect();
     let warnings = (0..refined.len())
         .filter(|&r| left[r])
@@ -40,7 +72,11 @@ pub(crate) fn in_their_columns(
             )
         })
         .collect();
-    (poles, warnings)
+    HeldPoles {
+        poles,
+        put_back,
+        warnings,
+    }
 }
 
 /// "the refinement moved the pole at … to …, out of its column in the diagram (…)": the start of
@@ -58,35 +94,6 @@ fn out_of_column(col: &SelectedPole, p: Complex64) -> String {
         100.0 * col.damping_range[0],
         100.0 * col.damping_range[1],
     )
-}
-
-/// The refined poles `refined` (index-aligned with `selected`), each clamped into its column in
-/// the diagram ([`SelectedPole::clamp`]): a pole that left is moved back to the column's edge
-/// where it crossed it, in f and ζ; a pole the column holds is returned as it is. This is the
-/// refinement's estimate limited to where the diagram supports this mode, and so a bounded
-/// measure of how far the data pull the pole from the diagram's (`identify`'s widened
-/// standard deviation).
-pub(crate) fn clamped_to_their_columns(
-    refined: &[Complex64],
-    selected: &[SelectedPole],
-    c: &StabilityCriteria,
-) -> Vec<Complex64> {
-    refined
-        .iter()
-        .zip(selected)
-        .map(|(&p, col)| {
-            let (f, z) = col.clamp(pole_freq_hz(p), pole_damping(p), c);
-            pole_of(f, z)
-        })
-        .collect()
-}
-
-/// The pole λ = ω(−ζ + i√(1 − ζ²)), ω = 2πf, of frequency f (Hz, |λ|/2π) and damping ratio ζ
-/// (−Re λ/|λ|); ζ is taken within [0, 1].
-fn pole_of(freq_hz: f64, damping: f64) -> Complex64 {
-    let w = 2.0 * std::f64::consts::PI * freq_hz;
-    let z = damping.clamp(0.0, 1.0);
-    Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
 }
 
 /// For each refined pole (index-aligned with `selected`), whether it left its column in the
@@ -130,39 +137,5 @@ mod tests {
             vec![false, true, true, false]
         );
         assert_eq!(beside_a_lost_pole(&diagram, &[false; 4]), vec![false; 4]);
-    }
-
-    /// A refined pole inside its column comes back as it is (to rounding); one that ran away
-    /// comes back on its column's edge, with the frequency and damping that `pole_of` was
-    /// given.
-    #[test]
-    fn refined_poles_are_clamped_into_their_columns() {
-        let c = StabilityCriteria::default();
-        let col = |f: f64, z: f64| SelectedPole {
-            pole: pole_of(f, z),
-            freq_hz: f,
-            damping: z,
-            count: 10,
-            spread_hz: 0.1,
-            freq_range_hz: [f - 0.05, f + 0.05],
-            damping_range: [z - 0.001, z + 0.001],
-            pick: crate::stabilization::Pick::Auto,
-        };
-        let selected = [col(25.6, 0.15), col(75.0, 0.011)];
-        let inside = pole_of(25.7, 0.16);
-        let runaway = pole_of(1.1e8, 0.0);
-        let out = clamped_to_their_columns(&[inside, runaway], &selected, &c);
-        assert!(
-            (out[0] - inside).norm() < 1e-9 * inside.norm(),
-            "{:?}",
-            out[0]
-        );
-        let (f, z) = (pole_freq_hz(out[1]), pole_damping(out[1]));
-        assert!(
-            (f - 75.80).abs() < 1e-9 && (z - 0.0045).abs() < 1e-12,
-            "{f} {z}"
-        );
-        assert!((pole_freq_hz(pole_of(40.0, 0.2)) - 40.0).abs() < 1e-12);
-        assert!((pole_damping(pole_of(40.0, 0.2)) - 0.2).abs() < 1e-12);
     }
 }

@@ -3,7 +3,7 @@
 //! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
 //! correlation with the measured ones, and the CMIF.
 
-use crate::columns::{clamped_to_their_columns, in_their_columns};
+use crate::columns::{HeldPoles, PutBack, in_their_columns};
 use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
 use crate::lscf::{
@@ -141,9 +141,45 @@ pub struct Mode {
     /// Whether `pole` is the refined pole (false: the diagram's).
     #[serde(default)]
     pub refined: bool,
+    /// The pole the refinement reached from `diagram_pole` and what became of it; None where
+    /// no refinement ran (`--no-refine`, `--poles diagram`).
+    #[serde(default)]
+    pub refinement: Option<Refinement>,
     /// The verdict on it: sound, doubtful or a smear over a cluster ([`crate::quality`]).
     #[serde(default)]
     pub quality: ModeQuality,
+}
+
+/// What the refinement made of a mode's diagram pole.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Refinement {
+    /// The pole it reached, rad/s (exponential-window damping removed), taken or not.
+    pub pole: Complex64,
+    /// What became of it.
+    pub outcome: RefinementOutcome,
+}
+
+/// Whether the refined pole is the mode's, and why not.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum RefinementOutcome {
+    /// It is the mode's pole.
+    Taken,
+    /// The check found it no significantly better than the diagram's ([`crate::context`]).
+    NotBetter,
+    /// It left its column in the diagram; the diagram's pole was put back.
+    LeftItsColumn,
+    /// Its diagram pole's half-power band overlaps that of a pole that left its column; the
+    /// diagram's pole was put back.
+    BesideALostPole,
+}
+
+impl From<PutBack> for RefinementOutcome {
+    fn from(p: PutBack) -> Self {
+        match p {
+            PutBack::LeftItsColumn => Self::LeftItsColumn,
+            PutBack::BesideALostPole => Self::BesideALostPole,
+        }
+    }
 }
 
 /// Everything [`identify`] found.
@@ -539,29 +575,22 @@ fn fit_selected(
             let (refined, check) =
                 refined_beside_the_check(data, &poles, s.refine_lines, c, refine)?;
             timings.refinement += lap(&mut clock);
-            let (in_place, warnings) = in_their_columns(&refined, selected, &s.criteria);
+            let held = in_their_columns(&refined, selected, &s.criteria);
             // The scope has run the spawned check; without it (never) the diagram's poles.
             let fit = match &check {
-                Some(check) => check.fit(&in_place)?,
+                Some(check) => check.fit(&held.poles)?,
                 None => lsfd(freqs, curves, quantity, &poles, band)?,
             };
             timings.check += lap(&mut clock);
-            SelectedFit {
-                fit,
-                warnings,
-                refined: Some(clamped_to_their_columns(&refined, selected, &s.criteria)),
-            }
+            SelectedFit::refined(fit, refined, held)
         }
         _ => {
-            let (in_place, warnings) = in_their_columns(&refine()?, selected, &s.criteria);
+            let refined = refine()?;
+            let held = in_their_columns(&refined, selected, &s.criteria);
             timings.refinement += lap(&mut clock);
-            let fit = lsfd(freqs, curves, quantity, &in_place, band)?;
+            let fit = lsfd(freqs, curves, quantity, &held.poles, band)?;
             timings.residues += lap(&mut clock);
-            SelectedFit {
-                fit,
-                warnings,
-                refined: None,
-            }
+            SelectedFit::refined(fit, refined, held)
         }
     };
     Ok(fitted)
@@ -601,23 +630,47 @@ struct SelectedFit {
     fit: ModalFit,
     /// One line per refined pole put back into its column.
     warnings: Vec<String>,
-    /// With the checked estimator: the refined poles, index-aligned with the selection, taken
-    /// or not, each clamped into its column ([`clamped_to_their_columns`]): a pole that left
-    /// its column is no estimate of this mode, only of the direction the data pull it.
-    refined: Option<Vec<Complex64>>,
+    /// With an estimator that refines: the refined poles, index-aligned with the selection,
+    /// taken or not.
+    refined: Option<Vec<RefinedPole>>,
+}
+
+impl SelectedFit {
+    /// The fit of the poles `held` to their columns, with the refined poles `refined` it was
+    /// chosen from and the warnings of `held`.
+    fn refined(fit: ModalFit, refined: Vec<Complex64>, held: HeldPoles) -> Self {
+        let refined = refined
+            .into_iter()
+            .zip(held.put_back)
+            .map(|(pole, put_back)| RefinedPole { pole, put_back })
+            .collect();
+        Self {
+            fit,
+            warnings: held.warnings,
+            refined: Some(refined),
+        }
+    }
+}
+
+/// A pole as the refinement left it, and why the diagram's was put back in its place.
+#[derive(Debug, Clone, Copy)]
+struct RefinedPole {
+    pole: Complex64,
+    put_back: Option<PutBack>,
 }
 
 /// The standard deviation `sd` of a mode whose reported pole `pole` is the diagram's while the
-/// refinement found `refined` (clamped into the pole's column: [`clamped_to_their_columns`]):
-/// widened by the two estimates' difference, √(sd² + (diagram − refined)²), in f and ζ. The
-/// check found neither significantly better, or the refinement left the column, so the truth
-/// may lie by either; `sd` is the noise's part at `pole` and describes its scatter only. The
-/// clamp keeps a pole that ran away from widening the deviation beyond the column's reach.
-fn widened_by_the_refinement(sd: PoleSd, pole: Complex64, refined: Complex64) -> PoleSd {
+/// refinement found another, at `refined` = (f in Hz, ζ) clamped into the pole's column
+/// ([`SelectedPole::clamp`]): widened by the two estimates' difference,
+/// √(sd² + (diagram − refined)²), in f and ζ. The check found neither significantly better, or
+/// the refinement left the column, so the truth may lie by either; `sd` is the noise's part at
+/// `pole` and describes its scatter only. The clamp keeps a pole that ran away from widening
+/// the deviation beyond the column's reach.
+fn widened_by_the_refinement(sd: PoleSd, pole: Complex64, refined: (f64, f64)) -> PoleSd {
     let spread = |s: f64, d: f64| s.hypot(d);
     PoleSd {
-        freq_hz: spread(sd.freq_hz, pole_freq_hz(pole) - pole_freq_hz(refined)),
-        damping_ratio: spread(sd.damping_ratio, pole_damping(pole) - pole_damping(refined)),
+        freq_hz: spread(sd.freq_hz, pole_freq_hz(pole) - refined.0),
+        damping_ratio: spread(sd.damping_ratio, pole_damping(pole) - refined.1),
     }
 }
 
@@ -810,8 +863,8 @@ struct ModeSources<'a> {
     references: usize,
     /// The selection, index-aligned with the fit's poles.
     selected: &'a [SelectedPole],
-    /// With the checked estimator: the refined poles clamped into their columns, taken or not.
-    refined: Option<&'a [Complex64]>,
+    /// With an estimator that refines: the refined poles, taken or not.
+    refined: Option<&'a [RefinedPole]>,
     /// The poles' standard deviations.
     deviations: Option<&'a [PoleSd]>,
     /// Each mode's FRAC drop ([`contributions`]).
@@ -865,9 +918,19 @@ impl ModeSources<'_> {
             frac_drop: self.frac_drop[r],
             line_spacing_hz: self.line_spacing_hz,
         };
+        let refined = self.refined.and_then(|p| p.get(r));
+        let outcome = refined.map(|q| match q.put_back {
+            Some(why) => why.into(),
+            None if q.pole == fit.poles[r] => RefinementOutcome::Taken,
+            None => RefinementOutcome::NotBetter,
+        });
         let sd = self.deviations.and_then(|d| d.get(r).copied()).map(|sd| {
-            match self.refined.and_then(|p| p.get(r)) {
-                Some(&q) if fit.poles[r] != q => widened_by_the_refinement(sd, fit.poles[r], q),
+            match (refined, selected, outcome) {
+                (Some(q), Some(col), Some(o)) if o != RefinementOutcome::Taken => {
+                    let at = (pole_freq_hz(q.pole), pole_damping(q.pole));
+                    let clamped = col.clamp(at.0, at.1, &s.criteria);
+                    widened_by_the_refinement(sd, fit.poles[r], clamped)
+                }
                 _ => sd,
             }
         });
@@ -886,6 +949,10 @@ impl ModeSources<'_> {
             pick: selected.map_or(Pick::Auto, |p| p.pick),
             diagram_pole: corrected(diagram_pole),
             refined: diagram_pole != fit.poles[r],
+            refinement: refined.zip(outcome).map(|(q, outcome)| Refinement {
+                pole: corrected(q.pole),
+                outcome,
+            }),
             quality: assess(&evidence, self.cmif_peaks),
         }
     }
@@ -1099,6 +1166,7 @@ mod tests {
             pick: Pick::Auto,
             diagram_pole: pole,
             refined: false,
+            refinement: None,
             quality: ModeQuality::default(),
         }
     }

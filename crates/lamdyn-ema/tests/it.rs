@@ -698,6 +698,34 @@ fn refined_poles_stay_in_their_columns_on_noisy_receptance() {
         r.modes.iter().map(|m| m.freq_hz).collect::<Vec<_>>()
     );
     eprintln!("{} modes; replaced poles: {:?}", r.modes.len(), r.warnings);
+    // Each mode says what the refinement made of its pole: the refined pole is the mode's
+    // where taken, the diagram's otherwise; one mode per warning left its column, and its
+    // refined pole is the one the warning names (none here since 2026-11; the 15 %-damped
+    // plate of python/tests/test_ema_damped.py has four).
+    use lamdyn_ema::identify::RefinementOutcome;
+    let left: Vec<&String> = r
+        .warnings
+        .iter()
+        .filter(|w| w.contains("out of its column"))
+        .collect();
+    let mut left_modes = 0;
+    for m in &r.modes {
+        let q = m
+            .refinement
+            .expect("the checked estimator refines every pole");
+        match q.outcome {
+            RefinementOutcome::Taken => assert!(m.refined && m.pole == q.pole, "{m:?}"),
+            other => {
+                assert!(!m.refined && m.pole == m.diagram_pole, "{other:?}: {m:?}");
+                if other == RefinementOutcome::LeftItsColumn {
+                    left_modes += 1;
+                    let named = format!("to {:.3} Hz", q.pole.norm() / (2.0 * PI));
+                    assert!(left.iter().any(|w| w.contains(&named)), "{named}: {left:?}");
+                }
+            }
+        }
+    }
+    assert_eq!(left_modes, left.len(), "{:?}", r.warnings);
 }
 
 /// On a long record (9 accelerance FRFs × 50 001 lines at 0.02 Hz, four modes of

@@ -760,6 +760,7 @@ pub(crate) mod tests {
             sd: None,
             pick: Default::default(),
             diagram_pole: Complex64::new(0.0, 0.0),
+            refinement: None,
             refined: false,
             quality: Default::default(),
         }

@@ -342,6 +342,7 @@ fn ema_mode(pole: Complex64, sd: Option<lamdyn_ema::lsfd::PoleSd>) -> lamdyn_ema
         pick: Default::default(),
         diagram_pole: pole,
         refined: false,
+        refinement: None,
         quality: Default::default(),
     }
 }

@@ -224,9 +224,15 @@ fn verdict_cell(m: &Mode) -> String {
     format!("{}{mark}", m.quality.verdict.label())
 }
 
-/// Where the mode's pole comes from: "refined" or "diagram".
+/// Where the mode's pole comes from: "refined", "diagram", or "put back" (the diagram's, where
+/// the refinement left the pole's column or moved a pole beside one that left).
 fn pole_source(m: &Mode) -> &'static str {
-    if m.refined { "refined" } else { "diagram" }
+    use lamdyn_ema::identify::RefinementOutcome::{BesideALostPole, LeftItsColumn};
+    match m.refinement.map(|q| q.outcome) {
+        Some(LeftItsColumn | BesideALostPole) => "put back",
+        _ if m.refined => "refined",
+        _ => "diagram",
+    }
 }
 
 /// One line per mode that is not sound: its number, frequency, verdict and reasons.
@@ -337,6 +343,8 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read
             pole_source(m).into(),
             pole_freq_hz(m.diagram_pole).into(),
             pole_damping(m.diagram_pole).into(),
+            m.refinement.map(|q| pole_freq_hz(q.pole)).into(),
+            m.refinement.map(|q| pole_damping(q.pole)).into(),
         ]);
     }
     for (verdict, line) in verdict_lines(&r.modes) {
@@ -371,6 +379,14 @@ fn mode_columns() -> Vec<Column> {
         Column::new(
             "diagram_damping_ratio",
             "zeta (diagram)",
+            "%",
+            Fmt::Fixed(4),
+        )
+        .scaled(0.01),
+        Column::new("refined_freq_hz", "f (refined)", "Hz", Fmt::Fixed(4)),
+        Column::new(
+            "refined_damping_ratio",
+            "zeta (refined)",
             "%",
             Fmt::Fixed(4),
         )
@@ -596,17 +612,18 @@ fn write_results(
     use lamdyn_report::ema::{cmif_chart, stabilization_chart};
     let mut modes = String::from(
         "mode,freq_hz,freq_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_poles,\
-         pick,frac_drop,verdict,pole,diagram_freq_hz,diagram_damping_ratio\n",
+         pick,frac_drop,verdict,pole,diagram_freq_hz,diagram_damping_ratio,refined_freq_hz,\
+         refined_damping_ratio\n",
     );
-    let sd = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+    let optional = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for (k, m) in r.modes.iter().enumerate() {
         modes += &format!(
-            "{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{}\n",
             k + 1,
             m.freq_hz,
-            sd(m.sd.map(|d| d.freq_hz)),
+            optional(m.sd.map(|d| d.freq_hz)),
             m.damping_ratio,
-            sd(m.sd.map(|d| d.damping_ratio)),
+            optional(m.sd.map(|d| d.damping_ratio)),
             m.loss_factor,
             m.mpc,
             m.mpd_deg,
@@ -617,6 +634,8 @@ fn write_results(
             pole_source(m),
             pole_freq_hz(m.diagram_pole),
             pole_damping(m.diagram_pole),
+            optional(m.refinement.map(|q| pole_freq_hz(q.pole))),
+            optional(m.refinement.map(|q| pole_damping(q.pole))),
         );
     }
     let mut diagram = String::from("order,freq_hz,damping_ratio,stability,vector_mac\n");
