@@ -13,10 +13,9 @@
 use crate::lscf::{half_power_bands_overlap, pole_damping, pole_freq_hz};
 use crate::stabilization::{SelectedPole, StabilityCriteria};
 use num_complex::Complex64;
-use serde::{Deserialize, Serialize};
 
 /// Why the diagram's pole was put back in place of a refined pole ([`in_their_columns`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PutBack {
     /// The refined pole left its column in the diagram.
     LeftItsColumn,
