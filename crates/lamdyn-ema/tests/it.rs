@@ -700,8 +700,8 @@ fn refined_poles_stay_in_their_columns_on_noisy_receptance() {
     eprintln!("{} modes; replaced poles: {:?}", r.modes.len(), r.warnings);
     // Each mode says what the refinement made of its pole: the refined pole is the mode's
     // where taken, the diagram's otherwise; one mode per warning left its column, and its
-    // refined pole is the one the warning names (none here since 2026-11; the 15 %-damped
-    // plate of python/tests/test_ema_damped.py has four).
+    // refined pole is the one the warning names (none leaves its column here now; the
+    // 15 %-damped plate of python/tests/test_ema_damped.py has four).
     use lamdyn_ema::identify::RefinementOutcome;
     let left: Vec<&String> = r
         .warnings
