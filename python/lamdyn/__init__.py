@@ -349,12 +349,12 @@ def ema(
     refined one), ``refined_freq_hz`` and ``refined_damping_ratio`` (the pole the refinement
     reached, taken or not; NaN without refinement) and ``refinement`` (what became of it:
     "taken", "not better" — the check kept the diagram's —, "left its column" or "beside a
-    lost pole" — the diagram's put back —, or "none"), ``auto_mac``, ``cmif`` (lines x singular values), and ``modes`` /
-    ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's result.json). The CMIF peaks
-    listed are those whose topographic prominence in the band (as ``scipy.signal.find_peaks``
-    on log sigma_1) is at least the factor ``cmif_prominence``. ``driving`` names the
-    driving-point response (mass-normalised shapes) as ``lamdyn ema --driving`` does, or gives
-    its index.
+    lost pole" — the diagram's put back —, or "none"), ``auto_mac``, ``cmif`` (lines x
+    singular values), and ``modes`` / ``diagram`` / ``cmif_peaks`` as lists of dicts (the CLI's
+    result.json). The CMIF peaks listed are those whose topographic prominence in the band (as
+    ``scipy.signal.find_peaks`` on log sigma_1) is at least the factor ``cmif_prominence``.
+    ``driving`` names the driving-point response (mass-normalised shapes) as ``lamdyn ema
+    --driving`` does, or gives its index.
     """
     if isinstance(driving, bool) or not (driving is None or isinstance(driving, (str, int, np.integer))):
         raise LamdynError(f"driving: a response's name or index, got {driving!r}")

@@ -13,8 +13,9 @@ refinement left its column or moved a pole beside one that left).
 Usage: python3 tools/ema/damped_coverage.py [--seeds N] [--levels 0.001,0.02,...]
   -> markdown (docs/ema.md, "Standard deviations of each pole"): per case, the poles counted,
      the coverage of f and zeta over the poles that are not smears, and by class, and the
-     widest sd of any pole found (smears too) relative to the true f and zeta; then per mode where a coverage is below 90 %: its class counts, observed RMS error over the RMS of
-     the predicted sd, and the mean error over it (a bias where near the first).
+     widest sd of any pole found (smears too) relative to the true f and zeta; then per mode
+     where a coverage is below 90 %: its class counts, observed RMS error over the RMS of the
+     predicted sd, and the mean error over it (a bias where near the first).
 """
 import argparse
 import sys
