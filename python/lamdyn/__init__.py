@@ -305,6 +305,11 @@ class EmaResult(_Fields):
     timings: dict
 
 
+def _freq_and_damping(poles: np.ndarray) -> tuple:
+    """|lambda|/2 pi (Hz) and -Re(lambda)/|lambda| of complex poles (rad/s); NaN stays NaN."""
+    return np.abs(poles) / (2 * np.pi), -poles.real / np.maximum(np.abs(poles), 1e-300)
+
+
 #: ``refinement`` labels of :func:`ema` by the outcome's name in the JSON.
 _OUTCOMES = {"Taken": "taken", "NotBetter": "not better", "LeftItsColumn": "left its column",
              "BesideALostPole": "beside a lost pole"}
@@ -395,13 +400,11 @@ def ema(
     r["damping_sd"] = np.array([d.get("damping_ratio", np.nan) for d in sd])
     r["verdict"] = [m["quality"]["verdict"].lower() for m in modes_]
     diagram_poles = np.array([complex(*m["diagram_pole"]) for m in modes_])
-    r["diagram_freq_hz"] = np.abs(diagram_poles) / (2 * np.pi)
-    r["diagram_damping_ratio"] = -diagram_poles.real / np.maximum(np.abs(diagram_poles), 1e-300)
+    r["diagram_freq_hz"], r["diagram_damping_ratio"] = _freq_and_damping(diagram_poles)
     r["refined"] = np.array([bool(m["refined"]) for m in modes_], dtype=bool)
     refinement = [m.get("refinement") for m in modes_]
     refined_poles = np.array([complex(*q["pole"]) if q else np.nan for q in refinement])
-    r["refined_freq_hz"] = np.abs(refined_poles) / (2 * np.pi)
-    r["refined_damping_ratio"] = -refined_poles.real / np.maximum(np.abs(refined_poles), 1e-300)
+    r["refined_freq_hz"], r["refined_damping_ratio"] = _freq_and_damping(refined_poles)
     r["refinement"] = [_OUTCOMES[q["outcome"]] if q else "none" for q in refinement]
     r["auto_mac"] = np.array(r["auto_mac"])
     r["cmif"] = np.array(r["cmif"])

@@ -182,7 +182,7 @@ def test_pole_intervals_cover_the_damped_plates(coverage_tool, zeta):
     pair (150.6 / 152.5 and 175.6 / 180.6 Hz), 4-6 sd from the mode it is matched to, which no
     noise interval describes (docs/ema.md)."""
     targets, err, sd, verdict, kind = coverage_tool.intervals(zeta, [0, 5, 10], 20)
-    counted = np.isfinite(err[..., 0]) & np.isfinite(sd).all(axis=-1) & (verdict != "smear")
+    counted = coverage_tool.cases_counted(err, sd, verdict)
     assert counted.sum() >= 0.8 * err.shape[0] * len(targets), counted.sum()
     hit = coverage_tool.covered(err, sd)[counted]
     assert hit.mean(axis=0).min() >= 0.9, hit.mean(axis=0)

@@ -55,6 +55,11 @@ def intervals(zeta, references, seeds, snr_rel=0.01):
     return targets, err, sd, verdict, kind
 
 
+def cases_counted(err, sd, verdict):
+    """Which (seed, mode) cases count: a pole found, with an sd, and not a smear."""
+    return np.isfinite(err[..., 0]) & np.isfinite(sd).all(axis=-1) & (verdict != "smear")
+
+
 def covered(err, sd):
     """Whether the truth lies in each 95 % interval (|error| <= 1.96 sd), per quantity."""
     return np.abs(err) <= 1.96 * sd
@@ -71,7 +76,7 @@ def fraction(hit, mask):
 def case_lines(zeta, refs, seeds):
     """One row of the coverage table, and the lines on its modes below 90 %."""
     targets, err, sd, verdict, kind = intervals(zeta, refs, seeds)
-    counted = np.isfinite(err[..., 0]) & np.isfinite(sd).all(axis=-1) & (verdict != "smear")
+    counted = cases_counted(err, sd, verdict)
     hit = covered(err, sd)
     smears = int((verdict == "smear").sum())
     cells = [fraction(hit, counted & (kind == c)) + f" ({int((counted & (kind == c)).sum())})"

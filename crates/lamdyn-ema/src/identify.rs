@@ -924,16 +924,15 @@ impl ModeSources<'_> {
             None if q.pole == fit.poles[r] => RefinementOutcome::Taken,
             None => RefinementOutcome::NotBetter,
         });
-        let sd = self.deviations.and_then(|d| d.get(r).copied()).map(|sd| {
-            match (refined, selected, outcome) {
-                (Some(q), Some(col), Some(o)) if o != RefinementOutcome::Taken => {
-                    let at = (pole_freq_hz(q.pole), pole_damping(q.pole));
-                    let clamped = col.clamp(at.0, at.1, &s.criteria);
-                    widened_by_the_refinement(sd, fit.poles[r], clamped)
-                }
-                _ => sd,
-            }
-        });
+        // The refined pole not taken, clamped into the column: what widens the sd.
+        let not_taken = refined
+            .filter(|_| outcome != Some(RefinementOutcome::Taken))
+            .zip(selected)
+            .map(|(q, col)| col.clamp(pole_freq_hz(q.pole), pole_damping(q.pole), &s.criteria));
+        let sd = self
+            .deviations
+            .and_then(|d| d.get(r).copied())
+            .map(|sd| not_taken.map_or(sd, |q| widened_by_the_refinement(sd, fit.poles[r], q)));
         Mode {
             freq_hz: evidence.freq_hz,
             damping_ratio: z,
