@@ -249,6 +249,10 @@ class EmaResult(_Fields):
             refinement); they leave out the estimator's bias.
         verdict: per mode "sound", "doubtful" or "smear" (the reasons in
             ``modes[k]["quality"]``).
+        second_shape_z, second_shape_rho: per mode the second-shape test (NaN where it has
+            none): a second shape's energy under the pole over its chance level (1 for one
+            mode), and its peak over the pole's (docs/ema.md, step 7).
+        second_shape_calibrated: whether that test judged on these data.
         diagram_freq_hz, diagram_damping_ratio: the stabilization diagram's pole each mode
             started from, Hz and ratio.
         refined: whether the reported pole is the refined one (bool array).
@@ -284,6 +288,9 @@ class EmaResult(_Fields):
     freq_sd_hz: np.ndarray
     damping_sd: np.ndarray
     verdict: list
+    second_shape_z: np.ndarray
+    second_shape_rho: np.ndarray
+    second_shape_calibrated: bool
     diagram_freq_hz: np.ndarray
     diagram_damping_ratio: np.ndarray
     refined: np.ndarray
@@ -349,7 +356,9 @@ def ema(
     ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses), ``mpc``,
     ``mpd_deg``, ``freq_sd_hz`` and ``damping_sd`` (standard deviations from the fit's noise,
     NaN without refinement), ``verdict`` (per mode: "sound", "doubtful" or "smear", the
-    reasons in ``modes[k]["quality"]``), ``diagram_freq_hz`` and ``diagram_damping_ratio`` (the
+    reasons in ``modes[k]["quality"]``), ``second_shape_z`` and ``second_shape_rho`` (the
+    second-shape test, judging where ``second_shape_calibrated``), ``diagram_freq_hz`` and
+    ``diagram_damping_ratio`` (the
     diagram's pole each mode started from) and ``refined`` (whether the reported pole is the
     refined one), ``refined_freq_hz`` and ``refined_damping_ratio`` (the pole the refinement
     reached, taken or not; NaN without refinement) and ``refinement`` (what became of it:
@@ -399,6 +408,10 @@ def ema(
     r["freq_sd_hz"] = np.array([d.get("freq_hz", np.nan) for d in sd])
     r["damping_sd"] = np.array([d.get("damping_ratio", np.nan) for d in sd])
     r["verdict"] = [m["quality"]["verdict"].lower() for m in modes_]
+    tests = [m["quality"].get("second_shape") or {} for m in modes_]
+    r["second_shape_z"] = np.array([t.get("statistic", np.nan) for t in tests])
+    r["second_shape_rho"] = np.array([t.get("relative_amplitude", np.nan) for t in tests])
+    r["second_shape_calibrated"] = bool(r.get("second_shape_calibrated", False))
     diagram_poles = np.array([complex(*m["diagram_pole"]) for m in modes_])
     r["diagram_freq_hz"], r["diagram_damping_ratio"] = _freq_and_damping(diagram_poles)
     r["refined"] = np.array([bool(m["refined"]) for m in modes_], dtype=bool)

@@ -10,7 +10,11 @@ use crate::lscf::{
     LscfSettings, half_power_bands_overlap, lscf, pole_damping, pole_freq_hz, sample_interval,
 };
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
-use crate::quality::{Measured, ModeEvidence, ModeQuality, assess, contributions};
+use crate::quality::{
+    Contributions, Measured, ModeEvidence, ModeQuality, assess, contributions,
+    second_shape_calibrated,
+};
+use crate::second_shape::{Curves, SecondShape, second_shapes};
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode, to_unit};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
@@ -218,6 +222,10 @@ pub struct EmaResult {
     /// Wall-clock time of each step (zero in a result stored before they were kept).
     #[serde(default)]
     pub timings: EmaTimings,
+    /// Whether the second-shape test judged the modes ([`crate::quality`]: the data calibrate
+    /// it); where not, each mode's statistics are reported and judge nothing.
+    #[serde(default)]
+    pub second_shape_calibrated: bool,
 }
 
 /// Wall-clock seconds of each step of [`identify`]; a step run twice (the fit after split modes
@@ -854,6 +862,33 @@ fn select(
     (picks.into_iter().flatten().collect(), missing)
 }
 
+/// What the regenerated curves say of the fit's modes ([`crate::quality`]).
+struct FitEvidence {
+    /// FRAC of each curve and each mode's FRAC drop.
+    contributions: Contributions,
+    /// Each mode's second-shape test.
+    second_shapes: Vec<Option<SecondShape>>,
+    /// Whether the data calibrate that test.
+    calibrated: bool,
+}
+
+impl FitEvidence {
+    /// The evidence of `fit` (in the data's units) on `measured`.
+    fn of(fit: &ModalFit, measured: Measured) -> Self {
+        let curves = Curves {
+            freqs_hz: measured.freqs_hz,
+            curves: measured.curves,
+            lines: measured.lines,
+        };
+        let second_shapes = second_shapes(&fit.poles, curves);
+        Self {
+            contributions: contributions(fit, measured),
+            calibrated: second_shape_calibrated(&second_shapes),
+            second_shapes,
+        }
+    }
+}
+
 /// What each identified mode is made of ([`ModeSources::mode`]).
 struct ModeSources<'a> {
     /// The modal model in the data's units.
@@ -869,6 +904,10 @@ struct ModeSources<'a> {
     deviations: Option<&'a [PoleSd]>,
     /// Each mode's FRAC drop ([`contributions`]).
     frac_drop: &'a [f64],
+    /// Each mode's second-shape test ([`second_shapes`]).
+    second_shapes: &'a [Option<SecondShape>],
+    /// Whether the data calibrate that test ([`second_shape_calibrated`]).
+    second_shape_calibrated: bool,
     line_spacing_hz: f64,
     /// The first CMIF curve's peaks.
     cmif_peaks: &'a [CmifPeak],
@@ -917,6 +956,8 @@ impl ModeSources<'_> {
             stable_count: selected.map_or(0, |p| p.count),
             frac_drop: self.frac_drop[r],
             line_spacing_hz: self.line_spacing_hz,
+            second_shape: self.second_shapes.get(r).copied().flatten(),
+            second_shape_calibrated: self.second_shape_calibrated,
         };
         let refined = self.refined.and_then(|p| p.get(r));
         let outcome = refined.map(|q| match q.put_back {
@@ -1101,7 +1142,7 @@ pub fn identify_with(
         .filter(|&k| freqs[k] > 0.0)
         .collect();
     let scaled_fit = fitted.fit.scaled(1.0 / scale);
-    let contributions = contributions(&scaled_fit, data.on_lines(&positive));
+    let evidence = FitEvidence::of(&scaled_fit, data.on_lines(&positive));
     warnings.extend(roving_hammer_note(set));
     timings.modes = lap(&mut clock);
     let deviations = deviations_of(data, &scaled_fit.poles, s, on_stage)?;
@@ -1114,7 +1155,9 @@ pub fn identify_with(
         selected: &selected,
         refined: fitted.refined.as_deref(),
         deviations: deviations.as_deref(),
-        frac_drop: &contributions.frac_drop,
+        frac_drop: &evidence.contributions.frac_drop,
+        second_shapes: &evidence.second_shapes,
+        second_shape_calibrated: evidence.calibrated,
         line_spacing_hz: line_spacing(freqs, &positive),
         cmif_peaks: &peaks[0],
     };
@@ -1132,7 +1175,7 @@ pub fn identify_with(
         modes,
         rejected,
         set_aside: vec![],
-        correlation: contributions.frac,
+        correlation: evidence.contributions.frac,
         curve_names: names,
         cmif,
         cmif_peaks,
@@ -1140,6 +1183,7 @@ pub fn identify_with(
         fit: Some(scaled_fit),
         warnings,
         timings,
+        second_shape_calibrated: evidence.calibrated,
     })
 }
 

@@ -13,6 +13,7 @@
 //! | [`context`] | the refined poles checked in the LSCF model's context (its other roots fixed) |
 //! | `noise` | each curve's noise level from its line-to-line second differences |
 //! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
+//! | [`second_shape`] | whether a pole's curves hold a second shape under it (two close modes) |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
 //! | [`spectra`] | H1/H2/Hv and coherence from hammer hits, force and exponential windows |
 //! | [`welch`] | H1/H2/Hv and coherence from continuous excitation (Welch averaging) |
@@ -33,6 +34,7 @@ pub mod lsfd;
 mod noise;
 mod projection;
 pub mod quality;
+pub mod second_shape;
 pub mod shapes;
 pub mod spectra;
 pub mod stabilization;

@@ -968,6 +968,8 @@ fn one_pole_over_a_cluster_is_a_smear() {
                     stable_count: 20,
                     frac_drop: drops[r],
                     line_spacing_hz: freqs[1] - freqs[0],
+                    second_shape: None,
+                    second_shape_calibrated: false,
                 };
                 (evidence.mpc, assess(&evidence, &[]))
             })

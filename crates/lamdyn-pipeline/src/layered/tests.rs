@@ -364,6 +364,7 @@ fn ema_of(modes: Vec<lamdyn_ema::identify::Mode>) -> EmaResult {
         fit: None,
         warnings: Vec::new(),
         timings: Default::default(),
+        second_shape_calibrated: false,
     }
 }
 

@@ -339,6 +339,8 @@ fn build_report(set: &FrfSet, source: &str, s: &EmaSettings, r: &EmaResult, read
             m.mpd_deg.into(),
             (m.stable_count as f64).into(),
             m.quality.frac_drop.into(),
+            m.quality.second_shape.map(|t| t.statistic).into(),
+            m.quality.second_shape.map(|t| t.relative_amplitude).into(),
             verdict_cell(m).into(),
             pole_source(m).into(),
             pole_freq_hz(m.diagram_pole).into(),
@@ -373,6 +375,8 @@ fn mode_columns() -> Vec<Column> {
         Column::new("mpd_deg", "MPD", "deg", Fmt::Fixed(2)),
         Column::new("stable_poles", "stable", "", Fmt::Fixed(0)),
         Column::new("frac_drop", "FRAC drop", "", Fmt::Sci(2)),
+        Column::new("second_shape_z", "2nd shape Z", "", Fmt::Sci(2)),
+        Column::new("second_shape_rho", "2nd shape rho", "", Fmt::Fixed(3)),
         Column::new("verdict", "verdict", "", Fmt::Fixed(0)),
         Column::new("pole", "pole", "", Fmt::Fixed(0)),
         Column::new("diagram_freq_hz", "f (diagram)", "Hz", Fmt::Fixed(4)),
@@ -473,6 +477,20 @@ fn add_sections(report: &mut Report, r: &EmaResult) {
 }
 
 /// Low correlations and missing picks as warnings; the columns' notes.
+/// What the `2nd shape` columns say, and whether they judged.
+fn second_shape_note(calibrated: bool) -> &'static str {
+    if calibrated {
+        "2nd shape Z: energy of a second shape under the pole over its chance level (1 for one \
+         mode); rho: its peak over the pole's. Z >= 5 with a chance <= 1e-6 and rho >= 0.02 \
+         makes the mode doubtful (a weak close mode), rho >= 0.08 a smear (one pole over two \
+         close modes)."
+    } else {
+        "2nd shape Z, rho: the second-shape test is not calibrated on these data (its median Z \
+         over the poles is above 2, or fewer than 3 poles have one: the curves do not follow one \
+         set of poles to their noise), so it judges nothing here."
+    }
+}
+
 fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
     let low: Vec<&String> = r
         .curve_names
@@ -500,6 +518,9 @@ fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
             s.window_hz, r.missing_hz
         ));
     }
+    report
+        .notes
+        .push(second_shape_note(r.second_shape_calibrated).into());
     report.notes.push(
         "zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and \
          MPD 0 for a real (normal) mode."
@@ -539,6 +560,7 @@ fn extra_json(set: &FrfSet, r: &EmaResult, read_s: f64) -> serde_json::Value {
         "freqs_hz": set.freqs_hz(),
         "responses": set.responses().iter().map(|c| &c.name).collect::<Vec<_>>(),
         "seconds": time_json(read_s, &r.timings),
+        "second_shape_calibrated": r.second_shape_calibrated,
     })
 }
 
@@ -612,13 +634,13 @@ fn write_results(
     use lamdyn_report::ema::{cmif_chart, stabilization_chart};
     let mut modes = String::from(
         "mode,freq_hz,freq_sd_hz,damping_ratio,damping_sd,loss_factor,mpc,mpd_deg,stable_poles,\
-         pick,frac_drop,verdict,pole,diagram_freq_hz,diagram_damping_ratio,refined_freq_hz,\
-         refined_damping_ratio\n",
+         pick,frac_drop,second_shape_z,second_shape_rho,verdict,pole,diagram_freq_hz,\
+         diagram_damping_ratio,refined_freq_hz,refined_damping_ratio\n",
     );
     let optional = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for (k, m) in r.modes.iter().enumerate() {
         modes += &format!(
-            "{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{}\n",
             k + 1,
             m.freq_hz,
             optional(m.sd.map(|d| d.freq_hz)),
@@ -630,6 +652,8 @@ fn write_results(
             m.stable_count,
             m.pick,
             m.quality.frac_drop,
+            optional(m.quality.second_shape.map(|t| t.statistic)),
+            optional(m.quality.second_shape.map(|t| t.relative_amplitude)),
             m.quality.verdict.label(),
             pole_source(m),
             pole_freq_hz(m.diagram_pole),

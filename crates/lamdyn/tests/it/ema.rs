@@ -625,6 +625,39 @@ fn the_dam_keeps_every_cmif_peak_and_its_close_pair() {
     assert!(pair.iter().all(|(_, v)| v == "sound*"), "{pair:?}");
 }
 
+/// The second-shape test on measured data: the dam's 26 curves do not follow one set of poles
+/// to their noise (measured Z 0.8–1000, median 9.5, where one mode gives about 1), so the test
+/// is not calibrated and judges nothing; each mode still shows its Z and rho, and the text says
+/// why they judge nothing.
+#[test]
+fn the_dam_shows_its_second_shapes_without_judging_them() {
+    let dam =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../lamdyn-ema/tests/fixtures/dam/dam0.unv");
+    let (doc, _) = ema_json(&["--uff", dam.to_str().unwrap(), "--band-hz", "2,12.5"]);
+    assert_eq!(doc["details"]["second_shape_calibrated"], false);
+    let rows = doc["rows"].as_array().unwrap();
+    let z: Vec<f64> = rows
+        .iter()
+        .map(|m| m["second_shape_z"].as_f64().unwrap())
+        .collect();
+    assert!(z.iter().all(|z| z.is_finite() && *z >= 0.0), "{z:?}");
+    let mut sorted = z.clone();
+    sorted.sort_by(f64::total_cmp);
+    assert!(sorted[sorted.len() / 2] > 2.0, "{z:?}");
+    assert!(
+        rows.iter()
+            .all(|m| m["verdict"].as_str().unwrap() != "smear"),
+        "{rows:?}"
+    );
+    let args = ["ema", "--uff", dam.to_str().unwrap(), "--band-hz", "2,12.5"];
+    let (code, text, _) = lamdyn(&args);
+    assert!(code <= 1, "exit {code}");
+    assert!(
+        text.contains("the second-shape test is not calibrated"),
+        "{text}"
+    );
+}
+
 /// The time of each step is printed: in the text's `time` line and as numbers in the JSON's
 /// `details.seconds`, every step there, none negative, their sum within the process's time.
 #[test]
