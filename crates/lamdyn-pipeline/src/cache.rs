@@ -2,9 +2,10 @@
 //! modal model (the eigen solution on the channels, with its residual terms) and the modal
 //! identification. A key is the FNV-1a 64-bit hash of everything the result depends on (the
 //! model spec and mesh file bytes, the channels, the options; the FRF values for the
-//! identification), so changing only the law, the stack or the uncertainty options re-uses
-//! both, and changing any input misses. Files are written to a temporary name and renamed: a
-//! crash leaves no half-written entry.
+//! identification; and the code: the package version and `LAMDYN_SOURCE_HASH`, the hash of the
+//! sources of the crates that compute them, set by build.rs), so changing only the law, the
+//! stack or the uncertainty options re-uses both, and changing any input, or the code, misses.
+//! Files are written to a temporary name and renamed: a crash leaves no half-written entry.
 //!
 //! Every entry is checked before it is used: a header holds a magic word, the entry's key, the
 //! payload's length and its FNV-1a checksum (any change confined to one byte changes the

@@ -658,8 +658,13 @@ fn run_ema_to_order(
     max_order: usize,
 ) -> Result<(EmaResult, bool)> {
     let settings = config.settings(max_order);
-    let mut key = Key::new(concat!("ema ", env!("CARGO_PKG_VERSION")))
-        .bytes(format!("{settings:?}").as_bytes());
+    let mut key = Key::new(concat!(
+        "ema ",
+        env!("CARGO_PKG_VERSION"),
+        " ",
+        env!("LAMDYN_SOURCE_HASH")
+    ))
+    .bytes(format!("{settings:?}").as_bytes());
     key = channels_key(key, set.responses());
     key = channels_key(key, set.references());
     for f in set.freqs_hz() {
@@ -705,12 +710,17 @@ fn build_model(
         bail!("model.modes: {modes}: keep at least the 6 rigid-body modes and one elastic mode");
     }
     let tol = config.tolerance_m;
-    let mut key = Key::new(concat!("model with its line ", env!("CARGO_PKG_VERSION")))
-        .bytes(format!("{spec:?}").as_bytes())
-        .bytes(&(modes as u64).to_le_bytes())
-        .bytes(&[u8::from(config.residual)])
-        .f64(tol)
-        .bytes(format!("{:?}", config.sensor_mapping).as_bytes());
+    let mut key = Key::new(concat!(
+        "model with its line ",
+        env!("CARGO_PKG_VERSION"),
+        " ",
+        env!("LAMDYN_SOURCE_HASH")
+    ))
+    .bytes(format!("{spec:?}").as_bytes())
+    .bytes(&(modes as u64).to_le_bytes())
+    .bytes(&[u8::from(config.residual)])
+    .f64(tol)
+    .bytes(format!("{:?}", config.sensor_mapping).as_bytes());
     if let MeshSpec::Gmsh { file, .. } = &spec.mesh {
         let p = relative(spec_dir, Path::new(file));
         key = key

@@ -169,15 +169,20 @@ impl<'a> LevelBuilds<'a> {
         } else {
             self.setup.ladder.modes
         };
-        let mut key = Key::new(concat!("layered basis v7 ", env!("CARGO_PKG_VERSION")))
-            .f64(self.g_ref)
-            .bytes(
-                format!(
-                    "{:?} {elements:?} {modes} {coarsest} {:?} {}",
-                    plate.plan, plate.supports, plate.elements_per_layer
-                )
-                .as_bytes(),
-            );
+        let mut key = Key::new(concat!(
+            "layered basis v7 ",
+            env!("CARGO_PKG_VERSION"),
+            " ",
+            env!("LAMDYN_SOURCE_HASH")
+        ))
+        .f64(self.g_ref)
+        .bytes(
+            format!(
+                "{:?} {elements:?} {modes} {coarsest} {:?} {}",
+                plate.plan, plate.supports, plate.elements_per_layer
+            )
+            .as_bytes(),
+        );
         for l in &plate.layers {
             key = key.bytes(format!("{l:?}").as_bytes());
         }
