@@ -114,14 +114,20 @@ def lamdyn_ema(f, h, targets, band=BAND_HZ, **options):
                       window_hz=min(windows(targets)), **options)
 
 
-def lamdyn_poles(f, h, targets, refine, estimator=None, polymax=True):
+def lamdyn_poles(f, h, targets, refine, estimator=None, polymax=True, smears=None):
     """lamdyn's poles near each target (`lamdyn_ema`), NaN where none was found or the
     identification failed. `polymax=False` is one LSCF over every curve with several
-    references (`lamdyn ema --single-reference`)."""
+    references (`lamdyn ema --single-reference`). With a list `smears`, one boolean per target
+    is appended to it: whether the pole found there is a smear (kept out of the chain)."""
     try:
         r = lamdyn_ema(f, h, targets, refine=refine, poles=estimator or "checked",
                        polymax=polymax)
     except Exception:  # noqa: BLE001 - a failed identification finds nothing
+        r = None
+    if smears is not None:
+        idx = nearest_index(r["freq_hz"], targets, windows(targets)) if r else [None] * len(targets)
+        smears.append([k is not None and r["verdict"][k] == "smear" for k in idx])
+    if r is None:
         return np.full((len(targets), 2), np.nan)
     return nearest(r["freq_hz"], r["damping_ratio"], targets, windows(targets))
 
@@ -154,10 +160,11 @@ def sdypy_poles(f, h, targets):
 
 
 def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False,
-        channel_noise=False):
+        channel_noise=False, smears=None):
     """Per estimator: relative errors (seeds, modes, [f, zeta]). `with_single` adds, with
     several references, lamdyn's checked pole from one LSCF over every curve ("single"):
-    sdypy-EMA's formulation, where PolyMAX is lamdyn's default."""
+    sdypy-EMA's formulation, where PolyMAX is lamdyn's default. With a list `smears`, per seed
+    and mode whether the checked pole is a smear (`lamdyn_poles`)."""
     modes = true_modes()
     targets = [t[0] for t in modes]
     truth = np.array([[t, zeta] for t in targets])
@@ -171,8 +178,9 @@ def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False,
         rng = np.random.default_rng(1000 + seed)
         f, h = plate_frf(zeta, references, snr_rel, rng, channel_noise)
         errors["diagram"].append(lamdyn_poles(f, h, targets, refine=False) / truth - 1)
-        for e in ("refined", "checked"):
-            errors[e].append(lamdyn_poles(f, h, targets, True, e) / truth - 1)
+        errors["refined"].append(lamdyn_poles(f, h, targets, True, "refined") / truth - 1)
+        errors["checked"].append(lamdyn_poles(f, h, targets, True, "checked", smears=smears)
+                                 / truth - 1)
         if single:
             errors["single"].append(lamdyn_poles(f, h, targets, True, polymax=False) / truth - 1)
         if with_sdypy:
@@ -236,15 +244,20 @@ def loss(a, b, rng):
     return f"{ratio:.2f} (95 % interval {lo:.2f}-{hi:.2f}, {verdict})"
 
 
-def losses(targets, errors, final="checked", others=("diagram", "sdypy")):
+def losses(targets, errors, final="checked", others=("diagram", "sdypy"), smears=None):
     """The final pole's RMS error against the diagram's and sdypy-EMA's (or `others`), mode by
-    mode and quantity by quantity: one line where it is larger (`loss`)."""
+    mode and quantity by quantity: one line where it is larger (`loss`). With `smears` (seeds x
+    modes, booleans: the final pole judged a smear), each line says in how many seeds the pole
+    was one: lamdyn itself says it describes no mode, and keeps it out of the chain."""
     rng = np.random.default_rng(0)
     out = []
     for other in [n for n in others if n in errors]:
         for i, t in enumerate(targets):
             for q, name in ((0, "f"), (1, "zeta")):
                 text = loss(errors[final][:, i, q], errors[other][:, i, q], rng)
+                if text and smears is not None and smears[:, i].any():
+                    found = int(np.isfinite(errors[final][:, i, q]).sum())
+                    text += f"; a smear in {int(smears[:, i].sum())} of the {found} seeds found"
                 if text:
                     out.append(f"- {t:.1f} Hz, {name}: {final} / {other} RMS {text}")
     return out
@@ -300,13 +313,15 @@ def report(zeta, refs, snr, seeds, with_sdypy, channel_noise=False):
     """Prints one case's table and, with noise, its lists of losses; returns its worst modes
     and its errors (`run`)."""
     t = time.perf_counter()
-    targets, errors = run(zeta, refs, snr, seeds, with_sdypy, True, channel_noise)
+    smears = []
+    targets, errors = run(zeta, refs, snr, seeds, with_sdypy, True, channel_noise, smears)
+    smears = np.array(smears)
     print(f"\n### zeta {100 * zeta:g} %, {len(refs)} reference(s), "
           f"{'noise-free' if snr == 0 else f'{100 * snr:g} % noise, {seeds} seeds'}"
           f" ({time.perf_counter() - t:.0f} s)\n")
     print(table(targets, errors))
     if snr > 0:
-        worse = losses(targets, errors)
+        worse = losses(targets, errors, smears=smears)
         if worse:
             print("\nWhere the checked pole's RMS error is larger (paired bootstrap "
                   "over the seeds):\n" + "\n".join(worse))
