@@ -26,11 +26,11 @@
 //! most [`SECOND_SHAPE_CHANCE`] that noise gives as much (with few curves Z scatters widely)
 //! and a second shape of at least [`SECOND_SHAPE_AMPLITUDE`] of the pole's own peak make it
 //! doubtful (a weak close mode, or a neighbour the model misses), and one of at least
-//! [`SECOND_SHAPE_SMEAR_AMPLITUDE`] a smear. Z
-//! is a noise test, so it is trusted only where it is calibrated: the median Z over the data's
-//! poles (at least [`CALIBRATING_POLES`] of them) at most [`CALIBRATED_MEDIAN`], the modal
-//! model holding to the noise at the other modes. Where it is not (measured curves whose poles
-//! shift from curve to curve), Z is reported and judges nothing.
+//! [`SECOND_SHAPE_SMEAR_AMPLITUDE`] a smear. Z is a noise test, so it is trusted only where it
+//! is calibrated: the median Z over the data's poles (at least [`CALIBRATING_POLES`] of them)
+//! at most [`CALIBRATED_MEDIAN`], the modal model holding to the noise at the other modes.
+//! Where it is not (measured curves whose poles shift from curve to curve), Z is reported and
+//! judges nothing.
 //!
 //! **No resonance**: a pole damped at ζ ≥ 1/√2 ([`NO_RESONANCE_DAMPING`]) gives a receptance
 //! term without a peak (|1/(ω_n² − ω² + 2iζω_nω)| falls monotonically from ω = 0 when
@@ -143,7 +143,8 @@ pub enum QualityFlag {
         /// Stable poles.
         count: usize,
     },
-    /// A second shape under the pole ([`crate::second_shape`]): one pole over two modes.
+    /// A second shape under the pole ([`crate::second_shape`]): a weak close mode (doubtful)
+    /// or, from [`SECOND_SHAPE_SMEAR_AMPLITUDE`] on, one pole over two modes (a smear).
     SecondShape {
         /// Z, over its chance level.
         statistic: f64,
@@ -256,10 +257,9 @@ pub struct ModeEvidence {
     pub frac_drop: f64,
     /// The spacing of the measured lines, Hz (the CMIF peak's least reach).
     pub line_spacing_hz: f64,
-    /// The second-shape test's statistics, and whether the data calibrate it
-    /// ([`second_shape_calibrated`]).
+    /// The second-shape test's statistics (None where it has none).
     pub second_shape: Option<SecondShape>,
-    /// Whether the second-shape test judges on these data.
+    /// Whether the second-shape test judges on these data ([`second_shape_calibrated`]).
     pub second_shape_calibrated: bool,
 }
 

@@ -242,11 +242,12 @@ pub fn support_resonance_rejected(freq_hz: f64, zeta: f64) -> String {
     )
 }
 
-/// A pole set aside from the inverses as a smear over a cluster of modes.
-pub fn smear_set_aside(freq_hz: f64, zeta: f64, mpc: f64) -> String {
+/// A pole set aside from the inverses as a smear over a cluster of modes, with the verdict's
+/// `reasons` (a low MPC, or a second shape under a pole whose MPC is high).
+pub fn smear_set_aside(freq_hz: f64, zeta: f64, mpc: f64, reasons: &str) -> String {
     format!(
         "EMA: pole at {freq_hz:.3} Hz (zeta {:.2} %, MPC {mpc:.2}) set aside from the inverses: \
-         one pole over a cluster of modes (ema.keep_smears = true keeps it)",
+         {reasons} (ema.keep_smears = true keeps it)",
         100.0 * zeta
     )
 }

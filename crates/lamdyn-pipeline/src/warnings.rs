@@ -56,7 +56,12 @@ pub(crate) fn collect_warnings(
         out.push(text::support_resonance_rejected(m.freq_hz, m.damping_ratio));
     }
     for m in &ema.set_aside {
-        out.push(text::smear_set_aside(m.freq_hz, m.damping_ratio, m.mpc));
+        out.push(text::smear_set_aside(
+            m.freq_hz,
+            m.damping_ratio,
+            m.mpc,
+            &m.quality.reasons(),
+        ));
     }
     for f in &ema.missing_hz {
         out.push(text::no_stable_pole_near(*f));

@@ -476,7 +476,6 @@ fn add_sections(report: &mut Report, r: &EmaResult) {
     report.sections.push(peaks);
 }
 
-/// Low correlations and missing picks as warnings; the columns' notes.
 /// What the `2nd shape` columns say, and whether they judged.
 fn second_shape_note(calibrated: bool) -> &'static str {
     if calibrated {
@@ -491,6 +490,7 @@ fn second_shape_note(calibrated: bool) -> &'static str {
     }
 }
 
+/// Low correlations and missing picks as warnings; the columns' notes.
 fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
     let low: Vec<&String> = r
         .curve_names
