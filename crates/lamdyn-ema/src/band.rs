@@ -20,6 +20,15 @@ pub fn positive_lines(freqs_hz: &[f64], band_hz: [f64; 2]) -> Vec<usize> {
     out
 }
 
+/// The spacing of the first two of `lines` (Hz), 0 with fewer: the line spacing of a uniform
+/// frequency axis.
+pub fn line_spacing(freqs_hz: &[f64], lines: &[usize]) -> f64 {
+    match lines {
+        [a, b, ..] => (freqs_hz[*b] - freqs_hz[*a]).abs(),
+        _ => 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

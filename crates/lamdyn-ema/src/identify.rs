@@ -11,10 +11,10 @@ use crate::lscf::{
 };
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
 use crate::quality::{
-    Contributions, Measured, ModeEvidence, ModeQuality, assess, contributions,
+    Contributions, Measured, ModeEvidence, ModeQuality, SecondShape, assess, contributions,
     second_shape_calibrated,
 };
-use crate::second_shape::{Curves, SecondShape, second_shapes};
+use crate::second_shape::second_shapes;
 use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode, to_unit};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
@@ -875,12 +875,7 @@ struct FitEvidence {
 impl FitEvidence {
     /// The evidence of `fit` (in the data's units) on `measured`.
     fn of(fit: &ModalFit, measured: Measured) -> Self {
-        let curves = Curves {
-            freqs_hz: measured.freqs_hz,
-            curves: measured.curves,
-            lines: measured.lines,
-        };
-        let second_shapes = second_shapes(&fit.poles, curves);
+        let second_shapes = second_shapes(&fit.poles, measured);
         Self {
             contributions: contributions(fit, measured),
             calibrated: second_shape_calibrated(&second_shapes),
@@ -1043,14 +1038,6 @@ fn roving_hammer_note(set: &FrfSet) -> Option<String> {
     })
 }
 
-/// The spacing of the first two of `lines` (Hz), 0 with fewer.
-fn line_spacing(freqs: &[f64], lines: &[usize]) -> f64 {
-    match lines {
-        [a, b, ..] => (freqs[*b] - freqs[*a]).abs(),
-        _ => 0.0,
-    }
-}
-
 /// The poles' standard deviations ([`pole_deviations`]) when the settings refine them, else
 /// none.
 fn deviations_of(
@@ -1158,7 +1145,7 @@ pub fn identify_with(
         frac_drop: &evidence.contributions.frac_drop,
         second_shapes: &evidence.second_shapes,
         second_shape_calibrated: evidence.calibrated,
-        line_spacing_hz: line_spacing(freqs, &positive),
+        line_spacing_hz: crate::band::line_spacing(freqs, &positive),
         cmif_peaks: &peaks[0],
     };
     let (rejected, modes) = sources.modes();

@@ -39,7 +39,6 @@
 //! damping is named.
 
 use crate::lsfd::{FracSums, ModalFit};
-use crate::second_shape::SecondShape;
 use crate::shapes::CmifPeak;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -158,6 +157,20 @@ pub enum QualityFlag {
     },
 }
 
+impl QualityFlag {
+    /// Whether this flag alone makes the mode a smear: a low MPC at ζ ≥ [`SMEAR_DAMPING`], or a
+    /// second shape of at least [`SECOND_SHAPE_SMEAR_AMPLITUDE`].
+    pub fn makes_a_smear(&self) -> bool {
+        match *self {
+            Self::Smear { .. } => true,
+            Self::SecondShape {
+                relative_amplitude, ..
+            } => relative_amplitude >= SECOND_SHAPE_SMEAR_AMPLITUDE,
+            _ => false,
+        }
+    }
+}
+
 impl std::fmt::Display for QualityFlag {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match *self {
@@ -184,7 +197,7 @@ impl std::fmt::Display for QualityFlag {
                 "a second shape under the pole, {:.1} % of its peak ({statistic:.0} times the \
                  noise's chance level): {}",
                 100.0 * relative_amplitude,
-                if relative_amplitude >= SECOND_SHAPE_SMEAR_AMPLITUDE {
+                if self.makes_a_smear() {
                     "one pole over two close modes, not a mode"
                 } else {
                     "a weak close mode or a neighbour the model misses, which may pull the pole"
@@ -198,6 +211,17 @@ impl std::fmt::Display for QualityFlag {
             ),
         }
     }
+}
+
+/// The second-shape statistics of one pole ([`crate::second_shape`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SecondShape {
+    /// Z: the orthogonal part's energy over its chance level (mean 1 for one mode).
+    pub statistic: f64,
+    /// ρ: the second shape's peak over the pole's own.
+    pub relative_amplitude: f64,
+    /// The chance that noise alone gives a Z this large at one mode: P(χ²₂₍ₙ₋₁₎ ≥ 2(n − 1)Z).
+    pub chance: f64,
 }
 
 /// The verdict on one mode and its evidence.
@@ -336,14 +360,7 @@ pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
     if frac_drop < LITTLE_CONTRIBUTION && cmif_peak_hz.is_none() {
         flags.push(QualityFlag::LittleContribution { frac_drop });
     }
-    let smear = |f: &QualityFlag| match f {
-        QualityFlag::Smear { .. } => true,
-        QualityFlag::SecondShape {
-            relative_amplitude, ..
-        } => *relative_amplitude >= SECOND_SHAPE_SMEAR_AMPLITUDE,
-        _ => false,
-    };
-    let verdict = if flags.iter().any(smear) {
+    let verdict = if flags.iter().any(QualityFlag::makes_a_smear) {
         Verdict::Smear
     } else if flags.is_empty() {
         Verdict::Sound

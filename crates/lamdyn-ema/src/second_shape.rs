@@ -43,12 +43,13 @@
 //! at 0.1-15 % damping, one or three references; the pole for the pair 150.6 / 152.5 Hz at
 //! 8 %, one reference, Z ≥ 9.3, ρ ≥ 0.09.
 
+use crate::band::line_spacing;
 use crate::noise::line_noise_variance;
+use crate::quality::{Measured, SecondShape};
 use faer::linalg::solvers::SolveLstsq;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::{Mat, Par, c64};
 use num_complex::Complex64;
-use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// The window's least half-width, in lines (a pole narrower than a line is still fitted over
@@ -58,31 +59,9 @@ pub const MIN_HALF_WINDOW_LINES: f64 = 20.0;
 /// Each curve's σ̂ is at least this fraction of its RMS over the band (module docs).
 pub const NOISE_FLOOR: f64 = 1e-3;
 
-/// The second-shape statistics of one pole (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct SecondShape {
-    /// Z: the orthogonal part's energy over its chance level (mean 1 for one mode).
-    pub statistic: f64,
-    /// ρ: the second shape's peak over the pole's own.
-    pub relative_amplitude: f64,
-    /// The chance that noise alone gives a Z this large at one mode: P(χ²₂₍ₙ₋₁₎ ≥ 2(n − 1)Z).
-    pub chance: f64,
-}
-
-/// The measured curves and the band's lines the test reads.
-#[derive(Debug, Clone, Copy)]
-pub struct Curves<'a> {
-    /// Frequencies of the lines, Hz.
-    pub freqs_hz: &'a [f64],
-    /// The curves.
-    pub curves: &'a [&'a [Complex64]],
-    /// Indices of the band's lines, increasing.
-    pub lines: &'a [usize],
-}
-
 /// [`SecondShape`] of every pole of `poles` on `data`; None for a pole with fewer than two
 /// curves, too few lines in its window or a singular local fit.
-pub fn second_shapes(poles: &[Complex64], data: Curves) -> Vec<Option<SecondShape>> {
+pub fn second_shapes(poles: &[Complex64], data: Measured) -> Vec<Option<SecondShape>> {
     if data.curves.len() < 2 {
         return vec![None; poles.len()];
     }
@@ -91,8 +70,9 @@ pub fn second_shapes(poles: &[Complex64], data: Curves) -> Vec<Option<SecondShap
         .iter()
         .map(|c| floored_noise(c, data.lines))
         .collect();
+    let spacing = line_spacing(data.freqs_hz, data.lines);
     (0..poles.len())
-        .map(|k| second_shape(poles, k, data, &sigmas))
+        .map(|k| second_shape(poles, k, data, &sigmas, spacing))
         .collect()
 }
 
@@ -146,15 +126,16 @@ fn local_basis(poles: &[Complex64], k: usize, freqs: &[f64], half_hz: f64) -> Ma
     })
 }
 
-/// [`SecondShape`] of pole `k` (module docs); `sigmas` each curve's floored σ̂.
+/// [`SecondShape`] of pole `k` (module docs); `sigmas` each curve's floored σ̂, `spacing` the
+/// lines' spacing, Hz.
 fn second_shape(
     poles: &[Complex64],
     k: usize,
-    data: Curves,
+    data: Measured,
     sigmas: &[f64],
+    spacing: f64,
 ) -> Option<SecondShape> {
     let (wk, zk) = natural(poles[k]);
-    let spacing = line_spacing(data);
     let half_hz = (2.0 * zk * wk / (2.0 * PI)).max(MIN_HALF_WINDOW_LINES * spacing);
     let fk = wk / (2.0 * PI);
     let window: Vec<usize> = data
@@ -245,15 +226,6 @@ fn chi_square_survival(m: usize, t: f64) -> f64 {
     (top + sum.ln() - t).exp().min(1.0)
 }
 
-/// The smallest spacing of consecutive band lines, Hz (the data's line spacing).
-fn line_spacing(data: Curves) -> f64 {
-    data.lines
-        .windows(2)
-        .map(|w| data.freqs_hz[w[1]] - data.freqs_hz[w[0]])
-        .filter(|d| *d > 0.0)
-        .fold(f64::INFINITY, f64::min)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -312,7 +284,7 @@ mod tests {
         let lines: Vec<usize> = (0..freqs.len()).collect();
         second_shapes(
             poles,
-            Curves {
+            Measured {
                 freqs_hz: freqs,
                 curves: &refs,
                 lines: &lines,
