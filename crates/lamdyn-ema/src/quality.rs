@@ -52,27 +52,23 @@ pub const SMEAR_MPC: f64 = 0.5;
 /// A smear is damped at least this much (ζ): a cluster spans several half-power bandwidths.
 pub const SMEAR_DAMPING: f64 = 0.02;
 
-/// At or above this Z a second shape under a pole is more than noise (module docs). Measured
-/// on the damped plates of tools/ema/damped_bias.py (1 % noise, 20 seeds, 0.1-15 %, one and
-/// three references): one mode's Z at most 2.8, a pole over a pair 1.3 % apart at 8 % at least
-/// 9.3.
+/// At or above this Z a second shape under a pole is more than noise (module docs): above what
+/// one mode gives on the damped plates of tools/ema/damped_bias.py, below what a pole over an
+/// unresolved pair gives there (docs/ema.md, method step 7).
 pub const SECOND_SHAPE_STATISTIC: f64 = 5.0;
 
-/// At most this chance that noise alone gives the Z found: with two curves Z ≥ 5 has a chance
-/// of e⁻⁵ = 0.7 % per pole, so there it takes Z ≥ 13.8; from six curves on Z ≥ 5 is rarer.
+/// At most this chance that noise alone gives the Z found: with few curves Z scatters widely
+/// (with two it is an exponential variable, and Z ≥ 5 is then no rare event).
 pub const SECOND_SHAPE_CHANCE: f64 = 1e-6;
 
 /// At or above this relative amplitude a second shape is worth naming (the mode is doubtful):
-/// on noise-free curves the model's own imprecision gives ρ up to 0.002 at a significant Z
-/// (0.1 % damping).
+/// above what the modal model's own imprecision gives on noise-free curves.
 pub const SECOND_SHAPE_AMPLITUDE: f64 = 0.02;
 
-/// At or above this relative amplitude the pole stands for two modes (a smear). Measured: the
-/// poles over the damped plates' unresolved pairs (8 % and 15 %, one reference, 58 poles over
-/// 20 seeds) ρ 0.089-0.18; the demo roof's weakly excited 50.99 Hz mode ρ 0.044 at Z 10 (five
-/// hits; over two to five hits Z grows from 4.8 to 10 while ρ stays 0.044-0.046: no noise),
-/// whose pole gives the core's G' within 0.3 %: a pole under a weaker second shape still
-/// describes its mode.
+/// At or above this relative amplitude the pole stands for two modes (a smear): below what the
+/// poles over the damped plates' unresolved pairs give, above what a weakly excited mode beside
+/// a second one gives where its pole still describes it (the demo roof's; docs/ema.md, method
+/// step 7).
 pub const SECOND_SHAPE_SMEAR_AMPLITUDE: f64 = 0.08;
 
 /// Z is trusted where its median over the data's poles is at most this (module docs).
