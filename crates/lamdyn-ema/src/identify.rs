@@ -1,15 +1,17 @@
 //! The whole identification of an FRF set: LSCF poles at every order → stabilization diagram →
 //! physical poles (automatic, or near given frequencies) → pole refinement and residues (LSFD
-//! with residual terms) → modes with damping, shapes and indicators, the regenerated FRFs'
-//! correlation with the measured ones, and the CMIF.
+//! with residual terms) → modes with damping, shapes (each from the lines around its pole,
+//! [`crate::local_residues`]) and indicators, the regenerated FRFs' correlation with the
+//! measured ones, and the CMIF.
 
 use crate::columns::{HeldPoles, PutBack, in_their_columns};
 use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
+use crate::local_residues::local_residues;
 use crate::lscf::{
     LscfSettings, half_power_bands_overlap, lscf, pole_damping, pole_freq_hz, sample_interval,
 };
-use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles};
+use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles, shape_of};
 use crate::quality::{
     Contributions, Measured, ModeEvidence, ModeQuality, SecondShape, assess, contributions,
     second_shape_calibrated,
@@ -360,8 +362,8 @@ fn auto_mac(modes: &[Mode]) -> Vec<Vec<f64>> {
 
 /// Participation factors of mode r (see [`Mode::participation`]): power iteration on RᴴR with
 /// R the residue matrix (responses × references).
-fn participation(fit: &ModalFit, r: usize, nr: usize, nf: usize) -> Vec<Complex64> {
-    let res = |i: usize, j: usize| fit.residues[i * nf + j][r];
+fn participation(residues: &[Complex64], nr: usize, nf: usize) -> Vec<Complex64> {
+    let res = |i: usize, j: usize| residues[i * nf + j];
     let mut g = vec![Complex64::new(0.0, 0.0); nf * nf];
     for a in 0..nf {
         for b in 0..nf {
@@ -899,6 +901,9 @@ struct ModeSources<'a> {
     deviations: Option<&'a [PoleSd]>,
     /// Each mode's FRAC drop ([`contributions`]).
     frac_drop: &'a [f64],
+    /// Each mode's residues from the lines around its pole ([`local_residues`]), index-aligned
+    /// with the fit's poles; None where the fit's own stand.
+    local_residues: &'a [Option<Vec<Complex64>>],
     /// Each mode's second-shape test ([`second_shapes`]).
     second_shapes: &'a [Option<SecondShape>],
     /// Whether the data calibrate that test ([`second_shape_calibrated`]).
@@ -924,16 +929,24 @@ impl ModeSources<'_> {
 
     /// Mode `r`: its shape over the responses for reference 0 (over the references for a
     /// roving hammer: one response, several references; by reciprocity the residues of the
-    /// response to each hammer point), its pole with the exponential window's damping removed,
+    /// response to each hammer point) from its local residues (the fit's where it has none),
+    /// its pole with the exponential window's damping removed,
     /// its standard deviation (widened where the diagram's pole was kept) and its verdict.
     fn mode(&self, r: usize) -> Mode {
         let (fit, s, nr, nf) = (self.fit, self.settings, self.responses, self.references);
-        let all = fit.shape(r, s.driving.map(|d| d * nf));
-        let shape: Vec<Complex64> = if nr == 1 && nf > 1 {
-            all[..nf].to_vec()
-        } else {
-            (0..nr).map(|i| all[i * nf]).collect()
+        let residues = self.local_residues[r]
+            .clone()
+            .unwrap_or_else(|| fit.residues.iter().map(|res| res[r]).collect());
+        let for_reference = |all: Vec<Complex64>| -> Vec<Complex64> {
+            if nr == 1 && nf > 1 {
+                all[..nf].to_vec()
+            } else {
+                (0..nr).map(|i| all[i * nf]).collect()
+            }
         };
+        let driving = s.driving.map(|d| d * nf);
+        let shape = for_reference(shape_of(residues.clone(), fit.poles[r], driving));
+        let band_shape = for_reference(fit.shape(r, driving));
         let corrected = |p: Complex64| {
             s.exp_tau_s
                 .map_or(p, |tau| correct_exponential_window(p, tau))
@@ -946,6 +959,7 @@ impl ModeSources<'_> {
             freq_hz: pole_freq_hz(pole),
             damping_ratio: z,
             mpc: mpc(&shape),
+            band_mpc: mpc(&band_shape),
             mpd_deg: mpd(&shape),
             shape_len: shape.len(),
             stable_count: selected.map_or(0, |p| p.count),
@@ -976,7 +990,7 @@ impl ModeSources<'_> {
             pole,
             stable_count: evidence.stable_count,
             real_shape: real_mode(&shape),
-            participation: participation(fit, r, nr, nf),
+            participation: participation(&residues, nr, nf),
             mpc: evidence.mpc,
             mpd_deg: evidence.mpd_deg,
             shape,
@@ -1036,6 +1050,19 @@ fn roving_hammer_note(set: &FrfSet) -> Option<String> {
              each hammer point)"
         )
     })
+}
+
+/// The residues of each pole of `fit` (in the data's units) fitted near it ([`local_residues`])
+/// on `measured`, curves in the data's units times `scale`.
+fn residues_near_each_pole(
+    fit: &ModalFit,
+    measured: Measured,
+    scale: f64,
+) -> Vec<Option<Vec<Complex64>>> {
+    local_residues(&fit.poles, fit.quantity, measured)
+        .into_iter()
+        .map(|r| r.map(|r| r.into_iter().map(|a| a / scale).collect()))
+        .collect()
 }
 
 /// The poles' standard deviations ([`pole_deviations`]) when the settings refine them, else
@@ -1123,11 +1150,7 @@ pub fn identify_with(
     }
     warnings.extend(std::mem::take(&mut fitted.warnings));
     clock = Instant::now();
-    let positive: Vec<usize> = in_band
-        .iter()
-        .copied()
-        .filter(|&k| freqs[k] > 0.0)
-        .collect();
+    let positive = crate::band::positive_lines(freqs, band);
     let scaled_fit = fitted.fit.scaled(1.0 / scale);
     let evidence = FitEvidence::of(&scaled_fit, data.on_lines(&positive));
     warnings.extend(roving_hammer_note(set));
@@ -1143,6 +1166,7 @@ pub fn identify_with(
         refined: fitted.refined.as_deref(),
         deviations: deviations.as_deref(),
         frac_drop: &evidence.contributions.frac_drop,
+        local_residues: &residues_near_each_pole(&scaled_fit, data.on_lines(&positive), scale),
         second_shapes: &evidence.second_shapes,
         second_shape_calibrated: evidence.calibrated,
         line_spacing_hz: crate::band::line_spacing(freqs, &positive),
@@ -1153,8 +1177,8 @@ pub fn identify_with(
         warnings.extend(lone_modes_at_second_peaks(&modes, &peaks[1], &s.criteria));
     }
     let auto_mac = auto_mac(&modes);
-    timings.modes += lap(&mut clock);
     let [cmif_peaks, _] = peaks;
+    timings.modes += lap(&mut clock);
     Ok(EmaResult {
         band_hz: band,
         diagram: diag,

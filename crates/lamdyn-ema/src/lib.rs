@@ -8,6 +8,7 @@
 //! | [`lscf`] | LSCF / RFP-Z common-denominator poles at many orders in one pass |
 //! | [`stabilization`] | stabilization diagram, automatic and targeted pole selection |
 //! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC, pole refinement |
+//! | [`local_residues`] | each mode's residues from the lines around its pole: the shapes |
 //! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
 //! | `denominator` | the LSCF model's roots and their partial-fraction columns |
 //! | [`context`] | the refined poles checked in the LSCF model's context (its other roots fixed) |
@@ -29,6 +30,7 @@ pub mod context;
 mod denominator;
 mod error;
 pub mod identify;
+pub mod local_residues;
 pub mod lscf;
 pub mod lsfd;
 mod noise;

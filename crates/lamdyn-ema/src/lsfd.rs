@@ -24,7 +24,10 @@
 //!
 //! **Shapes.** For one reference, the residues over the responses are the complex mode shape
 //! (up to scale). With a driving point p (response = reference), mass-normalised complex modes
-//! A_r = φ φᵀ/(2iω_d) give φ_p = √(2iω_d A_r,pp) and φ_o = 2iω_d A_r,op/φ_p.
+//! A_r = φ φᵀ/(2iω_d) give φ_p = √(2iω_d A_r,pp) and φ_o = 2iω_d A_r,op/φ_p ([`shape_of`]).
+//! The residues of the whole band hold what its two residual terms miss (damped modes outside
+//! the band); the identified modes take their shapes from residues fitted near each pole
+//! ([`crate::local_residues`]).
 
 use crate::denominator::LscfContext;
 use crate::error::{EmaError, check_curves, invalid};
@@ -183,15 +186,24 @@ impl ModalFit {
     /// driving-point curve `driving` (module docs).
     pub fn shape(&self, r: usize, driving: Option<usize>) -> Vec<Complex64> {
         let a: Vec<Complex64> = self.residues.iter().map(|res| res[r]).collect();
-        match driving {
-            Some(p) if p < a.len() => {
-                let wd = self.poles[r].im;
-                let two_i_wd = Complex64::new(0.0, 2.0 * wd);
-                let phi_p = (two_i_wd * a[p]).sqrt();
-                a.iter().map(|v| two_i_wd * v / phi_p).collect()
-            }
-            _ => a,
+        shape_of(a, self.poles[r], driving)
+    }
+}
+
+/// The complex shape of a mode of pole `pole` from its residues over the curves: the residues,
+/// or mass-normalised through the driving-point curve `driving` (module docs).
+pub fn shape_of(
+    residues: Vec<Complex64>,
+    pole: Complex64,
+    driving: Option<usize>,
+) -> Vec<Complex64> {
+    match driving {
+        Some(p) if p < residues.len() => {
+            let two_i_wd = Complex64::new(0.0, 2.0 * pole.im);
+            let phi_p = (two_i_wd * residues[p]).sqrt();
+            residues.iter().map(|v| two_i_wd * v / phi_p).collect()
         }
+        _ => residues,
     }
 }
 

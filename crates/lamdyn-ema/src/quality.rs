@@ -43,10 +43,9 @@ use crate::shapes::CmifPeak;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-/// Below this MPC a damped pole's shape is not one mode's. Measured: smears over clusters of
-/// an independent damped laminate 0.05 and 0.15; one pole over four plate modes ζ 8 % at 40 dB
-/// 0.24 (`tests/it.rs`, where the four true poles give modes above 0.99); the measured dam's
-/// twelve modes 0.62–0.995 (26 channels, one reference).
+/// Below this MPC, in both residue estimates (the band's fit's and the lines' around the
+/// pole), a damped pole's shape is not one mode's: the figures it lies between are in
+/// docs/ema.md, method step 7.
 pub const SMEAR_MPC: f64 = 0.5;
 
 /// A smear is damped at least this much (ζ): a cluster spans several half-power bandwidths.
@@ -114,17 +113,22 @@ impl Verdict {
 /// One reason for a verdict other than [`Verdict::Sound`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum QualityFlag {
-    /// MPC below [`SMEAR_MPC`] at ζ ≥ [`SMEAR_DAMPING`].
+    /// MPC below [`SMEAR_MPC`] at ζ ≥ [`SMEAR_DAMPING`], from both residue estimates.
     Smear {
         /// MPC of the shape.
         mpc: f64,
+        /// MPC of the shape from the band's fit's residues.
+        band_mpc: f64,
         /// Damping ratio.
         damping_ratio: f64,
     },
-    /// MPC below [`SMEAR_MPC`] at light damping: a complex or weakly excited mode.
+    /// MPC below [`SMEAR_MPC`] at light damping, from both residue estimates: a complex or
+    /// weakly excited mode.
     ComplexShape {
         /// MPC of the shape.
         mpc: f64,
+        /// MPC of the shape from the band's fit's residues.
+        band_mpc: f64,
         /// MPD, degrees.
         mpd_deg: f64,
     },
@@ -170,14 +174,24 @@ impl QualityFlag {
 impl std::fmt::Display for QualityFlag {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match *self {
-            Self::Smear { mpc, damping_ratio } => write!(
+            Self::Smear {
+                mpc,
+                band_mpc,
+                damping_ratio,
+            } => write!(
                 f,
-                "MPC {mpc:.2} at zeta {:.1} %: one pole over a cluster of modes, not a mode",
+                "MPC {mpc:.2} ({band_mpc:.2} from the band's fit) at zeta {:.1} %: one pole \
+                 over a cluster of modes, not a mode",
                 100.0 * damping_ratio
             ),
-            Self::ComplexShape { mpc, mpd_deg } => write!(
+            Self::ComplexShape {
+                mpc,
+                band_mpc,
+                mpd_deg,
+            } => write!(
                 f,
-                "MPC {mpc:.2}, MPD {mpd_deg:.0} deg: a complex or weakly excited shape"
+                "MPC {mpc:.2} ({band_mpc:.2} from the band's fit), MPD {mpd_deg:.0} deg: a \
+                 complex or weakly excited shape"
             ),
             Self::NoResonance { damping_ratio } => write!(
                 f,
@@ -265,8 +279,10 @@ pub struct ModeEvidence {
     pub freq_hz: f64,
     /// Damping ratio.
     pub damping_ratio: f64,
-    /// MPC of its shape.
+    /// MPC of its shape (from its residues near its pole, [`crate::local_residues`]).
     pub mpc: f64,
+    /// MPC of its shape from the band's fit's residues ([`crate::lsfd`]).
+    pub band_mpc: f64,
     /// MPD of its shape, degrees.
     pub mpd_deg: f64,
     /// Components of its shape (responses, or references for a roving hammer).
@@ -319,15 +335,17 @@ pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
                 .total_cmp(&(b - mode.freq_hz).abs())
         });
     let mut flags = Vec::new();
-    if mode.shape_len >= 3 && mode.mpc < SMEAR_MPC {
+    if mode.shape_len >= 3 && mode.mpc.max(mode.band_mpc) < SMEAR_MPC {
         flags.push(if mode.damping_ratio >= SMEAR_DAMPING {
             QualityFlag::Smear {
                 mpc: mode.mpc,
+                band_mpc: mode.band_mpc,
                 damping_ratio: mode.damping_ratio,
             }
         } else {
             QualityFlag::ComplexShape {
                 mpc: mode.mpc,
+                band_mpc: mode.band_mpc,
                 mpd_deg: mode.mpd_deg,
             }
         });
@@ -459,6 +477,7 @@ mod tests {
             freq_hz: 100.0,
             damping_ratio,
             mpc: 0.99,
+            band_mpc: 0.99,
             mpd_deg: 2.0,
             shape_len: 9,
             stable_count: 20,

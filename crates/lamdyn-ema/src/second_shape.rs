@@ -43,6 +43,7 @@
 //! docs/ema.md, method step 7.
 
 use crate::band::line_spacing;
+use crate::local_residues::{natural, poles_reaching, window_lines};
 use crate::noise::line_noise_variance;
 use crate::quality::{Measured, SecondShape};
 use faer::linalg::solvers::SolveLstsq;
@@ -85,26 +86,12 @@ fn floored_noise(curve: &[Complex64], lines: &[usize]) -> f64 {
     line_noise_variance(curve, lines).map_or(f64::NAN, |v| v.max(floor).sqrt())
 }
 
-/// Natural frequency (rad/s) and damping ratio of a pole λ = −ζω_n + iω_n√(1 − ζ²).
-fn natural(pole: Complex64) -> (f64, f64) {
-    let wn = pole.norm();
-    (wn, -pole.re / wn)
-}
-
 /// The local basis of pole `k` on the window's lines (rows, at `freqs`, half-width `half_hz`):
 /// the pole's three columns first, then each near pole's three, then the quadratic.
 fn local_basis(poles: &[Complex64], k: usize, freqs: &[f64], half_hz: f64) -> Mat<c64> {
     let (wk, _) = natural(poles[k]);
     let fk = wk / (2.0 * PI);
-    let near: Vec<Complex64> = poles
-        .iter()
-        .enumerate()
-        .filter(|&(j, p)| {
-            let (wj, zj) = natural(*p);
-            j != k && ((wj - wk) / (2.0 * PI)).abs() <= half_hz + 2.0 * zj * wj / (2.0 * PI)
-        })
-        .map(|(_, p)| *p)
-        .collect();
+    let near = poles_reaching(poles, k, half_hz);
     let columns = 3 * (1 + near.len()) + 3;
     Mat::from_fn(freqs.len(), columns, |i, c| {
         let s = Complex64::new(0.0, 2.0 * PI * freqs[i]);
@@ -137,12 +124,7 @@ fn second_shape(
     let (wk, zk) = natural(poles[k]);
     let half_hz = (2.0 * zk * wk / (2.0 * PI)).max(MIN_HALF_WINDOW_LINES * spacing);
     let fk = wk / (2.0 * PI);
-    let window: Vec<usize> = data
-        .lines
-        .iter()
-        .copied()
-        .filter(|&i| (data.freqs_hz[i] - fk).abs() <= half_hz)
-        .collect();
+    let window = window_lines(data, fk, half_hz);
     let freqs: Vec<f64> = window.iter().map(|&i| data.freqs_hz[i]).collect();
     let mut a = local_basis(poles, k, &freqs, half_hz);
     if window.len() < 2 * a.ncols() || !zk.is_finite() || zk <= 0.0 {

@@ -923,6 +923,7 @@ fn a_close_pair_is_two_modes_in_the_automatic_selection() {
 /// damping is a doubtful complex shape, not a smear.
 #[test]
 fn one_pole_over_a_cluster_is_a_smear() {
+    use lamdyn_ema::local_residues::local_residues;
     use lamdyn_ema::lsfd::lsfd;
     use lamdyn_ema::quality::{
         Measured, ModeEvidence, QualityFlag, Verdict, assess, contributions,
@@ -956,13 +957,15 @@ fn one_pole_over_a_cluster_is_a_smear() {
     let verdicts = |poles: &[Complex64]| {
         let fit = lsfd(&freqs, &refs, Quantity::Accelerance, poles, band).unwrap();
         let drops = contributions(&fit, data).frac_drop;
+        let local = local_residues(poles, Quantity::Accelerance, data);
         (0..poles.len())
             .map(|r| {
-                let shape = fit.shape(r, None);
+                let shape = local[r].clone().expect("local residues");
                 let evidence = ModeEvidence {
                     freq_hz: pole_freq_hz(poles[r]),
                     damping_ratio: pole_damping(poles[r]),
                     mpc: mpc(&shape),
+                    band_mpc: mpc(&fit.shape(r, None)),
                     mpd_deg: mpd(&shape),
                     shape_len: shape.len(),
                     stable_count: 20,
@@ -971,7 +974,7 @@ fn one_pole_over_a_cluster_is_a_smear() {
                     second_shape: None,
                     second_shape_calibrated: false,
                 };
-                (evidence.mpc, assess(&evidence, &[]))
+                (evidence.mpc.max(evidence.band_mpc), assess(&evidence, &[]))
             })
             .collect::<Vec<_>>()
     };
@@ -984,7 +987,8 @@ fn one_pole_over_a_cluster_is_a_smear() {
     let smear = verdicts(&[pole(157.0, 0.04)]);
     let (m, q) = &smear[0];
     eprintln!("one pole over the cluster: MPC {m:.3}, {q:?}");
-    assert!(*m < 0.3, "MPC {m}");
+    // Both residue estimates see the cluster (band's fit 0.24, local 0.37 here).
+    assert!(*m < 0.45, "MPC {m}");
     assert_eq!(q.verdict, Verdict::Smear, "{q:?}");
     let light = verdicts(&[pole(157.0, 0.01)]);
     let (m, q) = &light[0];
