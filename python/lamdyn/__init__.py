@@ -353,7 +353,8 @@ def ema(
 
     Returns an :class:`EmaResult` (its attributes also read as ``r["freq_hz"]``):
     ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,
-    ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses), ``mpc``,
+    ``poles`` (complex, rad/s), ``shapes`` (complex, modes x responses; each from the
+    residues fitted within +-2 zeta f of its pole), ``mpc``,
     ``mpd_deg``, ``freq_sd_hz`` and ``damping_sd`` (standard deviations from the fit's noise,
     NaN without refinement), ``verdict`` (per mode: "sound", "doubtful" or "smear", the
     reasons in ``modes[k]["quality"]``), ``second_shape_z`` and ``second_shape_rho`` (the

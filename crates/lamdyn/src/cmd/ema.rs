@@ -522,8 +522,9 @@ fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
         .notes
         .push(second_shape_note(r.second_shape_calibrated).into());
     report.notes.push(
-        "zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; MPC 1 and \
-         MPD 0 for a real (normal) mode."
+        "zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; shapes from \
+         each mode's residues fitted within +-2 zeta f of its pole; MPC 1 and MPD 0 for a \
+         real (normal) mode."
             .into(),
     );
     report.notes.push(
