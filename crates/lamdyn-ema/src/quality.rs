@@ -3,7 +3,9 @@
 //!
 //! The evidence, per mode:
 //! - **MPC** and **MPD** of its shape ([`crate::shapes`]): a mode of a structure whose damping
-//!   is spread like its stiffness (a laminate's uniform core) is nearly real, MPC near 1.
+//!   is spread like its stiffness (a laminate's uniform core) is nearly real, MPC near 1. The
+//!   shape is fitted on the lines around the pole ([`crate::local_residues`]); the MPC of the
+//!   band's fit's residues ([`crate::lsfd`]) is kept beside it.
 //! - **The stable count**: how many poles of the diagram's orders support it.
 //! - **Its contribution**: the FRAC of the regenerated FRFs with and without its term
 //!   (residues kept), averaged over the curves. A pole that fits noise or a residual's
@@ -13,9 +15,13 @@
 //! **A smear** is one pole standing in for a cluster of modes: its residues over the
 //! responses add the cluster's modes at different phases (each mode's term turns by up to
 //! 180° across its resonance), so its MPC is low, and it is damped (it spans the cluster). A
-//! pole with MPC below [`SMEAR_MPC`] and ζ at least [`SMEAR_DAMPING`] is flagged as one: its
-//! frequency and damping describe no mode, and an inverse from it is meaningless (on an
-//! independent damped laminate, two such poles with MPC 0.05 and 0.15 gave G' 113 % off).
+//! pole with MPC below [`SMEAR_MPC`] in both residue estimates and ζ at least
+//! [`SMEAR_DAMPING`] is flagged as one: its frequency and damping describe no mode, and an
+//! inverse from it is meaningless (on an independent damped laminate, two such poles with MPC
+//! 0.05 and 0.15 gave G' 113 % off). Both, since each estimate can be spoilt alone by what its
+//! model lacks: the band's fit by damped modes outside the band (its real residual terms
+//! cannot hold them), the local fit by a mode without a pole inside its window; a pole over a
+//! cluster is complex in both.
 //! A low MPC on a lightly damped pole is a complex or weakly excited mode: doubtful, not a
 //! smear. With fewer than three response components the MPC carries no information (one
 //! component is always collinear) and no smear can be told.
@@ -513,6 +519,34 @@ mod tests {
             }]
         );
         assert!(q.reasons().contains("zeta 95 %"), "{}", q.reasons());
+    }
+
+    /// A low MPC makes a smear (or, lightly damped, a complex shape) only where both residue
+    /// estimates show it; the flag names both.
+    #[test]
+    fn a_smear_is_complex_in_both_residue_estimates() {
+        let with = |mpc, band_mpc, damping_ratio| {
+            let mode = ModeEvidence {
+                mpc,
+                band_mpc,
+                ..evidence(damping_ratio)
+            };
+            assess(&mode, &[])
+        };
+        for (mpc, band_mpc) in [(0.3, 0.9), (0.9, 0.3)] {
+            assert_eq!(with(mpc, band_mpc, 0.08).verdict, Verdict::Sound);
+            assert_eq!(with(mpc, band_mpc, 0.01).verdict, Verdict::Sound);
+        }
+        let smear = with(0.3, 0.4, 0.08);
+        assert_eq!(smear.verdict, Verdict::Smear, "{smear:?}");
+        assert!(
+            smear
+                .reasons()
+                .contains("MPC 0.30 (0.40 from the band's fit)")
+        );
+        let complex = with(0.3, 0.4, 0.01);
+        assert_eq!(complex.verdict, Verdict::Doubtful, "{complex:?}");
+        assert!(matches!(complex.flags[0], QualityFlag::ComplexShape { .. }));
     }
 
     /// A second shape judges only where the data calibrate the test, and only at both bounds.
