@@ -21,6 +21,7 @@
 //! are made from it as from those. The band's fit still gives the regenerated FRFs.
 
 use crate::band::line_spacing;
+use crate::lscf::{pole_damping, pole_freq_hz};
 use crate::projection::LineBasis;
 use crate::quality::Measured;
 use faer::Mat;
@@ -50,34 +51,52 @@ pub fn local_residues(
         .collect()
 }
 
-/// Natural frequency (rad/s) and damping ratio of a pole λ = −ζω_n + iω_n√(1 − ζ²).
-pub(crate) fn natural(pole: Complex64) -> (f64, f64) {
-    let wn = pole.norm();
-    (wn, -pole.re / wn)
+/// The lines around one pole that its local fits use (module docs; the second-shape test's
+/// too): within ±[`HALF_WIDTHS`] ζf of f = |λ|/2π, at least [`MIN_HALF_WINDOW_LINES`] lines.
+pub(crate) struct PoleWindow {
+    /// The pole's frequency |λ|/2π, Hz.
+    pub(crate) center_hz: f64,
+    /// The half-width, Hz.
+    pub(crate) half_hz: f64,
+    /// The lines of the data within it.
+    pub(crate) lines: Vec<usize>,
 }
 
-/// The poles other than `poles[k]` whose half-power band (±2ζf, half-widths doubled for the
-/// tails) reaches the window of half-width `half_hz` around it.
-pub(crate) fn poles_reaching(poles: &[Complex64], k: usize, half_hz: f64) -> Vec<Complex64> {
-    let (wk, _) = natural(poles[k]);
-    poles
-        .iter()
-        .enumerate()
-        .filter(|&(j, p)| {
-            let (wj, zj) = natural(*p);
-            j != k && ((wj - wk) / (2.0 * PI)).abs() <= half_hz + 2.0 * zj * wj / (2.0 * PI)
+impl PoleWindow {
+    /// The window of `pole` on `data` (lines `spacing` Hz apart); None for a pole whose damping
+    /// is not positive and finite.
+    pub(crate) fn of(pole: Complex64, data: Measured, spacing: f64) -> Option<Self> {
+        let (center_hz, z) = (pole_freq_hz(pole), pole_damping(pole));
+        if !(z.is_finite() && z > 0.0) {
+            return None;
+        }
+        let half_hz = (HALF_WIDTHS * z * center_hz).max(MIN_HALF_WINDOW_LINES * spacing);
+        let lines = data
+            .lines
+            .iter()
+            .copied()
+            .filter(|&i| (data.freqs_hz[i] - center_hz).abs() <= half_hz)
+            .collect();
+        Some(Self {
+            center_hz,
+            half_hz,
+            lines,
         })
-        .map(|(_, p)| *p)
-        .collect()
-}
+    }
 
-/// The lines of `data` within `half_hz` of `center_hz`.
-pub(crate) fn window_lines(data: Measured, center_hz: f64, half_hz: f64) -> Vec<usize> {
-    data.lines
-        .iter()
-        .copied()
-        .filter(|&i| (data.freqs_hz[i] - center_hz).abs() <= half_hz)
-        .collect()
+    /// The poles other than `poles[k]` (the window's own) whose half-power band, half-widths
+    /// doubled for the tails (±2ζf), reaches the window.
+    pub(crate) fn poles_reaching(&self, poles: &[Complex64], k: usize) -> Vec<Complex64> {
+        poles
+            .iter()
+            .enumerate()
+            .filter(|&(j, &p)| {
+                let reach = self.half_hz + 2.0 * pole_damping(p) * pole_freq_hz(p);
+                j != k && (pole_freq_hz(p) - self.center_hz).abs() <= reach
+            })
+            .map(|(_, p)| *p)
+            .collect()
+    }
 }
 
 /// The residues of pole `r` over every curve (module docs); `spacing` the lines' spacing, Hz.
@@ -88,16 +107,10 @@ fn residues_near(
     data: Measured,
     spacing: f64,
 ) -> Option<Vec<Complex64>> {
-    let (wr, zr) = natural(poles[r]);
-    if !(zr.is_finite() && zr > 0.0) {
-        return None;
-    }
-    let fr = wr / (2.0 * PI);
-    let half_hz = (HALF_WIDTHS * zr * fr).max(MIN_HALF_WINDOW_LINES * spacing);
-    let window = window_lines(data, fr, half_hz);
+    let window = PoleWindow::of(poles[r], data, spacing)?;
     let mut local = vec![poles[r]];
-    local.extend(poles_reaching(poles, r, half_hz));
-    let mut a = local_basis(&local, quantity, data.freqs_hz, &window, [fr, half_hz]);
+    local.extend(window.poles_reaching(poles, r));
+    let mut a = local_basis(&local, quantity, data.freqs_hz, &window);
     if a.nrows() < 2 * a.ncols() {
         return None;
     }
@@ -108,7 +121,7 @@ fn residues_near(
         a.col_mut(c).iter_mut().for_each(|x| *x /= *n);
     }
     let y = Mat::from_fn(a.nrows(), data.curves.len(), |row, o| {
-        let h = data.curves[o][window[row / 2]];
+        let h = data.curves[o][window.lines[row / 2]];
         if row % 2 == 0 { h.re } else { h.im }
     });
     let x = a.qr().solve_lstsq(&y);
@@ -121,20 +134,19 @@ fn residues_near(
         .then_some(residues)
 }
 
-/// The local basis on `window` (indices into `freqs_hz`) as real rows (re, im per line): the two
-/// columns of each of `poles` (the band's fit's: (iω)^k [1/(iω − λ) + 1/(iω − λ*)] and
+/// The local basis on `window` as real rows (re, im per line): the two columns of each of
+/// `poles` (the band's fit's: (iω)^k [1/(iω − λ) + 1/(iω − λ*)] and
 /// (iω)^k i[1/(iω − λ) − 1/(iω − λ*)]), the first pole's first, then 1, x, x² and i, ix, ix²,
 /// x = (f − centre)/half-width.
 fn local_basis(
     poles: &[Complex64],
     quantity: Quantity,
     freqs_hz: &[f64],
-    window: &[usize],
-    [center_hz, half_hz]: [f64; 2],
+    window: &PoleWindow,
 ) -> Mat<f64> {
     let columns = 2 * poles.len() + 6;
-    let mut a = Mat::zeros(2 * window.len(), columns);
-    for (i, &k) in window.iter().enumerate() {
+    let mut a = Mat::zeros(2 * window.lines.len(), columns);
+    for (i, &k) in window.lines.iter().enumerate() {
         let line = LineBasis::new(poles, quantity, 2.0 * PI * freqs_hz[k]);
         let mut values: Vec<Complex64> = line
             .fractions
@@ -146,7 +158,7 @@ fn local_basis(
                 ]
             })
             .collect();
-        let x = (freqs_hz[k] - center_hz) / half_hz;
+        let x = (freqs_hz[k] - window.center_hz) / window.half_hz;
         for power in [1.0, x, x * x] {
             values.push(Complex64::new(power, 0.0));
             values.push(Complex64::new(0.0, power));

@@ -15,8 +15,9 @@
 //! curve (one mode's shape times a function of frequency: leakage, a stiffening part) keeps
 //! every coefficient parallel too.
 //!
-//! **The test.** Within ±2 half-power half-widths of the pole (at least [`MIN_HALF_WINDOW_LINES`]
-//! lines), every curve is fitted by least squares with 1/(s − λ), 1/(s − λ*) and 1/(s − λ)²
+//! **The test.** Within ±2 half-power half-widths of the pole (at least
+//! [`crate::local_residues::MIN_HALF_WINDOW_LINES`] lines: the window of the shapes' local
+//! fit), every curve is fitted by least squares with 1/(s − λ), 1/(s − λ*) and 1/(s − λ)²
 //! for the pole and for each pole whose half-power band reaches the window, and a quadratic
 //! in frequency for the modes outside it. With every curve weighted by its noise σ̂
 //! (the `noise` module), c the coefficients of 1/(s − λ)² over the curves and ψ those of
@@ -43,7 +44,8 @@
 //! docs/ema.md, method step 7.
 
 use crate::band::line_spacing;
-use crate::local_residues::{natural, poles_reaching, window_lines};
+use crate::local_residues::PoleWindow;
+use crate::lscf::pole_damping;
 use crate::noise::line_noise_variance;
 use crate::quality::{Measured, SecondShape};
 use faer::linalg::solvers::SolveLstsq;
@@ -51,10 +53,6 @@ use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::{Mat, Par, c64};
 use num_complex::Complex64;
 use std::f64::consts::PI;
-
-/// The window's least half-width, in lines (a pole narrower than a line is still fitted over
-/// enough lines to see a second term).
-pub const MIN_HALF_WINDOW_LINES: f64 = 20.0;
 
 /// Each curve's σ̂ is at least this fraction of its RMS over the band (module docs).
 pub const NOISE_FLOOR: f64 = 1e-3;
@@ -86,12 +84,10 @@ fn floored_noise(curve: &[Complex64], lines: &[usize]) -> f64 {
     line_noise_variance(curve, lines).map_or(f64::NAN, |v| v.max(floor).sqrt())
 }
 
-/// The local basis of pole `k` on the window's lines (rows, at `freqs`, half-width `half_hz`):
-/// the pole's three columns first, then each near pole's three, then the quadratic.
-fn local_basis(poles: &[Complex64], k: usize, freqs: &[f64], half_hz: f64) -> Mat<c64> {
-    let (wk, _) = natural(poles[k]);
-    let fk = wk / (2.0 * PI);
-    let near = poles_reaching(poles, k, half_hz);
+/// The local basis of pole `k` on `window`'s lines (rows, at `freqs`): the pole's three
+/// columns first, then each near pole's three, then the quadratic.
+fn local_basis(poles: &[Complex64], k: usize, freqs: &[f64], window: &PoleWindow) -> Mat<c64> {
+    let near = window.poles_reaching(poles, k);
     let columns = 3 * (1 + near.len()) + 3;
     Mat::from_fn(freqs.len(), columns, |i, c| {
         let s = Complex64::new(0.0, 2.0 * PI * freqs[i]);
@@ -103,10 +99,8 @@ fn local_basis(poles: &[Complex64], k: usize, freqs: &[f64], half_hz: f64) -> Ma
                 _ => 1.0 / ((s - pole) * (s - pole)),
             }
         } else {
-            Complex64::new(
-                ((freqs[i] - fk) / half_hz).powi((c + 3 - columns) as i32),
-                0.0,
-            )
+            let x = (freqs[i] - window.center_hz) / window.half_hz;
+            Complex64::new(x.powi((c + 3 - columns) as i32), 0.0)
         };
         c64::new(value.re, value.im)
     })
@@ -121,13 +115,11 @@ fn second_shape(
     sigmas: &[f64],
     spacing: f64,
 ) -> Option<SecondShape> {
-    let (wk, zk) = natural(poles[k]);
-    let half_hz = (2.0 * zk * wk / (2.0 * PI)).max(MIN_HALF_WINDOW_LINES * spacing);
-    let fk = wk / (2.0 * PI);
-    let window = window_lines(data, fk, half_hz);
-    let freqs: Vec<f64> = window.iter().map(|&i| data.freqs_hz[i]).collect();
-    let mut a = local_basis(poles, k, &freqs, half_hz);
-    if window.len() < 2 * a.ncols() || !zk.is_finite() || zk <= 0.0 {
+    let window = PoleWindow::of(poles[k], data, spacing)?;
+    let (wk, zk) = (poles[k].norm(), pole_damping(poles[k]));
+    let freqs: Vec<f64> = window.lines.iter().map(|&i| data.freqs_hz[i]).collect();
+    let mut a = local_basis(poles, k, &freqs, &window);
+    if window.lines.len() < 2 * a.ncols() {
         return None;
     }
     let norms: Vec<f64> = (0..a.ncols()).map(|c| a.col(c).norm_l2()).collect();
@@ -135,8 +127,8 @@ fn second_shape(
         a.col_mut(c).iter_mut().for_each(|x| *x /= *n);
     }
     // Each curve weighted by 1/σ̂: one right-hand side per curve.
-    let y = Mat::from_fn(window.len(), data.curves.len(), |i, o| {
-        let h = data.curves[o][window[i]] / sigmas[o];
+    let y = Mat::from_fn(window.lines.len(), data.curves.len(), |i, o| {
+        let h = data.curves[o][window.lines[i]] / sigmas[o];
         c64::new(h.re, h.im)
     });
     let qr = a.qr();

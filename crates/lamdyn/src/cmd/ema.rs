@@ -476,17 +476,27 @@ fn add_sections(report: &mut Report, r: &EmaResult) {
     report.sections.push(peaks);
 }
 
-/// What the `2nd shape` columns say, and whether they judged.
-fn second_shape_note(calibrated: bool) -> &'static str {
+/// What the `2nd shape` columns say, and whether they judged (the bounds are the verdict's).
+fn second_shape_note(calibrated: bool) -> String {
+    use lamdyn_ema::quality::{
+        CALIBRATED_MEDIAN, CALIBRATING_POLES, SECOND_SHAPE_AMPLITUDE, SECOND_SHAPE_CHANCE,
+        SECOND_SHAPE_SMEAR_AMPLITUDE, SECOND_SHAPE_STATISTIC,
+    };
     if calibrated {
-        "2nd shape Z: energy of a second shape under the pole over its chance level (1 for one \
-         mode); rho: its peak over the pole's. Z >= 5 with a chance <= 1e-6 and rho >= 0.02 \
-         makes the mode doubtful (a weak close mode), rho >= 0.08 a smear (one pole over two \
-         close modes)."
+        format!(
+            "2nd shape Z: energy of a second shape under the pole over its chance level (1 for \
+             one mode); rho: its peak over the pole's. Z >= {SECOND_SHAPE_STATISTIC} with a \
+             chance <= {SECOND_SHAPE_CHANCE:e} and rho >= {SECOND_SHAPE_AMPLITUDE} makes the \
+             mode doubtful (a weak close mode), rho >= {SECOND_SHAPE_SMEAR_AMPLITUDE} a smear \
+             (one pole over two close modes)."
+        )
     } else {
-        "2nd shape Z, rho: the second-shape test is not calibrated on these data (its median Z \
-         over the poles is above 2, or fewer than 3 poles have one: the curves do not follow one \
-         set of poles to their noise), so it judges nothing here."
+        format!(
+            "2nd shape Z, rho: the second-shape test is not calibrated on these data (its \
+             median Z over the poles is above {CALIBRATED_MEDIAN}, or fewer than \
+             {CALIBRATING_POLES} poles have one: the curves do not follow one set of poles to \
+             their noise), so it judges nothing here."
+        )
     }
 }
 
@@ -520,13 +530,13 @@ fn add_warnings_and_notes(report: &mut Report, s: &EmaSettings, r: &EmaResult) {
     }
     report
         .notes
-        .push(second_shape_note(r.second_shape_calibrated).into());
-    report.notes.push(
-        "zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; shapes from \
-         each mode's residues fitted within +-2 zeta f of its pole; MPC 1 and MPD 0 for a \
-         real (normal) mode."
-            .into(),
-    );
+        .push(second_shape_note(r.second_shape_calibrated));
+    report.notes.push(format!(
+        "zeta: viscous damping ratio -Re(lambda)/|lambda|; eta = 2 zeta; shapes from each \
+         mode's residues fitted within +-{} zeta f of its pole; MPC 1 and MPD 0 for a real \
+         (normal) mode.",
+        lamdyn_ema::local_residues::HALF_WIDTHS
+    ));
     report.notes.push(
         "sd(f), sd(zeta): standard deviations from the fit's noise (the refinement's \
          covariance); they leave out the estimator's bias (modes outside the band, \
