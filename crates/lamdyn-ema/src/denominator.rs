@@ -23,6 +23,15 @@ pub struct LscfContext {
     pub roots: Vec<Complex64>,
 }
 
+/// Which outside groups of roots a refinement holds ([`LscfContext::groups_held_beside`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct OutsideModel {
+    /// The group above the band.
+    pub above: bool,
+    /// The group below the band.
+    pub below: bool,
+}
+
 /// One root held fixed: one real column, or two for a conjugate pair.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum FixedRoot {
@@ -65,41 +74,64 @@ impl LscfContext {
             .collect()
     }
 
-    /// The columns of the roots that stand for what lies outside `band_hz` on `lines` (indices
-    /// into `freqs_hz`), as real rows (re, im of each line) scaled to unit norm, in two groups:
-    /// above the band, the negative real roots (their poles at the damped frequency 1/(2Δt),
-    /// the band's upper edge, where the model gathers the modes above it); below, the positive
-    /// real roots (at 0 Hz) and the conjugate pairs whose pole's damped frequency lies below the
-    /// band. A group is left out whole where one of its roots' poles lies within three
-    /// half-power half-widths (or 1 % of |λ|) of one of `poles` (rad/s): a damped pole next to
-    /// the band's edge trades with them (measured in docs/ema.md, "Damped poles"). No direct
-    /// term: the refinement's residual terms hold the constant. The computational roots inside
-    /// the band, with which a damped pole would compete, are never among them.
+    /// The two groups of roots that stand for what lies outside `band_hz`: above the band, the
+    /// negative real roots (their poles at the damped frequency 1/(2Δt), the band's upper edge,
+    /// where the model gathers the modes above it); below, the positive real roots (at 0 Hz)
+    /// and the conjugate pairs whose pole's damped frequency lies below the band (one root of
+    /// each pair). The computational roots inside the band, with which a damped pole would
+    /// compete, are in neither.
+    fn outside_groups(&self, band_hz: [f64; 2]) -> [Vec<Complex64>; 2] {
+        let above = self
+            .roots
+            .iter()
+            .copied()
+            .filter(|&x| is_real(x) && x.re < 0.0)
+            .collect();
+        let below = self
+            .roots
+            .iter()
+            .copied()
+            .filter(|&x| {
+                (is_real(x) && x.re > 0.0)
+                    || (x.im < 0.0 && !is_real(x) && self.pole(x).im / (2.0 * PI) < band_hz[0])
+            })
+            .collect();
+        [above, below]
+    }
+
+    /// Which of the two outside groups ([`Self::outside_groups`]: above, below) the refinement
+    /// of `pole` (rad/s) holds: a group is left out where one of its roots' poles lies within
+    /// three half-power half-widths (or 1 % of |λ|) of `pole`, since a damped pole next to the
+    /// band's edge trades with them (measured in docs/ema.md, "Damped poles").
+    pub(crate) fn groups_held_beside(&self, band_hz: [f64; 2], pole: Complex64) -> OutsideModel {
+        let clear = |group: &Vec<Complex64>| {
+            !group.iter().any(|x| {
+                let q = self.pole(*x);
+                within_reach(pole, Complex64::new(q.re, q.im.abs()))
+            })
+        };
+        let [above, below] = self.outside_groups(band_hz);
+        OutsideModel {
+            above: clear(&above),
+            below: clear(&below),
+        }
+    }
+
+    /// The columns of the outside groups that `model` holds ([`Self::outside_groups`]) on
+    /// `lines` (indices into `freqs_hz`), as real rows (re, im of each line) scaled to unit
+    /// norm. No direct term: the refinement's residual terms hold the constant.
     pub(crate) fn outside_columns(
         &self,
         freqs_hz: &[f64],
         lines: &[usize],
         band_hz: [f64; 2],
-        poles: &[Complex64],
+        model: OutsideModel,
     ) -> Mat<f64> {
-        let near_a_pole = |x: &Complex64| {
-            let q = self.pole(*x);
-            let q = Complex64::new(q.re, q.im.abs());
-            poles.iter().any(|&p| within_reach(p, q))
-        };
-        let above = self
-            .roots
-            .iter()
-            .copied()
-            .filter(|&x| is_real(x) && x.re < 0.0);
-        let below = self.roots.iter().copied().filter(|&x| {
-            (is_real(x) && x.re > 0.0)
-                || (x.im < 0.0 && !is_real(x) && self.pole(x).im / (2.0 * PI) < band_hz[0])
-        });
-        let held: Vec<FixedRoot> = [above.collect::<Vec<_>>(), below.collect()]
+        let [above, below] = self.outside_groups(band_hz);
+        let held: Vec<FixedRoot> = [(model.above, above), (model.below, below)]
             .into_iter()
-            .filter(|group| !group.iter().any(near_a_pole))
-            .flatten()
+            .filter(|(kept, _)| *kept)
+            .flat_map(|(_, group)| group)
             .map(|x| {
                 if is_real(x) {
                     FixedRoot::Real(x.re)

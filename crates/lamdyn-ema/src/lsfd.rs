@@ -20,7 +20,10 @@
 //! edge takes up the misfit; so, given the LSCF model's denominator the diagram was read from,
 //! the refinement holds that model's roots outside the band beside its poles as fixed partial
 //! fractions (in the Ω domain, residues free: `LscfContext::outside_columns`), the roots inside
-//! the band (its computational ones) left out.
+//! the band (its computational ones) left out. A group of outside roots within a pole's reach
+//! trades with that pole, so each pole is refined in the fit that holds every group not within
+//! its own reach (`LscfContext::groups_held_beside`): one fit per distinct set of groups, each
+//! pole's estimate taken from its own.
 //!
 //! **Shapes.** For one reference, the residues over the responses are the complex mode shape
 //! (up to scale). With a driving point p (response = reference), mass-normalised complex modes
@@ -29,7 +32,7 @@
 //! the band); the identified modes take their shapes from residues fitted near each pole
 //! ([`crate::local_residues`]).
 
-use crate::denominator::LscfContext;
+use crate::denominator::{LscfContext, OutsideModel};
 use crate::error::{EmaError, check_curves, invalid};
 pub use crate::projection::LineBasis;
 use crate::projection::{LineSamples, NormalEquations, solve_by_blocks};
@@ -356,7 +359,8 @@ pub fn refine_with(
 
 /// The poles of [`refine_with`] without their residues (`poles` themselves where the residue
 /// problem fails at the start); with `outside`, the LSCF model the poles were read from, its
-/// roots outside the band held fixed beside them (module docs).
+/// roots outside the band held fixed beside them: each pole from the fit that holds the groups
+/// of roots not within its reach (module docs), every pole free in each fit.
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -374,13 +378,31 @@ pub(crate) fn refined_poles(
 ) -> Result<Vec<Complex64>, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
     let mut samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
-    if let Some(c) = outside {
-        samples = samples.with_fixed(c.outside_columns(freqs_hz, &lines, band_hz, poles));
+    let refine = |samples: &LineSamples| {
+        levenberg_marquardt(samples, poles, iterations, on_iteration)
+            .unwrap_or_else(|| poles.to_vec())
+    };
+    let Some(c) = outside else {
+        return Ok(refine(&samples));
+    };
+    let models: Vec<OutsideModel> = poles
+        .iter()
+        .map(|&p| c.groups_held_beside(band_hz, p))
+        .collect();
+    let mut refined = poles.to_vec();
+    let mut done: Vec<OutsideModel> = Vec::new();
+    for &model in &models {
+        if done.contains(&model) {
+            continue;
+        }
+        done.push(model);
+        samples.set_fixed(c.outside_columns(freqs_hz, &lines, band_hz, model));
+        let fit = refine(&samples);
+        for (k, _) in models.iter().enumerate().filter(|(_, m)| **m == model) {
+            refined[k] = fit[k];
+        }
     }
-    Ok(
-        levenberg_marquardt(&samples, poles, iterations, on_iteration)
-            .unwrap_or_else(|| poles.to_vec()),
-    )
+    Ok(refined)
 }
 
 /// Levenberg–Marquardt on the poles' parameters ([`pole_parameters`]) from `poles`, minimising

@@ -45,7 +45,7 @@ pub(crate) struct LineSamples {
     quantity: Quantity,
     data: Mat<f64>,
     /// Columns beside the poles' and the residual terms' that do not depend on the poles (real
-    /// rows as `data`'s): none unless [`Self::with_fixed`] gives them.
+    /// rows as `data`'s): none unless [`Self::set_fixed`] gives them.
     fixed: Mat<f64>,
 }
 
@@ -78,16 +78,15 @@ impl LineSamples {
         })
     }
 
-    /// These samples with the columns `fixed` (real rows as the samples', one column per
+    /// Sets the columns `fixed` (real rows as the samples', one column per
     /// function of the line) beside the poles' and the residual terms' in every basis: their
     /// coefficients are unknowns as the residues are, their columns do not move with the poles.
     ///
     /// # Panics
     /// When `fixed` has not one row per sample row (a caller's bug).
-    pub(crate) fn with_fixed(mut self, fixed: Mat<f64>) -> Self {
+    pub(crate) fn set_fixed(&mut self, fixed: Mat<f64>) {
         assert_eq!(fixed.nrows(), self.rows(), "fixed columns' rows");
         self.fixed = fixed;
-        self
     }
 
     /// The unknowns per curve with `poles` poles: two per pole, the two residual terms and
@@ -114,7 +113,7 @@ impl LineSamples {
 
     /// The basis A for `poles` (unscaled): per pole the columns (iω)^k [1/(iω − λ) + 1/(iω − λ*)]
     /// and (iω)^k i[1/(iω − λ) − 1/(iω − λ*)], then the lower residual's −(iω)^k/ω² and the upper
-    /// residual's (iω)^k, then the fixed columns ([`Self::with_fixed`]).
+    /// residual's (iω)^k, then the fixed columns ([`Self::set_fixed`]).
     fn basis(&self, poles: &[Complex64]) -> Mat<f64> {
         let n = 2 * poles.len();
         let mut a = Mat::zeros(self.rows(), self.unknowns(poles.len()));
