@@ -80,7 +80,7 @@ impl LscfContext {
     /// and the conjugate pairs whose pole's damped frequency lies below the band (one root of
     /// each pair). The computational roots inside the band, with which a damped pole would
     /// compete, are in neither.
-    fn outside_groups(&self, band_hz: [f64; 2]) -> [Vec<Complex64>; 2] {
+    pub(crate) fn outside_groups(&self, band_hz: [f64; 2]) -> [Vec<Complex64>; 2] {
         let above = self
             .roots
             .iter()
@@ -99,39 +99,41 @@ impl LscfContext {
         [above, below]
     }
 
-    /// Which of the two outside groups ([`Self::outside_groups`]: above, below) the refinement
+    /// Which of the outside `groups` ([`Self::outside_groups`]: above, below) the refinement
     /// of `pole` (rad/s) holds: a group is left out where one of its roots' poles lies within
     /// three half-power half-widths (or 1 % of |λ|) of `pole`, since a damped pole next to the
     /// band's edge trades with them (measured in docs/ema.md, "Damped poles").
-    pub(crate) fn groups_held_beside(&self, band_hz: [f64; 2], pole: Complex64) -> OutsideModel {
+    pub(crate) fn groups_held_beside(
+        &self,
+        groups: &[Vec<Complex64>; 2],
+        pole: Complex64,
+    ) -> OutsideModel {
         let clear = |group: &Vec<Complex64>| {
             !group.iter().any(|x| {
                 let q = self.pole(*x);
                 within_reach(pole, Complex64::new(q.re, q.im.abs()))
             })
         };
-        let [above, below] = self.outside_groups(band_hz);
         OutsideModel {
-            above: clear(&above),
-            below: clear(&below),
+            above: clear(&groups[0]),
+            below: clear(&groups[1]),
         }
     }
 
-    /// The columns of the outside groups that `model` holds ([`Self::outside_groups`]) on
+    /// The columns of the outside `groups` ([`Self::outside_groups`]) that `model` holds on
     /// `lines` (indices into `freqs_hz`), as real rows (re, im of each line) scaled to unit
     /// norm. No direct term: the refinement's residual terms hold the constant.
     pub(crate) fn outside_columns(
         &self,
         freqs_hz: &[f64],
         lines: &[usize],
-        band_hz: [f64; 2],
+        groups: &[Vec<Complex64>; 2],
         model: OutsideModel,
     ) -> Mat<f64> {
-        let [above, below] = self.outside_groups(band_hz);
-        let held: Vec<FixedRoot> = [(model.above, above), (model.below, below)]
+        let held: Vec<FixedRoot> = [(model.above, &groups[0]), (model.below, &groups[1])]
             .into_iter()
             .filter(|(kept, _)| *kept)
-            .flat_map(|(_, group)| group)
+            .flat_map(|(_, group)| group.iter().copied())
             .map(|x| {
                 if is_real(x) {
                     FixedRoot::Real(x.re)

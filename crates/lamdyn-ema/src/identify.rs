@@ -937,6 +937,7 @@ impl ModeSources<'_> {
         let residues = self.local_residues[r]
             .clone()
             .unwrap_or_else(|| fit.residues.iter().map(|res| res[r]).collect());
+        let participation_factors = participation(&residues, nr, nf);
         let for_reference = |all: Vec<Complex64>| -> Vec<Complex64> {
             if nr == 1 && nf > 1 {
                 all[..nf].to_vec()
@@ -945,7 +946,7 @@ impl ModeSources<'_> {
             }
         };
         let driving = s.driving.map(|d| d * nf);
-        let shape = for_reference(shape_of(residues.clone(), fit.poles[r], driving));
+        let shape = for_reference(shape_of(residues, fit.poles[r], driving));
         let band_shape = for_reference(fit.shape(r, driving));
         let corrected = |p: Complex64| {
             s.exp_tau_s
@@ -990,7 +991,7 @@ impl ModeSources<'_> {
             pole,
             stable_count: evidence.stable_count,
             real_shape: real_mode(&shape),
-            participation: participation(&residues, nr, nf),
+            participation: participation_factors,
             mpc: evidence.mpc,
             mpd_deg: evidence.mpd_deg,
             shape,

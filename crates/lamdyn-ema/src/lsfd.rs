@@ -385,9 +385,10 @@ pub(crate) fn refined_poles(
     let Some(c) = outside else {
         return Ok(refine(&samples));
     };
+    let groups = c.outside_groups(band_hz);
     let models: Vec<OutsideModel> = poles
         .iter()
-        .map(|&p| c.groups_held_beside(band_hz, p))
+        .map(|&p| c.groups_held_beside(&groups, p))
         .collect();
     let mut refined = poles.to_vec();
     let mut done: Vec<OutsideModel> = Vec::new();
@@ -396,7 +397,7 @@ pub(crate) fn refined_poles(
             continue;
         }
         done.push(model);
-        samples.set_fixed(c.outside_columns(freqs_hz, &lines, band_hz, model));
+        samples.set_fixed(c.outside_columns(freqs_hz, &lines, &groups, model));
         let fit = refine(&samples);
         for (k, _) in models.iter().enumerate().filter(|(_, m)| **m == model) {
             refined[k] = fit[k];
