@@ -192,6 +192,25 @@ def test_pole_intervals_cover_the_damped_plates(coverage_tool, zeta, refs, least
     assert hit.mean(axis=0).min() >= 0.9, hit.mean(axis=0)
 
 
+def test_a_free_plates_sound_poles_hold_their_damping(coverage_tool):
+    """Issue 45, item 2, on a part unlike the supported plates: the same plate free, its
+    rigid-body mass line twice the elastic modes' RMS (damped_bias.plate_frf's `mass_line`),
+    8 % damping, one reference, 1 % noise of each curve's RMS, 20 seeds. The LSCF's damping of
+    the pair 102.5 / 105.6 Hz (one pole) is 55-67 % low in every seed, its whole column too, and
+    the refinement finds 8 % at the column's frequency; the diagram's pole is put back. The
+    interval of every pole judged sound holds the truth in f and zeta on at least 90 % of the
+    cases. Measured (2026-12-02, tools/ema/damped_coverage.py --mass-line 2): 1.000 / 1.000; with
+    the refined pole clamped into the column's damping allowance before it widened the sd,
+    zeta 0.865 (102.5 Hz covered in 29 % of its seeds). The doubtful poles are not asserted: the
+    one near 176 Hz for the pair 175.6 / 180.6 Hz has zeta 0.8 % against 8 %, and its refined
+    pole left the column's frequency (docs/ema.md, method step 6)."""
+    targets, err, sd, verdict, kind = coverage_tool.intervals(0.08, [0], 20, mass_line=2.0)
+    sound = np.isfinite(err[..., 0]) & np.isfinite(sd).all(axis=-1) & (verdict == "sound")
+    assert sound.sum() >= 60, sound.sum()
+    hit = coverage_tool.covered(err, sd)[sound]
+    assert hit.mean(axis=0).min() >= 0.9, hit.mean(axis=0)
+
+
 def test_a_pole_over_a_close_pair_is_a_smear(bench):
     """Issue 45, item 3: with one reference at 8 % damping the pairs 150.6 / 152.5 Hz (1.3 %
     apart) and 175.6 / 180.6 Hz are one pole each in the diagram, MPC above 0.7. Their curves

@@ -52,11 +52,24 @@ def true_modes(band=BAND_HZ):
     return [t for t in MODES if band[0] <= t[0] <= band[1]]
 
 
-def plate_frf(zeta, references, snr_rel, rng, channel_noise=False):
+def rigid_body_shapes():
+    """The free plate's rigid-body modes at the response points (modes x points): heave, and
+    the rotations about the centre lines x = 0.5 and y = 0.4, each scaled to unit modal mass on
+    the uniform plate of unit mass per area (1 x 0.8: mass 0.8, second moments 0.8/12 and
+    0.8^3/12)."""
+    x, y = np.array(POINTS).T
+    return np.stack([np.full(len(x), 1 / np.sqrt(0.8)), (x - 0.5) / np.sqrt(0.8 / 12),
+                     (y - 0.4) / np.sqrt(0.8 ** 3 / 12)])
+
+
+def plate_frf(zeta, references, snr_rel, rng, channel_noise=False, mass_line=0.0):
     """Accelerance FRFs, shape (responses, references, lines), and the lines, Hz. The noise is
     `snr_rel` times each curve's RMS over the band, or with `channel_noise` times the RMS of all
     curves times 10^u, u uniform in [-0.5, 0.5] and fixed per curve (channels whose noise does
-    not follow their level)."""
+    not follow their level). With `mass_line` > 0 the plate is free: its three rigid-body modes
+    at 0 Hz (`rigid_body_shapes`) add their mass line, a real constant per curve in accelerance,
+    scaled so that its RMS over the curves is `mass_line` times that of the elastic modes over
+    the band, before the noise (which then follows the larger curves)."""
     f = np.arange(1, int(F_MAX_HZ / DF_HZ) + 1) * DF_HZ
     w = 2 * np.pi * f
     phi = np.array([[np.sin(m * np.pi * x) * np.sin(n * np.pi * y / 0.8) for (x, y) in POINTS]
@@ -66,8 +79,13 @@ def plate_frf(zeta, references, snr_rel, rng, channel_noise=False):
         wr = 2 * np.pi * fr
         den = wr * wr - w * w + 2j * zeta * wr * w
         h += np.einsum("o,j,k->ojk", phi[r], phi[r, references], -w * w / den)
+    band = (f >= BAND_HZ[0]) & (f <= BAND_HZ[1])
+    if mass_line > 0:
+        rb = rigid_body_shapes()
+        line = np.einsum("ro,rj->oj", rb, rb[:, references])
+        scale = mass_line * np.sqrt(np.mean(np.abs(h[:, :, band]) ** 2) / np.mean(line ** 2))
+        h = h + scale * line[:, :, None]
     if snr_rel > 0:
-        band = (f >= BAND_HZ[0]) & (f <= BAND_HZ[1])
         if channel_noise:
             u = np.random.default_rng(0).uniform(-0.5, 0.5, size=h.shape[:2] + (1,))
             rms = np.sqrt(np.mean(np.abs(h[:, :, band]) ** 2)) * 10 ** u

@@ -11,6 +11,7 @@ check kept the diagram's pole) and "put back" (the diagram's pole, put back beca
 refinement left its column or moved a pole beside one that left).
 
 Usage: python3 tools/ema/damped_coverage.py [--seeds N] [--levels 0.001,0.02,...]
+                                            [--mass-line X]
   -> markdown (docs/ema.md, "Standard deviations of each pole"): per case, the poles counted,
      the coverage of f and zeta over the poles that are not smears, and by class, and the
      widest sd of any pole found (smears too) relative to the true f and zeta; then per mode
@@ -33,7 +34,7 @@ CLASS_OF = {"taken": "refined", "not better": "diagram", "none": "diagram",
             "left its column": "put back", "beside a lost pole": "put back"}
 
 
-def intervals(zeta, references, seeds, snr_rel=0.01):
+def intervals(zeta, references, seeds, snr_rel=0.01, mass_line=0.0):
     """Per (seed, mode): the checked pole's error (f in Hz, zeta), its sd, its verdict and its
     class (`CLASSES`); NaN, "" where no pole was found near the mode."""
     targets = [t[0] for t in db.true_modes()]
@@ -42,7 +43,8 @@ def intervals(zeta, references, seeds, snr_rel=0.01):
     err, sd = np.full(shape + (2,), np.nan), np.full(shape + (2,), np.nan)
     verdict, kind = np.full(shape, "", object), np.full(shape, "", object)
     for s in range(seeds):
-        f, h = db.plate_frf(zeta, references, snr_rel, np.random.default_rng(1000 + s))
+        f, h = db.plate_frf(zeta, references, snr_rel, np.random.default_rng(1000 + s),
+                            mass_line=mass_line)
         r = db.lamdyn_ema(f, h, targets, refine=True, poles="checked")
         found = r["freq_hz"]
         for i, k in enumerate(db.nearest_index(found, targets, win)):
@@ -73,9 +75,9 @@ def fraction(hit, mask):
     return f"{hit[mask, 0].mean():.3f} / {hit[mask, 1].mean():.3f}"
 
 
-def case_lines(zeta, refs, seeds):
+def case_lines(zeta, refs, seeds, mass_line=0.0):
     """One row of the coverage table, and the lines on its modes below 90 %."""
-    targets, err, sd, verdict, kind = intervals(zeta, refs, seeds)
+    targets, err, sd, verdict, kind = intervals(zeta, refs, seeds, mass_line=mass_line)
     counted = cases_counted(err, sd, verdict)
     hit = covered(err, sd)
     smears = int((verdict == "smear").sum())
@@ -107,15 +109,19 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--levels", default="0.001,0.02,0.08,0.15")
+    ap.add_argument("--mass-line", type=float, default=0.0,
+                    help="a free plate: its rigid-body mass line, this many times the elastic "
+                         "modes' RMS (damped_bias.plate_frf)")
     a = ap.parse_args()
     rows, notes = [], []
     for zeta in map(float, a.levels.split(",")):
         for refs in ([0], [0, 5, 10]):
-            row, more = case_lines(zeta, refs, a.seeds)
+            row, more = case_lines(zeta, refs, a.seeds, a.mass_line)
             rows.append(row)
             notes.extend(more)
-    print(f"Coverage of the 95 % intervals, f / ζ, over {a.seeds} seeds at 1 % noise (poles "
-          "counted in brackets):\n")
+    free = f", free plate (mass line {a.mass_line:g} times the modes' RMS)" if a.mass_line else ""
+    print(f"Coverage of the 95 % intervals, f / ζ, over {a.seeds} seeds at 1 % noise{free} "
+          "(poles counted in brackets):\n")
     print("| ζ | refs | poles | smears (apart) | all | " + " | ".join(CLASSES)
           + " | widest sd(f)/f / sd(ζ)/ζ, % |")
     print("|---" * (6 + len(CLASSES)) + "|")

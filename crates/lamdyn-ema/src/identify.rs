@@ -670,12 +670,12 @@ struct RefinedPole {
 }
 
 /// The standard deviation `sd` of a mode whose reported pole `pole` is the diagram's while the
-/// refinement found another, at `refined` = (f in Hz, ζ) clamped into the pole's column
-/// ([`SelectedPole::clamp`]): widened by the two estimates' difference,
+/// refinement found another, at `refined` = (f in Hz, ζ) as far as the pole's column reaches
+/// ([`SelectedPole::widening_point`]): widened by the two estimates' difference,
 /// √(sd² + (diagram − refined)²), in f and ζ. The check found neither significantly better, or
 /// the refinement left the column, so the truth may lie by either; `sd` is the noise's part at
-/// `pole` and describes its scatter only. The clamp keeps a pole that ran away from widening
-/// the deviation beyond the column's reach.
+/// `pole` and describes its scatter only. The reach keeps a pole that ran away (to another
+/// resonance, or out of the band) from widening the deviation without bound.
 fn widened_by_the_refinement(sd: PoleSd, pole: Complex64, refined: (f64, f64)) -> PoleSd {
     let spread = |s: f64, d: f64| s.hypot(d);
     PoleSd {
@@ -975,11 +975,13 @@ impl ModeSources<'_> {
             None if q.pole == fit.poles[r] => RefinementOutcome::Taken,
             None => RefinementOutcome::NotBetter,
         });
-        // The refined pole not taken, clamped into the column: what widens the sd.
+        // The refined pole not taken, as far as its column reaches: what widens the sd.
         let not_taken = refined
             .filter(|_| outcome != Some(RefinementOutcome::Taken))
             .zip(selected)
-            .map(|(q, col)| col.clamp(pole_freq_hz(q.pole), pole_damping(q.pole), &s.criteria));
+            .map(|(q, col)| {
+                col.widening_point(pole_freq_hz(q.pole), pole_damping(q.pole), &s.criteria)
+            });
         let sd = self
             .deviations
             .and_then(|d| d.get(r).copied())

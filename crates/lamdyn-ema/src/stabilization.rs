@@ -213,6 +213,23 @@ impl SelectedPole {
         )
     }
 
+    /// The point a refined pole (Hz, damping ratio) that was not taken widens this pole's
+    /// standard deviation to: the refined pole itself where its frequency lies in the column's
+    /// widened frequency range ([`Self::holds`]), whatever its damping; else the column's
+    /// nearest point ([`Self::clamp`]). A refined pole at the column's frequency is another
+    /// estimate of the same resonance: where the noise is high the linearised LSCF's damping,
+    /// the column's with it, can be biased far beyond the column's damping allowance, and the
+    /// truth may lie by either estimate. A refined pole beyond the column's frequency has moved
+    /// to another resonance or out of the band, and widens the deviation only to the edge.
+    pub fn widening_point(&self, freq_hz: f64, damping: f64, c: &StabilityCriteria) -> (f64, f64) {
+        let [freq, _] = self.bounds(c);
+        if (freq[0]..=freq[1]).contains(&freq_hz) {
+            (freq_hz, damping)
+        } else {
+            self.clamp(freq_hz, damping, c)
+        }
+    }
+
     /// The column's widened ranges of frequency (Hz) and damping ratio ([`Self::holds`]).
     fn bounds(&self, c: &StabilityCriteria) -> [[f64; 2]; 2] {
         let [f0, f1] = self.freq_range_hz;
@@ -532,5 +549,20 @@ mod tests {
         let empty = column([f64::INFINITY, f64::NEG_INFINITY], [0.01, 0.01]);
         let (f, z) = empty.clamp(75.0, 0.01, &c);
         assert!(!empty.holds(f, z, &c) && !empty.holds(75.0, 0.01, &c));
+    }
+
+    /// A refined pole at the column's frequency widens the deviation to itself, damping far
+    /// outside the column's allowance included (the LSCF's damping biased low by noise); one
+    /// beyond the column's frequency only to the column's edge, in damping too.
+    #[test]
+    fn a_refined_pole_at_the_columns_frequency_widens_the_deviation_to_itself() {
+        let c = StabilityCriteria::default();
+        let col = column([74.95, 75.05], [0.010, 0.012]);
+        // Damping 8 % against a column of 1.0-1.2 %: not held, but at the column's frequency.
+        assert!(!col.holds(75.3, 0.08, &c));
+        assert_eq!(col.widening_point(75.3, 0.08, &c), (75.3, 0.08));
+        // Beyond the column's widened frequency range (74.2-75.8 Hz): clamped as a runaway.
+        assert_eq!(col.widening_point(77.2, 0.08, &c), (75.8, 0.0175));
+        assert_eq!(col.widening_point(1.1e8, 0.0111, &c), (75.8, 0.0111));
     }
 }
