@@ -211,6 +211,26 @@ def test_a_free_plates_sound_poles_hold_their_damping(coverage_tool):
     assert hit.mean(axis=0).min() >= 0.9, hit.mean(axis=0)
 
 
+def test_a_pole_over_a_pair_on_a_free_plate_is_not_sound(bench):
+    """Issue 45, item 3, on the free plate of the test above (mass line twice the elastic
+    modes' RMS, 8 %, one reference, 1 % noise): one pole near 103.2 Hz stands for the pair
+    102.5 / 105.6 Hz, its damping 64-70 % low. Its residues over the band look real (MPC above
+    0.5), those of the lines around it do not (0.14-0.18): the window holds a mode without its
+    own pole. It is doubtful, with that reason; before the local estimate alone counted it was
+    judged sound in 14 of 20 seeds (measured 2026-12-02)."""
+    targets = [t[0] for t in bench.true_modes()]
+    for seed in range(4):
+        f, h = bench.plate_frf(0.08, [0], 0.01, np.random.default_rng(1000 + seed),
+                               mass_line=2.0)
+        r = bench.lamdyn_ema(f, h, targets)
+        near = [k for k, fk in enumerate(r["freq_hz"]) if 100 < fk < 108]
+        assert near, (seed, r["freq_hz"])
+        for k in near:
+            flags = r["modes"][k]["quality"]["flags"]
+            assert r["verdict"][k] != "sound", (seed, r["freq_hz"][k], flags)
+            assert any("LocalComplexShape" in fl for fl in flags), (seed, flags)
+
+
 def test_a_pole_over_a_close_pair_is_a_smear(bench):
     """Issue 45, item 3: with one reference at 8 % damping the pairs 150.6 / 152.5 Hz (1.3 %
     apart) and 175.6 / 180.6 Hz are one pole each in the diagram, MPC above 0.7. Their curves

@@ -23,7 +23,11 @@
 //! cannot hold them), the local fit by a mode without a pole inside its window; a pole over a
 //! cluster is complex in both.
 //! A low MPC on a lightly damped pole is a complex or weakly excited mode: doubtful, not a
-//! smear. With fewer than three response components the MPC carries no information (one
+//! smear. A low MPC in the local estimate alone still makes the mode doubtful: a mode without
+//! its own pole inside the pole's window is a mode the list misses, and the pole fitted to that
+//! window may stand for it too (one pole over a damped pair whose band's residues look real).
+//! The band's estimate alone is no such evidence: its residual terms spoil it at isolated
+//! damped modes. With fewer than three response components the MPC carries no information (one
 //! component is always collinear) and no smear can be told.
 //!
 //! **A pole over two close modes** (one reference, a pair closer than its bandwidth) keeps a
@@ -138,6 +142,15 @@ pub enum QualityFlag {
         /// MPD, degrees.
         mpd_deg: f64,
     },
+    /// MPC below [`SMEAR_MPC`] in the shape from the lines around the pole alone, the band's
+    /// fit's at or above it: a mode without its own pole within the pole's window, or a complex
+    /// mode (module docs).
+    LocalComplexShape {
+        /// MPC of the shape (from the lines around the pole).
+        mpc: f64,
+        /// MPC of the shape from the band's fit's residues.
+        band_mpc: f64,
+    },
     /// Damped at or above [`NO_RESONANCE_DAMPING`]: no resonance peak behind the pole.
     NoResonance {
         /// Damping ratio.
@@ -198,6 +211,12 @@ impl std::fmt::Display for QualityFlag {
                 f,
                 "MPC {mpc:.2} ({band_mpc:.2} from the band's fit), MPD {mpd_deg:.0} deg: a \
                  complex or weakly excited shape"
+            ),
+            Self::LocalComplexShape { mpc, band_mpc } => write!(
+                f,
+                "MPC {mpc:.2} from the lines around the pole ({band_mpc:.2} from the band's fit): \
+                 a mode without its own pole beside it, which the pole may stand for too, or a \
+                 complex shape"
             ),
             Self::NoResonance { damping_ratio } => write!(
                 f,
@@ -354,6 +373,12 @@ pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
                 band_mpc: mode.band_mpc,
                 mpd_deg: mode.mpd_deg,
             }
+        });
+    }
+    if mode.shape_len >= 3 && mode.mpc < SMEAR_MPC && mode.band_mpc >= SMEAR_MPC {
+        flags.push(QualityFlag::LocalComplexShape {
+            mpc: mode.mpc,
+            band_mpc: mode.band_mpc,
         });
     }
     if mode.damping_ratio >= NO_RESONANCE_DAMPING {
@@ -522,7 +547,8 @@ mod tests {
     }
 
     /// A low MPC makes a smear (or, lightly damped, a complex shape) only where both residue
-    /// estimates show it; the flag names both.
+    /// estimates show it; the flag names both. Low in the local estimate alone the mode is
+    /// doubtful; low in the band's alone (its residual terms) it stays sound.
     #[test]
     fn a_smear_is_complex_in_both_residue_estimates() {
         let with = |mpc, band_mpc, damping_ratio| {
@@ -533,9 +559,19 @@ mod tests {
             };
             assess(&mode, &[])
         };
-        for (mpc, band_mpc) in [(0.3, 0.9), (0.9, 0.3)] {
-            assert_eq!(with(mpc, band_mpc, 0.08).verdict, Verdict::Sound);
-            assert_eq!(with(mpc, band_mpc, 0.01).verdict, Verdict::Sound);
+        for damping in [0.08, 0.01] {
+            assert_eq!(with(0.9, 0.3, damping).verdict, Verdict::Sound);
+            let local = with(0.3, 0.9, damping);
+            assert_eq!(local.verdict, Verdict::Doubtful, "{local:?}");
+            assert!(matches!(
+                local.flags[..],
+                [QualityFlag::LocalComplexShape { .. }]
+            ));
+            assert!(
+                local
+                    .reasons()
+                    .contains("MPC 0.30 from the lines around the pole (0.90")
+            );
         }
         let smear = with(0.3, 0.4, 0.08);
         assert_eq!(smear.verdict, Verdict::Smear, "{smear:?}");
