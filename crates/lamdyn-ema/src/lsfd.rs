@@ -360,7 +360,9 @@ pub fn refine_with(
 /// The poles of [`refine_with`] without their residues (`poles` themselves where the residue
 /// problem fails at the start); with `outside`, the LSCF model the poles were read from, its
 /// roots outside the band held fixed beside them: each pole from the fit that holds the groups
-/// of roots not within its reach (module docs), every pole free in each fit.
+/// of roots not within its reach (module docs), every pole free in each fit. `on_iteration(k,
+/// max)` counts the iterations over all the fits, one after the other (k of at most `max` =
+/// fits × `iterations`).
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -378,27 +380,30 @@ pub(crate) fn refined_poles(
 ) -> Result<Vec<Complex64>, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
     let mut samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
-    let refine = |samples: &LineSamples| {
+    let refine = |samples: &LineSamples, on_iteration: &dyn Fn(usize, usize)| {
         levenberg_marquardt(samples, poles, iterations, on_iteration)
             .unwrap_or_else(|| poles.to_vec())
     };
     let Some(c) = outside else {
-        return Ok(refine(&samples));
+        return Ok(refine(&samples, on_iteration));
     };
     let groups = c.outside_groups(band_hz);
     let models: Vec<OutsideModel> = poles
         .iter()
         .map(|&p| c.groups_held_beside(&groups, p))
         .collect();
-    let mut refined = poles.to_vec();
-    let mut done: Vec<OutsideModel> = Vec::new();
+    let mut distinct: Vec<OutsideModel> = Vec::new();
     for &model in &models {
-        if done.contains(&model) {
-            continue;
+        if !distinct.contains(&model) {
+            distinct.push(model);
         }
-        done.push(model);
+    }
+    let mut refined = poles.to_vec();
+    let fits = distinct.len();
+    for (j, &model) in distinct.iter().enumerate() {
         samples.set_fixed(c.outside_columns(freqs_hz, &lines, &groups, model));
-        let fit = refine(&samples);
+        // The iterations counted over all the fits, one after the other.
+        let fit = refine(&samples, &|k, max| on_iteration(j * max + k, fits * max));
         for (k, _) in models.iter().enumerate().filter(|(_, m)| **m == model) {
             refined[k] = fit[k];
         }

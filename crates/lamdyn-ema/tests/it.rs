@@ -1254,3 +1254,43 @@ fn each_damped_pole_is_refined_beside_the_outside_roots_that_do_not_reach_it() {
     let (set, targets) = damped_plate(zeta, &[0, 5, 10]);
     refined_within(&set, &targets, zeta, [1e-5, 2e-4]);
 }
+
+/// The refinement's progress counts on across its fits. At 8 % damping the 180.6 Hz pole
+/// reaches the roots above the band, so the poles are refined in two fits (one with those
+/// roots, one without them); the iterations reported run 1, 2, … over both against one bound,
+/// where the second fit used to start again at 1.
+#[test]
+fn the_refinements_progress_counts_on_across_its_fits() {
+    use lamdyn_ema::identify::{EmaSettings, identify_with};
+    use std::sync::Mutex;
+    let (set, targets) = damped_plate(0.08, &[0, 5, 10]);
+    let settings = EmaSettings {
+        band_hz: Some([20.0, 200.0]),
+        near_hz: Some(targets),
+        window_hz: 0.75,
+        ..EmaSettings::default()
+    };
+    let steps = Mutex::new(Vec::new());
+    identify_with(&set, &settings, &|stage| {
+        if let Some(rest) = stage.split("iteration ").nth(1) {
+            let mut words = rest.split(" of at most ");
+            let mut number = || words.next().unwrap().trim().parse::<usize>().unwrap();
+            let (k, max) = (number(), number());
+            steps.lock().unwrap().push((k, max));
+        }
+    })
+    .unwrap();
+    let steps = steps.into_inner().unwrap();
+    let max = steps[0].1;
+    assert!(max >= 2 * settings.refine_iterations, "{steps:?}");
+    assert!(
+        steps.windows(2).all(|w| w[1].0 > w[0].0 && w[1].1 == max),
+        "{steps:?}"
+    );
+    assert!(steps.iter().all(|&(k, _)| k <= max), "{steps:?}");
+    // The second fit's first iteration follows the first fit's bound.
+    assert!(
+        steps.iter().any(|&(k, _)| k > settings.refine_iterations),
+        "{steps:?}"
+    );
+}
