@@ -388,24 +388,23 @@ pub(crate) fn refined_poles(
         return Ok(refine(&samples, on_iteration));
     };
     let groups = c.outside_groups(band_hz);
-    let models: Vec<OutsideModel> = poles
-        .iter()
-        .map(|&p| c.groups_held_beside(&groups, p))
-        .collect();
-    let mut distinct: Vec<OutsideModel> = Vec::new();
-    for &model in &models {
-        if !distinct.contains(&model) {
-            distinct.push(model);
+    // Each distinct outside model with the poles whose estimates its fit gives.
+    let mut fits: Vec<(OutsideModel, Vec<usize>)> = Vec::new();
+    for (r, &p) in poles.iter().enumerate() {
+        let model = c.groups_held_beside(&groups, p);
+        match fits.iter_mut().find(|(m, _)| *m == model) {
+            Some((_, members)) => members.push(r),
+            None => fits.push((model, vec![r])),
         }
     }
     let mut refined = poles.to_vec();
-    let fits = distinct.len();
-    for (j, &model) in distinct.iter().enumerate() {
+    let count = fits.len();
+    for (j, (model, members)) in fits.into_iter().enumerate() {
         samples.set_fixed(c.outside_columns(freqs_hz, &lines, &groups, model));
         // The iterations counted over all the fits, one after the other.
-        let fit = refine(&samples, &|k, max| on_iteration(j * max + k, fits * max));
-        for (k, _) in models.iter().enumerate().filter(|(_, m)| **m == model) {
-            refined[k] = fit[k];
+        let fit = refine(&samples, &|k, max| on_iteration(j * max + k, count * max));
+        for r in members {
+            refined[r] = fit[r];
         }
     }
     Ok(refined)

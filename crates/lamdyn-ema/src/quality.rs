@@ -346,6 +346,32 @@ pub struct Measured<'a> {
     pub lines: &'a [usize],
 }
 
+/// What the MPCs of a mode's two residue estimates say (module docs): low in both, a smear
+/// (damped) or a complex shape (light); low in the local estimate alone, a mode without its own
+/// pole in the window or a complex mode; nothing where the local one is high or fewer than
+/// three response components carry no MPC.
+fn shape_flag(mode: &ModeEvidence) -> Option<QualityFlag> {
+    let (mpc, band_mpc) = (mode.mpc, mode.band_mpc);
+    if mode.shape_len < 3 || mpc >= SMEAR_MPC {
+        return None;
+    }
+    Some(if band_mpc >= SMEAR_MPC {
+        QualityFlag::LocalComplexShape { mpc, band_mpc }
+    } else if mode.damping_ratio >= SMEAR_DAMPING {
+        QualityFlag::Smear {
+            mpc,
+            band_mpc,
+            damping_ratio: mode.damping_ratio,
+        }
+    } else {
+        QualityFlag::ComplexShape {
+            mpc,
+            band_mpc,
+            mpd_deg: mode.mpd_deg,
+        }
+    })
+}
+
 /// The verdict on a mode from its evidence (module docs).
 pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
     let frac_drop = mode.frac_drop;
@@ -359,28 +385,7 @@ pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
                 .abs()
                 .total_cmp(&(b - mode.freq_hz).abs())
         });
-    let mut flags = Vec::new();
-    if mode.shape_len >= 3 && mode.mpc.max(mode.band_mpc) < SMEAR_MPC {
-        flags.push(if mode.damping_ratio >= SMEAR_DAMPING {
-            QualityFlag::Smear {
-                mpc: mode.mpc,
-                band_mpc: mode.band_mpc,
-                damping_ratio: mode.damping_ratio,
-            }
-        } else {
-            QualityFlag::ComplexShape {
-                mpc: mode.mpc,
-                band_mpc: mode.band_mpc,
-                mpd_deg: mode.mpd_deg,
-            }
-        });
-    }
-    if mode.shape_len >= 3 && mode.mpc < SMEAR_MPC && mode.band_mpc >= SMEAR_MPC {
-        flags.push(QualityFlag::LocalComplexShape {
-            mpc: mode.mpc,
-            band_mpc: mode.band_mpc,
-        });
-    }
+    let mut flags: Vec<QualityFlag> = shape_flag(mode).into_iter().collect();
     if mode.damping_ratio >= NO_RESONANCE_DAMPING {
         flags.push(QualityFlag::NoResonance {
             damping_ratio: mode.damping_ratio,
