@@ -1,20 +1,28 @@
 #!/usr/bin/env python3
-"""Whole process on a long record, lamdyn ema against sdypy-EMA (issue 17.2): 9 accelerance
-FRFs x 50 001 lines (0.02-1000 Hz), four modes (51.5, 142.2, 278.7, 460.4 Hz; zeta 0.2-1 %),
-40 dB complex noise, band 20-1000 Hz, orders 2-60 (sdypy: pol_order_high = 30).
+"""Whole process on long records, lamdyn ema against sdypy-EMA (issues 17.2 and 45.5): 9
+accelerance FRFs x 50 001 lines (0.02-1000 Hz), band 20-1000 Hz, orders 2-60 (sdypy:
+pol_order_high = 30). Two records:
+
+- `four`: four modes (51.5, 142.2, 278.7, 460.4 Hz; zeta 0.2-1 %), 40 dB complex noise.
+- `beam`: a stand-in for a measured roving-hammer beam: a free-free Euler beam's first seven
+  bending modes (51.5-1290 Hz, the seventh above the band; zeta 0.2-1 %), hammer at nine points,
+  one accelerometer near an end, the rigid-body mass line, complex noise of 1 % of each curve's
+  RMS.
 
 - lamdyn: `lamdyn ema --uff long.uff --band-hz 20,1000 --json` (binary 58b, the automatic
   selection, the checked refinement, residues, sds, verdicts, CMIF), one process per run; its
-  step times from the JSON (details.seconds).
+  step times from the JSON (details.seconds). The same FRFs are written twice: as nine responses
+  to one reference (a roving accelerometer, a shaker) and as one response to nine references (a
+  roving hammer), and lamdyn runs on both.
 - sdypy-EMA: `python3 -c ...` reading the same FRFs from .npy (its fastest input), LSCF,
   select_closest_poles at the true frequencies (it has no automatic selection), its LSFD
   (get_constants), one process per run (Python start-up and imports included, as a user pays).
 
-Each is timed REPEATS times (wall clock of the process); the median is reported with the
-poles' errors against the truth. Needs: the lamdyn binary (cargo build --release), the
-Python package (pip install ./python) to write the UFF, numpy and sdypy-EMA.
+Each is timed REPEATS times (wall clock of the process, the three back to back); the median is
+reported with the poles' errors against the truth. Needs: the lamdyn binary (cargo build
+--release), the Python package (pip install ./python) to write the UFF, numpy and sdypy-EMA.
 
-Usage: python3 tools/ema/bench_long_vs_sdypy.py [REPEATS] [path/to/lamdyn]
+Usage: python3 tools/ema/bench_long_vs_sdypy.py [REPEATS] [path/to/lamdyn] [four|beam|both]
 """
 import json
 import os
@@ -30,7 +38,12 @@ import lamdyn
 
 REPEATS = int(sys.argv[1]) if len(sys.argv) > 1 else 5
 LAMDYN = sys.argv[2] if len(sys.argv) > 2 else "target/release/lamdyn"
+RECORDS = ["four", "beam"] if len(sys.argv) <= 3 or sys.argv[3] == "both" else [sys.argv[3]]
 MODES = [(51.5, 0.003), (142.2, 0.002), (278.7, 0.004), (460.4, 0.01)]
+BEAM_MODES = [(51.5, 0.004), (142.2, 0.002), (278.7, 0.003), (460.4, 0.006), (688.0, 0.005),
+              (960.0, 0.008), (1290.0, 0.01)]
+#: beta_r L of a free-free beam's bending modes.
+BETA_L = [4.730, 7.853, 10.996, 14.137, 17.279, 20.420, 23.562]
 
 
 def shape(r, o):
@@ -38,22 +51,54 @@ def shape(r, o):
     return np.sin((r + 1) * np.pi * x + 0.3 * r) + 0.2 * np.cos((r + 2) * x)
 
 
-def synthetic():
-    f = np.arange(1, 50_002) * 0.02
+def lines():
+    return np.arange(1, 50_002) * 0.02
+
+
+def with_noise(h, fraction, rng):
+    rms = np.sqrt(np.mean(np.abs(h) ** 2))
+    sd = fraction * rms / np.sqrt(2)
+    return h + sd * (rng.standard_normal(h.size) + 1j * rng.standard_normal(h.size))
+
+
+def modal_sum(f, modes, residue):
     s = 2j * np.pi * f
+    h = 0
+    for r, (fr, z) in enumerate(modes):
+        w = 2 * np.pi * fr
+        p = complex(-z * w, w * np.sqrt(1 - z * z))
+        a = residue(r) / (2j * p.imag)
+        h = h + a / (s - p) + np.conj(a) / (s - np.conj(p))
+    return h * s * s
+
+
+def synthetic():
+    f = lines()
     rng = np.random.default_rng(11)
     frf = np.zeros((9, f.size), complex)
     for o in range(9):
-        h = 0
-        for r, (fr, z) in enumerate(MODES):
-            w = 2 * np.pi * fr
-            p = complex(-z * w, w * np.sqrt(1 - z * z))
-            a = shape(r, 2 * o) * shape(r, 0) / (2j * p.imag)
-            h = h + a / (s - p) + np.conj(a) / (s - np.conj(p))
-        h = h * s * s
-        rms = np.sqrt(np.mean(np.abs(h) ** 2))
-        sd = rms * 10 ** (-40 / 20) / np.sqrt(2)
-        frf[o] = h + sd * (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size))
+        h = modal_sum(f, MODES, lambda r: shape(r, 2 * o) * shape(r, 0))
+        frf[o] = with_noise(h, 10 ** (-40 / 20), rng)
+    return f, frf
+
+
+def beam_shape(r, x):
+    """Mode r of a free-free beam of unit length at x."""
+    b = BETA_L[r]
+    k = (np.cosh(b) - np.cos(b)) / (np.sinh(b) - np.sin(b))
+    return np.cosh(b * x) + np.cos(b * x) - k * (np.sinh(b * x) + np.sin(b * x))
+
+
+def beam():
+    f = lines()
+    rng = np.random.default_rng(3)
+    hammer, sensor = (np.arange(9) + 0.37) / 9.2, 0.03
+    frf = np.zeros((9, f.size), complex)
+    for o, x in enumerate(hammer):
+        h = modal_sum(f, BEAM_MODES, lambda r: beam_shape(r, x) * beam_shape(r, sensor))
+        # The rigid-body modes' mass line (translation and rotation, unit mass and length).
+        h = h + (1 + 12 * (x - 0.5) * (sensor - 0.5))
+        frf[o] = with_noise(h, 0.01, rng)
     return f, frf
 
 
@@ -80,37 +125,58 @@ def timed(cmd):
     return dt, p.stdout
 
 
-def main():
-    f, frf = synthetic()
+def run(name, f, frf, modes):
     with tempfile.TemporaryDirectory() as tmp:
         uff = os.path.join(tmp, "long.uff")
-        lamdyn.write_uff(uff, f, frf[:, None, :], [f"{o + 1}+Z" for o in range(9)], ["100+Z"], binary=True)
+        points = [f"{o + 1}+Z" for o in range(9)]
+        lamdyn.write_uff(uff, f, frf[:, None, :], points, ["100+Z"], binary=True)
+        roving = os.path.join(tmp, "roving.uff")
+        lamdyn.write_uff(roving, f, frf[None, :, :], ["100+Z"], points, binary=True)
         fn, hn = os.path.join(tmp, "f.npy"), os.path.join(tmp, "frf.npy")
         np.save(fn, f)
         np.save(hn, frf)
-        truth = [m[0] for m in MODES]
-        lam_t, sd_t, steps = [], [], []
+        truth = [m[0] for m in modes]
+        lam_t, rov_t, sd_t, steps = [], [], [], []
         for _ in range(REPEATS):
             dt, out = timed([LAMDYN, "ema", "--uff", uff, "--band-hz", "20,1000", "--json"])
             lam_t.append(dt)
             lam = json.loads(out)
-            steps.append(lam["details"]["seconds"])
+            dt, out = timed([LAMDYN, "ema", "--uff", roving, "--band-hz", "20,1000", "--json"])
+            rov_t.append(dt)
+            rov = json.loads(out)
+            steps.append(rov["details"]["seconds"])
             dt, out = timed([sys.executable, "-c", SDYPY, fn, hn, json.dumps(truth)])
             sd_t.append(dt)
             sd = json.loads(out)
-    lf = [r["freq_hz"] for r in lam["rows"]]
-    lz = [r["damping_ratio"] for r in lam["rows"]]
-    tl, ts = statistics.median(lam_t), statistics.median(sd_t)
-    print(f"9 FRFs x {f.size} lines, band 20-1000 Hz, orders 2-60, {os.cpu_count()} cores, median of {REPEATS}")
-    print(f"whole process: lamdyn {tl:.3f} s, sdypy-EMA {ts:.3f} s, ratio {ts / tl:.1f}x")
+    tl, tr, ts = (statistics.median(t) for t in (lam_t, rov_t, sd_t))
+    print(f"{name}: 9 FRFs x {f.size} lines, band 20-1000 Hz, orders 2-60, {os.cpu_count()} cores, "
+          f"median of {REPEATS}")
+    print(f"whole process: lamdyn {tl:.3f} s (nine responses), {tr:.3f} s (roving hammer: one "
+          f"response, nine references), sdypy-EMA {ts:.3f} s; ratio {ts / tl:.1f}x and {ts / tr:.1f}x")
+    same = len(lam["rows"]) == len(rov["rows"]) and all(
+        abs(a["freq_hz"] / b["freq_hz"] - 1) < 1e-9
+        and abs(a["damping_ratio"] / b["damping_ratio"] - 1) < 1e-6
+        for a, b in zip(lam["rows"], rov["rows"]))
+    print(f"roving-hammer layout: the same poles as the nine responses' (1e-9 in f, 1e-6 in zeta): {same}")
     order = ["read", "diagram", "selection", "refinement", "check", "residues", "deviations", "modes"]
-    print("lamdyn steps (median, s): " + ", ".join(
+    print("lamdyn steps, roving hammer (median, s): " + ", ".join(
         f"{k} {statistics.median(s[k] for s in steps):.3f}" for k in order))
     print("| mode | true f [Hz] | lamdyn f err | sdypy f err | true zeta [%] | lamdyn zeta err | sdypy zeta err |")
     print("|---|---|---|---|---|---|---|")
-    for k, (ft, zt) in enumerate(MODES):
-        print(f"| {k + 1} | {ft} | {lf[k] / ft - 1:+.1e} | {sd['f'][k] / ft - 1:+.1e} | {100 * zt:.2f} | "
-              f"{lz[k] / zt - 1:+.1e} | {sd['z'][k] / zt - 1:+.1e} |")
+    for k, (ft, zt) in enumerate(modes):
+        lr = min(rov["rows"], key=lambda r: abs(r["freq_hz"] - ft))
+        j = int(np.argmin([abs(x - ft) for x in sd["f"]]))
+        print(f"| {k + 1} | {ft} | {lr['freq_hz'] / ft - 1:+.1e} | {sd['f'][j] / ft - 1:+.1e} | "
+              f"{100 * zt:.2f} | {lr['damping_ratio'] / zt - 1:+.1e} | {sd['z'][j] / zt - 1:+.1e} |")
+
+
+def main():
+    for name in RECORDS:
+        if name == "four":
+            run("four modes, 40 dB", *synthetic(), MODES)
+        else:
+            run("beam stand-in, 1 % noise", *beam(), [m for m in BEAM_MODES if m[0] < 1000])
+        print()
 
 
 if __name__ == "__main__":

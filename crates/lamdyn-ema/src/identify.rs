@@ -805,11 +805,16 @@ fn stabilization(
         "stabilization diagram: orders {lo} to {hi}, {} curves",
         curves.len()
     ));
+    let (curves, references) = if s.polymax {
+        smaller_side_as_references(curves, references)
+    } else {
+        (curves.to_vec(), 1)
+    };
     let orders = lscf(
         freqs,
-        curves,
+        &curves,
         &LscfSettings {
-            references: if s.polymax { references } else { 1 },
+            references,
             mode_vectors: s.mode_vectors,
             ..LscfSettings::new(band, (lo, hi, step))
         },
@@ -820,6 +825,26 @@ fn stabilization(
         roots: top.roots,
     });
     Ok((diag, context))
+}
+
+/// The curves (grouped by response, `references` each) as PolyMAX takes them: as they are where
+/// the responses are at least as many as the references, else transposed, grouped by reference
+/// with the responses as its references. H and Hᵀ have the same poles, and the matrix
+/// denominator is then the smaller side's: one response and nine hammer points (a roving hammer)
+/// give the LSCF's scalar denominator over nine curves, not a 9 × 9 matrix polynomial with nine
+/// times the roots per order.
+fn smaller_side_as_references<'a>(
+    curves: &[&'a [Complex64]],
+    references: usize,
+) -> (Vec<&'a [Complex64]>, usize) {
+    let responses = curves.len() / references.max(1);
+    if responses >= references {
+        return (curves.to_vec(), references);
+    }
+    let transposed = (0..references)
+        .flat_map(|j| (0..responses).map(move |i| curves[i * references + j]))
+        .collect();
+    (transposed, responses)
 }
 
 /// The CMIF at each of `lines` lines: the singular values of the FRF matrix (curves at unit

@@ -88,13 +88,21 @@ pub fn real_mode(v: &[Complex64]) -> Vec<f64> {
     v.iter().map(|z| (z * rot).re).collect()
 }
 
-/// CMIF values of one line: singular values of the n_resp × n_ref matrix `h` (row-major),
-/// largest first.
+/// CMIF values of one line: the min(n_resp, n_ref) singular values of the n_resp × n_ref matrix
+/// `h` (row-major), largest first. The Gram matrix is taken on the smaller side: with one response
+/// and nine references (a roving hammer) there is one singular value, not nine of which eight
+/// are rounding.
 pub fn cmif_line(h: &[Complex64], n_ref: usize) -> Vec<f64> {
-    if n_ref == 1 {
+    let n_resp = h.len() / n_ref.max(1);
+    if n_ref == 1 || n_resp == 1 {
         return vec![h.iter().map(Complex64::norm_sqr).sum::<f64>().sqrt()];
     }
-    let n_resp = h.len() / n_ref;
+    if n_resp < n_ref {
+        let transposed: Vec<Complex64> = (0..n_ref * n_resp)
+            .map(|k| h[(k % n_resp) * n_ref + k / n_resp])
+            .collect();
+        return cmif_line(&transposed, n_resp);
+    }
     let g = faer::Mat::<faer::c64>::from_fn(n_ref, n_ref, |a, b| {
         let s: Complex64 = (0..n_resp)
             .map(|i| h[i * n_ref + a].conj() * h[i * n_ref + b])
@@ -183,6 +191,33 @@ mod tests {
             Complex64::new(0.0, 0.0),
         ];
         assert!(mac(&real, &other) < 1.0);
+    }
+
+    /// H = 3 u₁v₁ᴴ + 0.5 u₂v₂ᴴ with orthonormal u (two responses) and v (three references): the
+    /// CMIF is [3, 0.5], two values and not three, for H and for Hᵀ (three responses, two
+    /// references); a single response's one value is the row's norm.
+    #[test]
+    fn cmif_has_as_many_values_as_the_smaller_side() {
+        let c = |re: f64, im: f64| Complex64::new(re, im);
+        let r = std::f64::consts::FRAC_1_SQRT_2;
+        let u = [[c(1.0, 0.0), c(0.0, 0.0)], [c(0.0, 0.0), c(0.0, 1.0)]];
+        let v = [
+            [c(r, 0.0), c(0.0, r), c(0.0, 0.0)],
+            [c(0.0, 0.0), c(0.0, 0.0), c(1.0, 0.0)],
+        ];
+        let h: Vec<Complex64> = (0..6)
+            .map(|k| {
+                let (i, j) = (k / 3, k % 3);
+                3.0 * u[0][i] * v[0][j].conj() + 0.5 * u[1][i] * v[1][j].conj()
+            })
+            .collect();
+        let transposed: Vec<Complex64> = (0..6).map(|k| h[(k % 2) * 3 + k / 2]).collect();
+        for sigma in [cmif_line(&h, 3), cmif_line(&transposed, 2)] {
+            assert_eq!(sigma.len(), 2);
+            assert!((sigma[0] - 3.0).abs() < 1e-12 && (sigma[1] - 0.5).abs() < 1e-12);
+        }
+        let row = [c(3.0, 4.0), c(0.0, 12.0)];
+        assert_eq!(cmif_line(&row, 2), vec![13.0]);
     }
 
     /// Two resonances (|1/(1 − (f/f_r)² + iη)|) with a 5 % ripple of period 2 Hz on them: the

@@ -15,6 +15,10 @@
 
 use faer::Mat;
 
+/// Rows × columns × reflectors from which [`ThinQr::apply_transpose_q`] and [`ThinQr::apply_q`]
+/// share the columns out over threads (each column's work is then a few milliseconds' share).
+const PARALLEL_WORK: usize = 1 << 21;
+
 /// The QR factorisation A = Q [R; 0] of a real rows × cols matrix, Q held as its min(rows, cols)
 /// Householder reflectors ([`Self::apply_transpose_q`], [`Self::apply_q`]); R is
 /// min(rows, cols) × cols (a trapezoid where rows < cols).
@@ -87,14 +91,27 @@ impl ThinQr {
         self.apply(b, (0..self.tau.len()).rev());
     }
 
-    /// Applies the reflectors in `order` (each its own transpose) to every column of `b`.
-    fn apply(&self, b: &mut Mat<f64>, order: impl Iterator<Item = usize> + Clone) {
+    /// Applies the reflectors in `order` (each its own transpose) to every column of `b`, the
+    /// columns in parallel where the work is large ([`PARALLEL_WORK`]).
+    fn apply(&self, b: &mut Mat<f64>, order: impl Iterator<Item = usize> + Clone + Send + Sync) {
+        use rayon::prelude::*;
         assert_eq!(b.nrows(), self.rows, "rows of the matrix Q is applied to");
-        for c in 0..b.ncols() {
-            let column = b.col_as_slice_mut(c);
+        let one = |column: &mut [f64]| {
             for j in order.clone() {
                 let v = &self.packed[j * self.rows + j + 1..(j + 1) * self.rows];
                 reflect(self.tau[j], v, &mut column[j..]);
+            }
+        };
+        if b.ncols() > 1 && self.rows * b.ncols() * self.tau.len() >= PARALLEL_WORK {
+            b.par_col_iter_mut().for_each(|c| {
+                let column = c
+                    .try_as_col_major_mut()
+                    .expect("a Mat's columns are contiguous");
+                one(column.as_slice_mut());
+            });
+        } else {
+            for c in 0..b.ncols() {
+                one(b.col_as_slice_mut(c));
             }
         }
     }

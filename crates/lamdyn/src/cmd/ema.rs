@@ -398,17 +398,28 @@ fn mode_columns() -> Vec<Column> {
     ]
 }
 
+/// The diagram's estimator: PolyMAX's matrix denominator is the smaller side's of the FRF
+/// matrix (the responses where they are fewer than the references, H transposed), so one
+/// response or one reference is the LSCF.
+fn estimator_name(set: &FrfSet, s: &EmaSettings) -> &'static str {
+    let (responses, references) = (set.responses().len(), set.references().len());
+    if !s.polymax || responses.min(references) == 1 {
+        "LSCF (z-domain common denominator)"
+    } else if responses < references {
+        "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model; over the responses, \
+         fewer than the references)"
+    } else {
+        "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
+    }
+}
+
 /// The method line: the estimator, orders, band, stability criteria, selection and pole
 /// estimator.
 fn method_line(set: &FrfSet, s: &EmaSettings, r: &EmaResult) -> String {
     format!(
         "{} orders {}-{} step {} on {:.3}-{:.3} Hz; stable: df/f <= {} %, dzeta/zeta <= {} %{}; \
          {}; {}",
-        if s.polymax && set.references().len() > 1 {
-            "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
-        } else {
-            "LSCF (z-domain common denominator)"
-        },
+        estimator_name(set, s),
         s.orders.0,
         s.orders.1,
         s.orders.2,
