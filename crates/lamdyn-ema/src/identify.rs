@@ -17,7 +17,9 @@ use crate::quality::{
     second_shape_calibrated,
 };
 use crate::second_shape::second_shapes;
-use crate::shapes::{CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode, to_unit};
+use crate::shapes::{
+    CmifPeak, cmif_line, cmif_peaks, mac, mpc, mpd, real_mode, to_unit, transposed_indices,
+};
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
     CmifCurvePeaks, DiagramPole, Pick, SelectedPole, StabilityCriteria, diagram, explains,
@@ -790,6 +792,35 @@ fn at_scale(curves: &[&[Complex64]], scale: f64) -> Option<Vec<Vec<Complex64>>> 
     })
 }
 
+/// The estimator of the stabilization diagram for an FRF matrix of `responses` × `references`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DiagramEstimator {
+    /// One LSCF over every curve (a scalar common denominator): one response or one reference,
+    /// or PolyMAX turned off.
+    Lscf,
+    /// PolyMAX, its matrix denominator the smaller side's of the FRF matrix: the references',
+    /// or, `transposed`, the responses' where they are fewer (H and Hᵀ have the same poles; a
+    /// 9 × 9 denominator for one response and nine hammer points would have nine times the
+    /// roots per order).
+    PolyMax {
+        /// Whether Hᵀ is fitted (the references taken as the outputs).
+        transposed: bool,
+    },
+}
+
+impl DiagramEstimator {
+    /// The estimator for `responses` × `references` curves, PolyMAX where `polymax` allows.
+    pub fn of(responses: usize, references: usize, polymax: bool) -> Self {
+        if !polymax || responses.min(references) <= 1 {
+            Self::Lscf
+        } else {
+            Self::PolyMax {
+                transposed: responses < references,
+            }
+        }
+    }
+}
+
 /// The stabilization diagram over `s.orders` (PolyMAX over the `references` when
 /// `s.polymax`), and the highest order's denominator as the context of the refinement's check.
 fn stabilization(
@@ -805,10 +836,16 @@ fn stabilization(
         "stabilization diagram: orders {lo} to {hi}, {} curves",
         curves.len()
     ));
-    let (curves, references) = if s.polymax {
-        smaller_side_as_references(curves, references)
-    } else {
-        (curves.to_vec(), 1)
+    let responses = curves.len() / references.max(1);
+    let (curves, references) = match DiagramEstimator::of(responses, references, s.polymax) {
+        DiagramEstimator::Lscf => (curves.to_vec(), 1),
+        DiagramEstimator::PolyMax { transposed: false } => (curves.to_vec(), references),
+        DiagramEstimator::PolyMax { transposed: true } => (
+            transposed_indices(responses, references)
+                .map(|k| curves[k])
+                .collect(),
+            responses,
+        ),
     };
     let orders = lscf(
         freqs,
@@ -825,26 +862,6 @@ fn stabilization(
         roots: top.roots,
     });
     Ok((diag, context))
-}
-
-/// The curves (grouped by response, `references` each) as PolyMAX takes them: as they are where
-/// the responses are at least as many as the references, else transposed, grouped by reference
-/// with the responses as its references. H and Hᵀ have the same poles, and the matrix
-/// denominator is then the smaller side's: one response and nine hammer points (a roving hammer)
-/// give the LSCF's scalar denominator over nine curves, not a 9 × 9 matrix polynomial with nine
-/// times the roots per order.
-fn smaller_side_as_references<'a>(
-    curves: &[&'a [Complex64]],
-    references: usize,
-) -> (Vec<&'a [Complex64]>, usize) {
-    let responses = curves.len() / references.max(1);
-    if responses >= references {
-        return (curves.to_vec(), references);
-    }
-    let transposed = (0..references)
-        .flat_map(|j| (0..responses).map(move |i| curves[i * references + j]))
-        .collect();
-    (transposed, responses)
 }
 
 /// The CMIF at each of `lines` lines: the singular values of the FRF matrix (curves at unit

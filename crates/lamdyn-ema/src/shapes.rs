@@ -88,6 +88,12 @@ pub fn real_mode(v: &[Complex64]) -> Vec<f64> {
     v.iter().map(|z| (z * rot).re).collect()
 }
 
+/// The indices of a row-major `rows` × `cols` matrix's entries in the row-major order of its
+/// transpose (column by column of the original).
+pub(crate) fn transposed_indices(rows: usize, cols: usize) -> impl Iterator<Item = usize> {
+    (0..cols).flat_map(move |j| (0..rows).map(move |i| i * cols + j))
+}
+
 /// CMIF values of one line: the min(n_resp, n_ref) singular values of the n_resp × n_ref matrix
 /// `h` (row-major), largest first. The Gram matrix is taken on the smaller side: with one response
 /// and nine references (a roving hammer) there is one singular value, not nine of which eight
@@ -98,9 +104,7 @@ pub fn cmif_line(h: &[Complex64], n_ref: usize) -> Vec<f64> {
         return vec![h.iter().map(Complex64::norm_sqr).sum::<f64>().sqrt()];
     }
     if n_resp < n_ref {
-        let transposed: Vec<Complex64> = (0..n_ref * n_resp)
-            .map(|k| h[(k % n_resp) * n_ref + k / n_resp])
-            .collect();
+        let transposed: Vec<Complex64> = transposed_indices(n_resp, n_ref).map(|k| h[k]).collect();
         return cmif_line(&transposed, n_resp);
     }
     let g = faer::Mat::<faer::c64>::from_fn(n_ref, n_ref, |a, b| {

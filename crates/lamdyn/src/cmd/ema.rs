@@ -9,7 +9,7 @@ use crate::progress::Spinner;
 use crate::table::{Column, Fmt, Report, Section};
 use anyhow::{Context, Result, anyhow, bail};
 use lamdyn_ema::identify::{
-    EmaResult, EmaSettings, EmaTimings, Mode, PoleEstimator, identify_with,
+    DiagramEstimator, EmaResult, EmaSettings, EmaTimings, Mode, PoleEstimator, identify_with,
 };
 use lamdyn_ema::lscf::{pole_damping, pole_freq_hz};
 use lamdyn_ema::quality::Verdict;
@@ -398,18 +398,18 @@ fn mode_columns() -> Vec<Column> {
     ]
 }
 
-/// The diagram's estimator: PolyMAX's matrix denominator is the smaller side's of the FRF
-/// matrix (the responses where they are fewer than the references, H transposed), so one
-/// response or one reference is the LSCF.
+/// The diagram's estimator, as `identify` chooses it ([`DiagramEstimator::of`]).
 fn estimator_name(set: &FrfSet, s: &EmaSettings) -> &'static str {
     let (responses, references) = (set.responses().len(), set.references().len());
-    if !s.polymax || responses.min(references) == 1 {
-        "LSCF (z-domain common denominator)"
-    } else if responses < references {
-        "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model; over the responses, \
-         fewer than the references)"
-    } else {
-        "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
+    match DiagramEstimator::of(responses, references, s.polymax) {
+        DiagramEstimator::Lscf => "LSCF (z-domain common denominator)",
+        DiagramEstimator::PolyMax { transposed: true } => {
+            "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model; over the responses, \
+             fewer than the references)"
+        }
+        DiagramEstimator::PolyMax { transposed: false } => {
+            "PolyMAX (multi-reference pLSCF, z-domain matrix-fraction model)"
+        }
     }
 }
 
