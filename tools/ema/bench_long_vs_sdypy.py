@@ -18,9 +18,10 @@ pol_order_high = 30). Two records:
   select_closest_poles at the true frequencies (it has no automatic selection), its LSFD
   (get_constants), one process per run (Python start-up and imports included, as a user pays).
 
-Each is timed REPEATS times (wall clock of the process, the three back to back); the median is
-reported with the poles' errors against the truth. Needs: the lamdyn binary (cargo build
---release), the Python package (pip install ./python) to write the UFF, numpy and sdypy-EMA.
+Each is timed REPEATS times (wall clock of the process, the three in turn, each round starting
+with the next one); the median is reported with the poles' errors against the truth. Needs: the
+lamdyn binary (cargo build --release), the Python package (pip install ./python) to write the
+UFF, numpy and sdypy-EMA.
 
 Usage: python3 tools/ema/bench_long_vs_sdypy.py [REPEATS] [path/to/lamdyn] [four|beam|both]
 """
@@ -125,6 +126,22 @@ def timed(cmd):
     return dt, p.stdout
 
 
+def rotated_runs(commands):
+    """Each command REPEATS times, one after the other, each round starting with the next one:
+    no program always runs right after the same other (a process started just after
+    sdypy-EMA's may find the caches and free memory in another state). Returns the wall times
+    and the outputs by name."""
+    names = list(commands)
+    times = {k: [] for k in names}
+    outputs = {k: [] for k in names}
+    for i in range(REPEATS):
+        for k in names[i % len(names):] + names[:i % len(names)]:
+            dt, out = timed(commands[k])
+            times[k].append(dt)
+            outputs[k].append(out)
+    return times, outputs
+
+
 def run(name, f, frf, modes):
     with tempfile.TemporaryDirectory() as tmp:
         uff = os.path.join(tmp, "long.uff")
@@ -136,18 +153,15 @@ def run(name, f, frf, modes):
         np.save(fn, f)
         np.save(hn, frf)
         truth = [m[0] for m in modes]
-        lam_t, rov_t, sd_t, steps = [], [], [], []
-        for _ in range(REPEATS):
-            dt, out = timed([LAMDYN, "ema", "--uff", uff, "--band-hz", "20,1000", "--json"])
-            lam_t.append(dt)
-            lam = json.loads(out)
-            dt, out = timed([LAMDYN, "ema", "--uff", roving, "--band-hz", "20,1000", "--json"])
-            rov_t.append(dt)
-            rov = json.loads(out)
-            steps.append(rov["details"]["seconds"])
-            dt, out = timed([sys.executable, "-c", SDYPY, fn, hn, json.dumps(truth)])
-            sd_t.append(dt)
-            sd = json.loads(out)
+        commands = {
+            "nine": [LAMDYN, "ema", "--uff", uff, "--band-hz", "20,1000", "--json"],
+            "roving": [LAMDYN, "ema", "--uff", roving, "--band-hz", "20,1000", "--json"],
+            "sdypy": [sys.executable, "-c", SDYPY, fn, hn, json.dumps(truth)],
+        }
+        times, outputs = rotated_runs(commands)
+        lam_t, rov_t, sd_t = times["nine"], times["roving"], times["sdypy"]
+        lam, rov, sd = (json.loads(outputs[k][-1]) for k in ("nine", "roving", "sdypy"))
+        steps = [json.loads(out)["details"]["seconds"] for out in outputs["roving"]]
     tl, tr, ts = (statistics.median(t) for t in (lam_t, rov_t, sd_t))
     print(f"{name}: 9 FRFs x {f.size} lines, band 20-1000 Hz, orders 2-60, {os.cpu_count()} cores, "
           f"median of {REPEATS}")

@@ -919,9 +919,12 @@ struct FitEvidence {
 impl FitEvidence {
     /// The evidence of `fit` (in the data's units) on `measured`.
     fn of(fit: &ModalFit, measured: Measured) -> Self {
-        let second_shapes = second_shapes(&fit.poles, measured);
+        let (second_shapes, contributions) = rayon::join(
+            || second_shapes(&fit.poles, measured),
+            || contributions(fit, measured),
+        );
         Self {
-            contributions: contributions(fit, measured),
+            contributions,
             calibrated: second_shape_calibrated(&second_shapes),
             second_shapes,
         }

@@ -188,40 +188,28 @@ struct FftBuffers {
 }
 
 /// All lag sums of the curves (band lines only, grouped by output with `refs` curves each).
+///
+/// t_ab is linear in the products H̄_oa,k H_ob,k, so the outputs are summed line by line before
+/// one transform per pair (a ≤ b): N_i(N_i + 1)/2 transforms for t, not N_o times as many.
 fn lag_sums(curves: &[&[Complex64]], refs: usize, how: &LagSums, n_max: usize) -> Sums {
     let ones = std::iter::repeat_n(Complex64::new(1.0, 0.0), curves[0].len());
     let r = how.sums(&mut ones.into_iter(), n_max, &mut FftBuffers::default())[n_max..].to_vec();
-    // Per output: (s_ob for each reference b, t_ab for each pair).
-    type OutputSums = (Vec<Vec<f64>>, Vec<Vec<f64>>);
-    let per_output: Vec<OutputSums> = curves
-        .par_chunks(refs)
-        .map_init(FftBuffers::default, |buffers, row| {
-            let s: Vec<Vec<f64>> = row
-                .iter()
-                .map(|h| how.sums(&mut h.iter().map(|v| -v), n_max, buffers))
-                .collect();
-            let mut t = vec![Vec::new(); refs * refs];
-            for a in 0..refs {
-                for b in a..refs {
-                    let y = row[a].iter().zip(row[b]).map(|(x, y)| x.conj() * y);
-                    let tab = how.sums(&mut y.into_iter(), n_max, buffers);
-                    // t_ba(m) = t_ab(−m).
-                    t[b * refs + a] = tab.iter().rev().copied().collect();
-                    t[a * refs + b] = tab;
-                }
-            }
-            (s, t)
-        })
-        .collect();
-    let mut t = vec![vec![0.0; 2 * n_max + 1]; refs * refs];
-    let mut s = Vec::with_capacity(curves.len());
-    for (so, to) in per_output {
-        for (acc, v) in t.iter_mut().zip(&to) {
-            for (x, y) in acc.iter_mut().zip(v) {
-                *x += y;
-            }
-        }
-        s.extend(so);
+    let (s, pair_sums) = rayon::join(
+        || {
+            curves
+                .par_iter()
+                .map_init(FftBuffers::default, |buffers, h| {
+                    how.sums(&mut h.iter().map(|v| -v), n_max, buffers)
+                })
+                .collect::<Vec<_>>()
+        },
+        || pair_lag_sums(curves, refs, how, n_max),
+    );
+    let mut t = vec![Vec::new(); refs * refs];
+    for ((a, b), tab) in reference_pairs(refs).zip(pair_sums) {
+        // t_ba(m) = t_ab(−m).
+        t[b * refs + a] = tab.iter().rev().copied().collect();
+        t[a * refs + b] = tab;
     }
     Sums {
         n_max,
@@ -230,6 +218,33 @@ fn lag_sums(curves: &[&[Complex64]], refs: usize, how: &LagSums, n_max: usize) -
         t,
         s,
     }
+}
+
+/// The pairs (a, b), a ≤ b, of `refs` references, a-major.
+fn reference_pairs(refs: usize) -> impl Iterator<Item = (usize, usize)> {
+    (0..refs).flat_map(move |a| (a..refs).map(move |b| (a, b)))
+}
+
+/// t_ab(m) for each pair of [`reference_pairs`]: the lag sums of Σ_o H̄_oa,k H_ob,k.
+fn pair_lag_sums(
+    curves: &[&[Complex64]],
+    refs: usize,
+    how: &LagSums,
+    n_max: usize,
+) -> Vec<Vec<f64>> {
+    let rows: Vec<&[&[Complex64]]> = curves.chunks(refs).collect();
+    let pairs: Vec<(usize, usize)> = reference_pairs(refs).collect();
+    pairs
+        .par_iter()
+        .map_init(FftBuffers::default, |buffers, &(a, b)| {
+            let y = (0..curves[0].len()).map(|k| {
+                rows.iter()
+                    .map(|row| row[a][k].conj() * row[b][k])
+                    .sum::<Complex64>()
+            });
+            how.sums(&mut y.into_iter(), n_max, buffers)
+        })
+        .collect()
 }
 
 /// The curves' values on the band's `lines`: in place where the lines follow one another
@@ -740,6 +755,50 @@ mod tests {
         };
         for (x, y) in flat(&a).iter().zip(&flat(&b)) {
             assert!((x - y).abs() < 1e-9 * (1.0 + x.abs()), "{x} vs {y}");
+        }
+    }
+
+    /// With three outputs of two references each, t_ab(m) and s_ob(m) are the module docs'
+    /// sums written out term by term: Re Σ_o Σ_k H̄_oa,k H_ob,k Ω_k^m and −Re Σ_k H_ob,k Ω_k^m.
+    #[test]
+    fn sums_over_outputs_follow_their_definition() {
+        let freqs: Vec<f64> = (1..=300).map(|k| k as f64 * 0.25).collect();
+        let hi = 75.0;
+        let omega_dt: Vec<f64> = freqs.iter().map(|f| 2.0 * PI * f / (2.0 * hi)).collect();
+        let curve = |c: f64| -> Vec<Complex64> {
+            let value = |f: f64| Complex64::new((0.7 * f + c).sin(), (0.2 * f * c).cos() + c);
+            freqs.iter().map(|&f| value(f)).collect()
+        };
+        let owned: Vec<Vec<Complex64>> = (0..6).map(|c| curve(c as f64)).collect();
+        let curves: Vec<&[Complex64]> = owned.iter().map(|c| c.as_slice()).collect();
+        let n_max = 8;
+        let sums = lag_sums(
+            &curves,
+            2,
+            &LagSums::new(&freqs, hi, &omega_dt, n_max),
+            n_max,
+        );
+        let lag = |y: &dyn Fn(usize) -> Complex64, m: i64| -> f64 {
+            let terms = omega_dt.iter().enumerate();
+            terms
+                .map(|(k, w)| (y(k) * Complex64::from_polar(1.0, -w * m as f64)).re)
+                .sum()
+        };
+        let close = |x: f64, y: f64| (x - y).abs() < 1e-9 * (1.0 + y.abs());
+        for m in -(n_max as i64)..=n_max as i64 {
+            let at = (m + n_max as i64) as usize;
+            for (a, b) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                let product = |k: usize| -> Complex64 {
+                    (0..3)
+                        .map(|o| curves[2 * o + a][k].conj() * curves[2 * o + b][k])
+                        .sum()
+                };
+                let expected = lag(&product, m);
+                assert!(close(sums.t[2 * a + b][at], expected), "t_{a}{b}({m})");
+            }
+            for (c, h) in curves.iter().enumerate() {
+                assert!(close(sums.s[c][at], lag(&|k| -h[k], m)), "s_{c}({m})");
+            }
         }
     }
 

@@ -52,6 +52,7 @@ use faer::linalg::solvers::SolveLstsq;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::{Mat, Par, c64};
 use num_complex::Complex64;
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Each curve's σ̂ is at least this fraction of its RMS over the band (module docs).
@@ -65,7 +66,7 @@ pub fn second_shapes(poles: &[Complex64], data: Measured) -> Vec<Option<SecondSh
     }
     let sigmas: Vec<f64> = data
         .curves
-        .iter()
+        .par_iter()
         .map(|c| floored_noise(c, data.lines))
         .collect();
     let spacing = line_spacing(data.freqs_hz, data.lines);
