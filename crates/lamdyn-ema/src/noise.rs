@@ -13,7 +13,6 @@
 //! that curvature alone, small but not zero.
 
 use num_complex::Complex64;
-use rayon::prelude::*;
 
 /// The fewest consecutive line triples an estimate is made from.
 const MIN_TRIPLES: usize = 8;
@@ -48,7 +47,7 @@ pub(crate) fn line_noise_variance(curve: &[Complex64], lines: &[usize]) -> Optio
 pub(crate) fn noise_weights(curves: &[&[Complex64]], lines: &[usize]) -> Vec<f64> {
     let ones = vec![1.0; curves.len()];
     let Some(variances) = curves
-        .par_iter()
+        .iter()
         .map(|c| line_noise_variance(c, lines))
         .collect::<Option<Vec<f64>>>()
     else {
