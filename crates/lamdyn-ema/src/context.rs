@@ -51,7 +51,7 @@ use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
 use crate::error::EmaError;
 use crate::lscf::half_power_bands_overlap;
 use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
-use crate::noise::noise_weights;
+use crate::noise::CurveNoise;
 use crate::projection::apply_transpose_q;
 use crate::thin_qr::ThinQr;
 use faer::Mat;
@@ -158,7 +158,9 @@ pub struct RefinementCheck<'a> {
 impl<'a> RefinementCheck<'a> {
     /// The check of the diagram's poles `diagram` on the lines `fit_lines` chooses in `band_hz`
     /// (the refinement's), in the LSCF model's `context`; `curves` are values of `quantity` at
-    /// `freqs_hz`, already checked by the refinement's caller.
+    /// `freqs_hz`, already checked by the refinement's caller, and `noise` their noise levels
+    /// over the band's positive lines ([`crate::band::positive_lines`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         freqs_hz: &'a [f64],
         curves: &'a [&'a [Complex64]],
@@ -167,10 +169,11 @@ impl<'a> RefinementCheck<'a> {
         band_hz: [f64; 2],
         fit_lines: RefineLines,
         context: &'a LscfContext,
+        noise: &CurveNoise,
     ) -> Self {
         let band = crate::band::positive_lines(freqs_hz, band_hz);
         let lines = refinement_lines(freqs_hz, &band, diagram, fit_lines);
-        let weights = noise_weights(curves, &band);
+        let weights = noise.weights();
         let problem = ContextProblem::new(freqs_hz, curves, &weights, &lines, context, diagram);
         let model = problem.cost(diagram).map(|base| (problem, base));
         Self {
@@ -337,6 +340,7 @@ mod tests {
         let (diagram, refined) = ([pole(50.0 * (1.0 + df))], [pole(50.0)]);
         for quiet_curve in [&a, &a_scaled] {
             let curves: [&[Complex64]; 2] = [quiet_curve, &b];
+            let noise = CurveNoise::of(&curves, &crate::band::positive_lines(&freqs, band));
             let check = RefinementCheck::new(
                 &freqs,
                 &curves,
@@ -345,6 +349,7 @@ mod tests {
                 band,
                 every,
                 &context,
+                &noise,
             );
             assert_eq!(check.taken(&refined), refined.to_vec());
         }

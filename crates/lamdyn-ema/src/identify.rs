@@ -12,6 +12,7 @@ use crate::lscf::{
     LscfSettings, half_power_bands_overlap, lscf, pole_damping, pole_freq_hz, sample_interval,
 };
 use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles, shape_of};
+use crate::noise::CurveNoise;
 use crate::quality::{
     Contributions, Measured, ModeEvidence, ModeQuality, SecondShape, assess, contributions,
     second_shape_calibrated,
@@ -238,7 +239,8 @@ pub struct EmaResult {
 pub struct EmaTimings {
     /// The LSCF at every order and the stabilization diagram.
     pub diagram: f64,
-    /// The CMIF, its peaks and the selection of poles.
+    /// The CMIF, its peaks and the selection of poles; each curve's noise level (for the check
+    /// and the second-shape test), estimated beside the CMIF.
     pub selection: f64,
     /// The poles' refinement (Levenberg–Marquardt with the residues eliminated); with the
     /// refined estimator, the residues of its poles; with the checked one, the check's context
@@ -250,9 +252,11 @@ pub struct EmaTimings {
     /// The residues of the diagram's poles (without refinement), and those fitted again where
     /// a refined pole left its column and was put back.
     pub residues: f64,
-    /// The poles' standard deviations.
+    /// The poles' standard deviations, computed on another thread beside the modes' evidence:
+    /// their time lies within [`Self::modes`] and is not added to [`Self::total`].
     pub deviations: f64,
-    /// Shapes, quality verdicts and the regenerated FRFs' correlation.
+    /// Shapes, quality verdicts and the regenerated FRFs' correlation, with the poles' standard
+    /// deviations computed meanwhile.
     pub modes: f64,
 }
 
@@ -270,9 +274,13 @@ impl EmaTimings {
         ]
     }
 
-    /// The sum of the steps.
+    /// The wall-clock time of the steps: their sum but the deviations (within the modes').
     pub fn total(&self) -> f64 {
-        self.steps().iter().map(|(_, t)| t).sum()
+        self.steps()
+            .iter()
+            .filter(|(label, _)| *label != "deviations")
+            .map(|(_, t)| t)
+            .sum()
     }
 }
 
@@ -515,6 +523,8 @@ struct BandCurves<'a> {
     quantity: lamdyn_frf::Quantity,
     /// The band, Hz.
     band_hz: [f64; 2],
+    /// Each curve's noise level over the band's positive lines.
+    noise: &'a CurveNoise,
 }
 
 impl<'a> BandCurves<'a> {
@@ -545,6 +555,7 @@ fn fit_selected(
         curves,
         quantity,
         band_hz: band,
+        ..
     } = data;
     let mut clock = Instant::now();
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
@@ -629,6 +640,7 @@ fn refined_beside_the_check<'a>(
                 data.band_hz,
                 fit_lines,
                 context,
+                data.noise,
             ));
         });
         refine()
@@ -917,10 +929,11 @@ struct FitEvidence {
 }
 
 impl FitEvidence {
-    /// The evidence of `fit` (in the data's units) on `measured`.
-    fn of(fit: &ModalFit, measured: Measured) -> Self {
+    /// The evidence of `fit` (in the data's units) on `measured`, whose curves' noise levels
+    /// are `noise`.
+    fn of(fit: &ModalFit, measured: Measured, noise: &CurveNoise) -> Self {
         let (second_shapes, contributions) = rayon::join(
-            || second_shapes(&fit.poles, measured),
+            || second_shapes(&fit.poles, measured, noise),
             || contributions(fit, measured),
         );
         Self {
@@ -1113,23 +1126,56 @@ fn residues_near_each_pole(
         .collect()
 }
 
+/// The evidence of `fit` (in the data's units) on the `positive` lines of `data` with each
+/// mode's local residues ([`FitEvidence::of`], [`residues_near_each_pole`]), and beside them on
+/// another thread the poles' standard deviations ([`deviations_of`]): neither needs the other.
+/// The whole adds to `timings.modes`, the deviations' own time to `timings.deviations`
+/// ([`EmaTimings`]).
+fn evidence_beside_deviations(
+    data: BandCurves<'_>,
+    fit: &ModalFit,
+    positive: &[usize],
+    scale: f64,
+    s: &EmaSettings,
+    timings: &mut EmaTimings,
+) -> (EvidenceAndResidues, Result<Option<Vec<PoleSd>>, EmaError>) {
+    let clock = Instant::now();
+    let (evidence, (deviations, deviations_s)) = rayon::join(
+        || {
+            let measured = data.on_lines(positive);
+            let evidence = FitEvidence::of(fit, measured, data.noise);
+            (evidence, residues_near_each_pole(fit, measured, scale))
+        },
+        || {
+            let clock = Instant::now();
+            let deviations = deviations_of(data, &fit.poles, s);
+            (deviations, clock.elapsed().as_secs_f64())
+        },
+    );
+    timings.modes += clock.elapsed().as_secs_f64();
+    timings.deviations += deviations_s;
+    (evidence, deviations)
+}
+
+/// The modes' evidence and each mode's local residues ([`evidence_beside_deviations`]).
+type EvidenceAndResidues = (FitEvidence, Vec<Option<Vec<Complex64>>>);
+
 /// The poles' standard deviations ([`pole_deviations`]) when the settings refine them, else
 /// none.
 fn deviations_of(
     data: BandCurves<'_>,
     poles: &[Complex64],
     s: &EmaSettings,
-    on_stage: &dyn Fn(&str),
 ) -> Result<Option<Vec<PoleSd>>, EmaError> {
     if s.refine_iterations == 0 {
         return Ok(None);
     }
-    on_stage("the poles' standard deviations");
     let BandCurves {
         freqs_hz,
         curves,
         quantity,
         band_hz,
+        ..
     } = data;
     pole_deviations(freqs_hz, curves, quantity, poles, band_hz, s.refine_lines)
 }
@@ -1171,7 +1217,11 @@ pub fn identify_with(
     };
     let (diag, context) = stabilization(freqs, &curves, band, nf, s, on_stage)?;
     timings.diagram = lap(&mut clock);
-    let cmif = cmif_curves(freqs.len(), &curves, nf, scale);
+    let positive = crate::band::positive_lines(freqs, band);
+    let (cmif, noise) = rayon::join(
+        || cmif_curves(freqs.len(), &curves, nf, scale),
+        || CurveNoise::of(&curves, &positive),
+    );
     let peaks = [1, 2].map(|k| cmif_curve_peaks(freqs, &cmif, &in_band, s.cmif_prominence, k));
     let (mut selected, missing_hz) = select(&diag, &peaks, s, &mut warnings);
     if selected.is_empty() {
@@ -1183,6 +1233,7 @@ pub fn identify_with(
         curves: &curves,
         quantity: set.quantity(),
         band_hz: band,
+        noise: &noise,
     };
     let fit_poles = |selected: &[SelectedPole], timings: &mut EmaTimings| {
         fit_selected(data, selected, context.as_ref(), s, on_stage, timings)
@@ -1197,14 +1248,15 @@ pub fn identify_with(
         }
     }
     warnings.extend(std::mem::take(&mut fitted.warnings));
-    clock = Instant::now();
-    let positive = crate::band::positive_lines(freqs, band);
     let scaled_fit = fitted.fit.scaled(1.0 / scale);
-    let evidence = FitEvidence::of(&scaled_fit, data.on_lines(&positive));
+    if s.refine_iterations > 0 {
+        on_stage("the modes' evidence and the poles' standard deviations");
+    }
+    let ((evidence, local_residues), deviations) =
+        evidence_beside_deviations(data, &scaled_fit, &positive, scale, s, &mut timings);
+    let deviations = deviations?;
     warnings.extend(roving_hammer_note(set));
-    timings.modes = lap(&mut clock);
-    let deviations = deviations_of(data, &scaled_fit.poles, s, on_stage)?;
-    timings.deviations = lap(&mut clock);
+    clock = Instant::now();
     let sources = ModeSources {
         fit: &scaled_fit,
         settings: s,
@@ -1214,7 +1266,7 @@ pub fn identify_with(
         refined: fitted.refined.as_deref(),
         deviations: deviations.as_deref(),
         frac_drop: &evidence.contributions.frac_drop,
-        local_residues: &residues_near_each_pole(&scaled_fit, data.on_lines(&positive), scale),
+        local_residues: &local_residues,
         second_shapes: &evidence.second_shapes,
         second_shape_calibrated: evidence.calibrated,
         line_spacing_hz: crate::band::line_spacing(freqs, &positive),

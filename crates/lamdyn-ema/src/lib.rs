@@ -12,7 +12,7 @@
 //! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
 //! | `denominator` | the LSCF model's roots and their partial-fraction columns |
 //! | [`context`] | the refined poles checked in the LSCF model's context (its other roots fixed) |
-//! | `noise` | each curve's noise level from its line-to-line second differences |
+//! | [`noise`] | each curve's noise level from its line-to-line second differences |
 //! | [`quality`] | each mode's verdict: sound, doubtful or a smear over a cluster |
 //! | [`second_shape`] | whether a pole's curves hold a second shape under it (two close modes) |
 //! | [`shapes`] | MAC, MPC, MPD, real modes, CMIF |
@@ -33,7 +33,7 @@ pub mod identify;
 pub mod local_residues;
 pub mod lscf;
 pub mod lsfd;
-mod noise;
+pub mod noise;
 mod projection;
 pub mod quality;
 pub mod second_shape;

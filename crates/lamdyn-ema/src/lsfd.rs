@@ -150,7 +150,17 @@ impl ModalFit {
         let modes: Complex64 = (0..self.poles.len())
             .map(|r| self.pair_on(basis, o, r))
             .sum();
-        (modes + basis.lower * self.lower[o] + self.upper[o]) * basis.factor
+        (modes + self.residuals_before_factor(basis, o)) * basis.factor
+    }
+
+    /// The residual terms of curve `o` on a line's basis, in the curves' quantity.
+    pub fn residual_term_on(&self, basis: &LineBasis, o: usize) -> Complex64 {
+        self.residuals_before_factor(basis, o) * basis.factor
+    }
+
+    /// The lower and upper residuals of curve `o` before the quantity's (iω)^k.
+    fn residuals_before_factor(&self, basis: &LineBasis, o: usize) -> Complex64 {
+        Complex64::new(basis.lower * self.lower[o] + self.upper[o], 0.0)
     }
 
     /// [`Self::mode_term`] on a line's basis.

@@ -15,51 +15,74 @@
 use num_complex::Complex64;
 
 /// The fewest consecutive line triples an estimate is made from.
-const MIN_TRIPLES: usize = 8;
+pub const MIN_TRIPLES: usize = 8;
 
 /// σ̂² (module docs) of `curve` over the consecutive line triples of `lines` (indices into the
 /// curve, in increasing order); None with fewer than [`MIN_TRIPLES`] triples or where σ̂² is
 /// not finite.
-pub(crate) fn line_noise_variance(curve: &[Complex64], lines: &[usize]) -> Option<f64> {
-    let mut magnitudes: Vec<f64> = lines
+pub fn line_noise_variance(curve: &[Complex64], lines: &[usize]) -> Option<f64> {
+    // |x| as its bits: for floats without sign the integers' order is the numbers' (NaN last,
+    // as f64::total_cmp), and integers select faster.
+    let mut magnitudes: Vec<u64> = lines
         .windows(3)
         .filter(|w| w[1] == w[0] + 1 && w[2] == w[1] + 1)
         .flat_map(|w| {
             let d = curve[w[0]] - 2.0 * curve[w[1]] + curve[w[2]];
-            [d.re.abs(), d.im.abs()]
+            [d.re.abs().to_bits(), d.im.abs().to_bits()]
         })
         .collect();
     if magnitudes.len() < 2 * MIN_TRIPLES {
         return None;
     }
     let mid = magnitudes.len() / 2;
-    let (_, median, _) = magnitudes.select_nth_unstable_by(mid, f64::total_cmp);
-    let sigma = *median / 0.674_489_75;
+    let (_, median, _) = magnitudes.select_nth_unstable(mid);
+    let sigma = f64::from_bits(*median) / 0.674_489_75;
     let variance = sigma * sigma / 6.0;
     variance.is_finite().then_some(variance)
 }
 
-/// Weights that make every curve's noise alike: √(mean σ̂²)/σ̂ of each curve, σ̂² its
-/// [`line_noise_variance`] and the mean over the curves, so that every weighted curve's noise
-/// variance is about the mean σ̂². σ̂² is floored at 1e-12 of the largest (a curve of zeros or
-/// of exact values does not take an unbounded weight). All ones where any curve has no estimate
-/// or every σ̂² is zero.
-pub(crate) fn noise_weights(curves: &[&[Complex64]], lines: &[usize]) -> Vec<f64> {
-    let ones = vec![1.0; curves.len()];
-    let Some(variances) = curves
-        .iter()
-        .map(|c| line_noise_variance(c, lines))
-        .collect::<Option<Vec<f64>>>()
-    else {
-        return ones;
-    };
-    let largest = variances.iter().copied().fold(0.0, f64::max);
-    if largest <= 0.0 {
-        return ones;
+/// Each curve's σ̂² ([`line_noise_variance`]) over the same lines, estimated once for every
+/// step that weighs the curves by their noise (the refinement's check, the second-shape test).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurveNoise {
+    variances: Vec<Option<f64>>,
+}
+
+impl CurveNoise {
+    /// The estimates of `curves` over `lines` (indices into each curve, increasing), the curves
+    /// in parallel.
+    pub fn of(curves: &[&[Complex64]], lines: &[usize]) -> Self {
+        use rayon::prelude::*;
+        Self {
+            variances: curves
+                .par_iter()
+                .map(|c| line_noise_variance(c, lines))
+                .collect(),
+        }
     }
-    let floored: Vec<f64> = variances.iter().map(|v| v.max(1e-12 * largest)).collect();
-    let mean = floored.iter().sum::<f64>() / floored.len() as f64;
-    floored.iter().map(|v| (mean / v).sqrt()).collect()
+
+    /// Curve `o`'s σ̂²; None without an estimate (or past the curves).
+    pub fn variance(&self, o: usize) -> Option<f64> {
+        self.variances.get(o).copied().flatten()
+    }
+
+    /// Weights that make every curve's noise alike: √(mean σ̂²)/σ̂ of each curve, the mean over
+    /// the curves, so that every weighted curve's noise variance is about the mean σ̂². σ̂² is
+    /// floored at 1e-12 of the largest (a curve of zeros or of exact values does not take an
+    /// unbounded weight). All ones where any curve has no estimate or every σ̂² is zero.
+    pub fn weights(&self) -> Vec<f64> {
+        let ones = vec![1.0; self.variances.len()];
+        let Some(variances) = self.variances.iter().copied().collect::<Option<Vec<f64>>>() else {
+            return ones;
+        };
+        let largest = variances.iter().copied().fold(0.0, f64::max);
+        if largest <= 0.0 {
+            return ones;
+        }
+        let floored: Vec<f64> = variances.iter().map(|v| v.max(1e-12 * largest)).collect();
+        let mean = floored.iter().sum::<f64>() / floored.len() as f64;
+        floored.iter().map(|v| (mean / v).sqrt()).collect()
+    }
 }
 
 #[cfg(test)]
@@ -124,11 +147,11 @@ pub(crate) mod tests {
         // 12.5 % high: the_noise_of_a_damped_curve_is_found).
         let (quiet, loud) = (noisy_curve(1e-2, 0.02, 1), noisy_curve(4e-2, 0.02, 2));
         let lines: Vec<usize> = (0..2500).collect();
-        let w = noise_weights(&[&quiet, &loud], &lines);
+        let w = CurveNoise::of(&[&quiet, &loud], &lines).weights();
         assert!((w[0] / w[1] / 4.0 - 1.0).abs() < 0.08, "{w:?}");
         // Scaling a curve scales its weight inversely.
         let scaled: Vec<Complex64> = loud.iter().map(|h| h * 1000.0).collect();
-        let ws = noise_weights(&[&quiet, &scaled], &lines);
+        let ws = CurveNoise::of(&[&quiet, &scaled], &lines).weights();
         assert!((ws[0] / ws[1] / (w[0] / w[1]) / 1000.0 - 1.0).abs() < 1e-9);
     }
 
@@ -137,11 +160,17 @@ pub(crate) mod tests {
         let curve = noisy_curve(1e-3, 0.02, 1);
         let gappy: Vec<usize> = (0..2500).step_by(2).collect();
         assert_eq!(line_noise_variance(&curve, &gappy), None);
-        assert_eq!(noise_weights(&[&curve, &curve], &gappy), vec![1.0, 1.0]);
+        assert_eq!(
+            CurveNoise::of(&[&curve, &curve], &gappy).weights(),
+            vec![1.0, 1.0]
+        );
         let zeros = vec![Complex64::new(0.0, 0.0); 2500];
         let lines: Vec<usize> = (0..2500).collect();
-        assert_eq!(noise_weights(&[&zeros, &zeros], &lines), vec![1.0, 1.0]);
-        let w = noise_weights(&[&curve, &zeros], &lines);
+        assert_eq!(
+            CurveNoise::of(&[&zeros, &zeros], &lines).weights(),
+            vec![1.0, 1.0]
+        );
+        let w = CurveNoise::of(&[&curve, &zeros], &lines).weights();
         assert!(w.iter().all(|x| x.is_finite() && *x > 0.0), "{w:?}");
     }
 }

@@ -136,20 +136,23 @@ impl LineSamples {
         a
     }
 
-    /// The derivatives of pole `p`'s two basis columns with respect to a parameter with
-    /// ∂λ/∂u = `c` (∂λ*/∂u = c*): (iω)^k [c/(iω − λ)² + c*/(iω − λ*)²] and
-    /// (iω)^k i[c/(iω − λ)² − c*/(iω − λ*)²], as an (rows × 2) matrix.
-    fn basis_derivative(&self, p: Complex64, c: Complex64) -> Mat<f64> {
-        let mut d = Mat::zeros(self.rows(), 2);
+    /// The derivatives of pole `p`'s two basis columns with respect to its two parameters, in
+    /// the four columns of `d` (rows × 4): for ln σ (∂λ/∂u = c = Re λ) and then ω_d (c = i),
+    /// with ∂λ*/∂u = c*, (iω)^k [c/(iω − λ)² + c*/(iω − λ*)²] and
+    /// (iω)^k i[c/(iω − λ)² − c*/(iω − λ*)²]. The fractions are computed once for both.
+    fn write_basis_derivatives(&self, p: Complex64, d: &mut Mat<f64>) {
+        let c = [Complex64::new(p.re, 0.0), Complex64::i()];
         for (i, &w) in self.omega.iter().enumerate() {
             let f = quantity_factor(w, self.quantity);
             let s = Complex64::new(0.0, w);
             let (a1, a2) = (1.0 / (s - p), 1.0 / (s - p.conj()));
-            let (d1, d2) = (c * a1 * a1, c.conj() * a2 * a2);
-            Self::put(&mut d, i, 0, f * (d1 + d2));
-            Self::put(&mut d, i, 1, f * Complex64::i() * (d1 - d2));
+            let (f1, f2) = (f * a1 * a1, f * a2 * a2);
+            for (m, c) in c.iter().enumerate() {
+                let (d1, d2) = (c * f1, c.conj() * f2);
+                Self::put(d, i, 2 * m, d1 + d2);
+                Self::put(d, i, 2 * m + 1, Complex64::i() * (d1 - d2));
+            }
         }
-        d
     }
 
     /// The basis for `poles` with each column scaled to unit norm, and the norms; None without
@@ -181,28 +184,29 @@ impl LineSamples {
     }
 
     /// The residue problem solved for `poles` (module docs); None where it is singular or not
-    /// finite. Needs more rows than unknowns (2 poles + 2). The residual is Q [0; (QᵀB)₂], the
-    /// part of B outside the basis's span.
+    /// finite. Needs more rows than unknowns (2 poles + 2). The residual P⊥B = Q [0; (QᵀB)₂],
+    /// the part of B outside the basis's span, is kept in Q's coordinates, [0; (QᵀB)₂]: its
+    /// norms and its products with other vectors in Q's coordinates are those of P⊥B, and Q is
+    /// never applied.
     pub(crate) fn project(&self, poles: &[Complex64]) -> Option<Projection> {
         let (a, scale) = self.scaled_basis(poles)?;
         let qr = ThinQr::new(&a);
         let r = qr.r();
         let n = r.nrows();
-        let mut residual = self.data.clone();
-        qr.apply_transpose_q(&mut residual);
-        let mut unknowns = residual.subrows(0, n).to_owned();
+        let mut residual_in_q = self.data.clone();
+        qr.apply_transpose_q(&mut residual_in_q);
+        let mut unknowns = residual_in_q.subrows(0, n).to_owned();
         solve_upper_triangular_in_place(r.as_ref(), unknowns.as_mut(), Par::Seq);
         if !unknowns.is_all_finite() {
             return None;
         }
-        residual.subrows_mut(0, n).fill(0.0);
-        qr.apply_q(&mut residual);
+        residual_in_q.subrows_mut(0, n).fill(0.0);
         Some(Projection {
             poles: poles.to_vec(),
             qr,
             scale,
             unknowns,
-            residual,
+            residual_in_q,
         })
     }
 }
@@ -327,8 +331,8 @@ pub(crate) struct Projection {
     scale: Vec<f64>,
     /// The scaled unknowns X̃ = S X, one column per curve.
     unknowns: Mat<f64>,
-    /// P⊥ B.
-    residual: Mat<f64>,
+    /// Qᵀ P⊥ B = [0; (QᵀB)₂]: the residual in Q's coordinates.
+    residual_in_q: Mat<f64>,
 }
 
 impl Projection {
@@ -340,12 +344,12 @@ impl Projection {
 
     /// The residual sum of squares over every curve.
     pub(crate) fn cost(&self) -> f64 {
-        self.residual.squared_norm_l2()
+        self.residual_in_q.squared_norm_l2()
     }
 
     /// Curve `o`'s residual sum of squares.
     pub(crate) fn curve_cost(&self, o: usize) -> f64 {
-        self.residual.col(o).squared_norm_l2()
+        self.residual_in_q.col(o).squared_norm_l2()
     }
 
     /// The Gauss–Newton normal equations of the projected residual with respect to the pole
@@ -358,19 +362,19 @@ impl Projection {
     /// with E_j the two nonzero columns of D_j, x_j their two unknowns and z_j curve o's column
     /// of Z_j. EᵀP⊥E is the Gram matrix of the last rows of QᵀE (P⊥E in Q's coordinates)
     /// rather than EᵀE − (Q₁ᵀE)ᵀ(Q₁ᵀE), which cancels where a derivative lies near the basis's
-    /// span.
+    /// span; Eᵀr = (QᵀE)ᵀ(Qᵀr) is taken in Q's coordinates too, where r lies in the last rows.
     pub(crate) fn normal_equations(&self, samples: &LineSamples) -> NormalEquations {
         let r = self.qr.r();
-        let (n, p, curves) = (r.nrows(), 2 * self.poles.len(), self.residual.ncols());
-        let mut e = Mat::<f64>::zeros(samples.rows(), 2 * p);
-        for j in 0..p {
-            let d = samples.basis_derivative(self.poles[j / 2], self.parameter_derivative(j));
-            e.subcols_mut(2 * j, 2).copy_from(&d);
+        let (n, p, curves) = (r.nrows(), 2 * self.poles.len(), self.residual_in_q.ncols());
+        let mut perp = Mat::<f64>::zeros(samples.rows(), 2 * p);
+        let mut d = Mat::<f64>::zeros(samples.rows(), 4);
+        for (k, pole) in self.poles.iter().enumerate() {
+            samples.write_basis_derivatives(*pole, &mut d);
+            perp.subcols_mut(4 * k, 4).copy_from(&d);
         }
-        let etr = e.transpose() * &self.residual;
-        let mut perp = e;
         self.qr.apply_transpose_q(&mut perp);
         perp.subrows_mut(0, n).fill(0.0);
+        let etr = perp.transpose() * &self.residual_in_q;
         let m = perp.transpose() * &perp;
         let mut z = Mat::<f64>::zeros(n, p * curves);
         for j in 0..p {
@@ -410,15 +414,6 @@ impl Projection {
             gradient,
         }
     }
-
-    /// ∂λ/∂u_j of parameter `j`: −σ = Re λ for ln σ (even j), i for ω_d (odd j).
-    fn parameter_derivative(&self, j: usize) -> Complex64 {
-        if j % 2 == 0 {
-            Complex64::new(self.poles[j / 2].re, 0.0)
-        } else {
-            Complex64::i()
-        }
-    }
 }
 
 /// The Gauss–Newton normal equations of [`Projection::normal_equations`].
@@ -445,20 +440,57 @@ impl NormalEquations {
 mod tests {
     use super::*;
 
+    impl LineSamples {
+        /// The derivatives of pole `p`'s two basis columns with respect to a parameter with
+        /// ∂λ/∂u = `c` (∂λ*/∂u = c*), written out apart from
+        /// [`LineSamples::write_basis_derivatives`] to check it: (iω)^k [c/(iω − λ)² +
+        /// c*/(iω − λ*)²] and (iω)^k i[c/(iω − λ)² − c*/(iω − λ*)²], as an (rows × 2) matrix.
+        fn basis_derivative(&self, p: Complex64, c: Complex64) -> Mat<f64> {
+            let mut d = Mat::zeros(self.rows(), 2);
+            for (i, &w) in self.omega.iter().enumerate() {
+                let f = quantity_factor(w, self.quantity);
+                let s = Complex64::new(0.0, w);
+                let (a1, a2) = (1.0 / (s - p), 1.0 / (s - p.conj()));
+                let (d1, d2) = (c * a1 * a1, c.conj() * a2 * a2);
+                Self::put(&mut d, i, 0, f * (d1 + d2));
+                Self::put(&mut d, i, 1, f * Complex64::i() * (d1 - d2));
+            }
+            d
+        }
+    }
+
     impl Projection {
+        /// ∂λ/∂u_j of parameter `j`: −σ = Re λ for ln σ (even j), i for ω_d (odd j).
+        fn parameter_derivative(&self, j: usize) -> Complex64 {
+            if j % 2 == 0 {
+                Complex64::new(self.poles[j / 2].re, 0.0)
+            } else {
+                Complex64::i()
+            }
+        }
+
+        /// The residual P⊥B in the samples' coordinates: Q times the one kept in Q's.
+        fn residual(&self) -> Mat<f64> {
+            let mut residual = self.residual_in_q.clone();
+            self.qr.apply_q(&mut residual);
+            residual
+        }
+
         /// The residuals curve after curve (rows 2i, 2i + 1: line i's real and imaginary
         /// part), as one column.
         fn residual_vector(&self) -> Mat<f64> {
-            let rows = self.residual.nrows();
-            Mat::from_fn(rows * self.residual.ncols(), 1, |i, _| {
-                self.residual[(i % rows, i / rows)]
+            let residual = self.residual();
+            let rows = residual.nrows();
+            Mat::from_fn(rows * residual.ncols(), 1, |i, _| {
+                residual[(i % rows, i / rows)]
             })
         }
 
         /// The Jacobian of [`Self::residual_vector`], formed column by column (module docs):
         /// −(P⊥ D_j X + Q R̃⁻ᵀ S⁻¹ D_jᵀ R).
         fn jacobian(&self, samples: &LineSamples) -> Mat<f64> {
-            let (rows, curves) = (self.residual.nrows(), self.residual.ncols());
+            let residual = self.residual();
+            let (rows, curves) = (residual.nrows(), residual.ncols());
             let r = self.qr.r();
             let mut jac = Mat::<f64>::zeros(rows * curves, 2 * self.poles.len());
             for j in 0..2 * self.poles.len() {
@@ -467,7 +499,7 @@ mod tests {
                 let x = Mat::from_fn(2, curves, |m, o| self.unknown(2 * k + m, o));
                 let v = &d * &x;
                 let mut w = Mat::<f64>::zeros(r.nrows(), curves);
-                let dtr = d.transpose() * &self.residual;
+                let dtr = d.transpose() * &residual;
                 for m in 0..2 {
                     for o in 0..curves {
                         w[(2 * k + m, o)] = dtr[(m, o)] / self.scale[2 * k + m];

@@ -450,8 +450,9 @@ pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
         .par_chunks(2048)
         .map(|chunk| {
             let mut sums = empty();
+            let mut terms = vec![Complex64::default(); modes];
             for &k in chunk {
-                sums.add_line(fit, data.curves, k, data.freqs_hz[k]);
+                sums.add_line(fit, data.curves, k, data.freqs_hz[k], &mut terms);
             }
             sums
         })
@@ -479,14 +480,25 @@ struct CurveSums {
 }
 
 impl CurveSums {
-    /// Adds line `k` (at `freq_hz`) of every curve.
-    fn add_line(&mut self, fit: &ModalFit, curves: &[&[Complex64]], k: usize, freq_hz: f64) {
+    /// Adds line `k` (at `freq_hz`) of every curve; `terms` (one per mode) is scratch space.
+    fn add_line(
+        &mut self,
+        fit: &ModalFit,
+        curves: &[&[Complex64]],
+        k: usize,
+        freq_hz: f64,
+        terms: &mut [Complex64],
+    ) {
         let basis = fit.line_basis(freq_hz);
         for (o, curve) in curves.iter().enumerate() {
-            let (measured, model) = (curve[k], fit.synthesize_on(&basis, o));
+            for (r, t) in terms.iter_mut().enumerate() {
+                *t = fit.mode_term_on(&basis, o, r);
+            }
+            let measured = curve[k];
+            let model = terms.iter().sum::<Complex64>() + fit.residual_term_on(&basis, o);
             self.with[o].add(measured, model);
-            for (r, sums) in self.without[o].iter_mut().enumerate() {
-                sums.add(measured, model - fit.mode_term_on(&basis, o, r));
+            for (sums, t) in self.without[o].iter_mut().zip(terms.iter()) {
+                sums.add(measured, model - t);
             }
         }
     }

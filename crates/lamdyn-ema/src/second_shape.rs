@@ -46,28 +46,33 @@
 use crate::band::line_spacing;
 use crate::local_residues::PoleWindow;
 use crate::lscf::pole_damping;
-use crate::noise::line_noise_variance;
+use crate::noise::CurveNoise;
 use crate::quality::{Measured, SecondShape};
 use faer::linalg::solvers::SolveLstsq;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::{Mat, Par, c64};
 use num_complex::Complex64;
-use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Each curve's σ̂ is at least this fraction of its RMS over the band (module docs).
 pub const NOISE_FLOOR: f64 = 1e-3;
 
-/// [`SecondShape`] of every pole of `poles` on `data`; None for a pole with fewer than two
-/// curves, too few lines in its window or a singular local fit.
-pub fn second_shapes(poles: &[Complex64], data: Measured) -> Vec<Option<SecondShape>> {
+/// [`SecondShape`] of every pole of `poles` on `data`, each curve weighted by its noise level
+/// `noise` (estimated over `data.lines`); None for a pole with fewer than two curves, too few
+/// lines in its window or a singular local fit.
+pub fn second_shapes(
+    poles: &[Complex64],
+    data: Measured,
+    noise: &CurveNoise,
+) -> Vec<Option<SecondShape>> {
     if data.curves.len() < 2 {
         return vec![None; poles.len()];
     }
     let sigmas: Vec<f64> = data
         .curves
-        .par_iter()
-        .map(|c| floored_noise(c, data.lines))
+        .iter()
+        .enumerate()
+        .map(|(o, c)| floored_noise(c, data.lines, noise.variance(o)))
         .collect();
     let spacing = line_spacing(data.freqs_hz, data.lines);
     (0..poles.len())
@@ -75,14 +80,14 @@ pub fn second_shapes(poles: &[Complex64], data: Measured) -> Vec<Option<SecondSh
         .collect()
 }
 
-/// σ̂ of `curve` over `lines`, at least [`NOISE_FLOOR`] of its RMS there; NaN without an
-/// estimate.
-fn floored_noise(curve: &[Complex64], lines: &[usize]) -> f64 {
+/// σ̂ of `curve` over `lines` from its estimate σ̂² `variance` there, at least [`NOISE_FLOOR`]
+/// of its RMS there; NaN without an estimate.
+fn floored_noise(curve: &[Complex64], lines: &[usize], variance: Option<f64>) -> f64 {
     let mean_square =
         lines.iter().map(|&k| curve[k].norm_sqr()).sum::<f64>() / lines.len().max(1) as f64;
     // σ̂² is per part (real, imaginary): the floor's |H|² splits over two.
     let floor = NOISE_FLOOR * NOISE_FLOOR * mean_square / 2.0;
-    line_noise_variance(curve, lines).map_or(f64::NAN, |v| v.max(floor).sqrt())
+    variance.map_or(f64::NAN, |v| v.max(floor).sqrt())
 }
 
 /// The local basis of pole `k` on `window`'s lines (rows, at `freqs`): the pole's three
@@ -263,6 +268,7 @@ mod tests {
                 curves: &refs,
                 lines: &lines,
             },
+            &CurveNoise::of(&refs, &lines),
         )
     }
 

@@ -207,7 +207,9 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
     let mut quantity = None;
     let mut scales = Vec::with_capacity(frfs.len());
     for f in &frfs {
-        if f.x() != x {
+        // The same abscissa record and length give the same axis; others are compared by value.
+        let same_record = f.abscissa == first.abscissa && f.data.len() == first.data.len();
+        if !same_record && f.x() != x {
             return Err(convert(format!(
                 "FRF {} / {} has a different frequency axis from the first FRF",
                 dof_name(&f.response),
@@ -234,7 +236,8 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
     }
     let nl = x.len();
     let (nr, nf) = (responses.len(), references.len());
-    let mut data = vec![Complex64::new(f64::NAN, f64::NAN); nr * nf * nl];
+    // Each (response, reference) pair's values and their scale to SI.
+    let mut sources: Vec<Option<(&[Complex64], f64)>> = vec![None; nr * nf];
     let mut seen = vec![false; nr * nf];
     for (f, scale) in frfs.iter().zip(&scales) {
         let i = responses.iter().position(|r| r == &f.response).unwrap_or(0);
@@ -250,9 +253,7 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
             )));
         }
         if let Ordinate::Complex(v) = &f.data {
-            for (k, h) in v.iter().enumerate() {
-                data[(i * nf + j) * nl + k] = h * scale;
-            }
+            sources[i * nf + j] = Some((v, *scale));
         }
     }
     if let Some(p) = seen.iter().position(|s| !s) {
@@ -262,6 +263,7 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
             dof_name(&references[p % nf])
         )));
     }
+    let data = in_si(&sources, nl);
     let resp = responses
         .iter()
         .map(|d| geo.channel(d))
@@ -278,6 +280,25 @@ pub fn to_frf_set(file: &UffFile) -> Result<FrfSet, UffError> {
         data,
     )
     .map_err(|e| convert(e.to_string()))
+}
+
+/// The FRF set's values: each pair's `nl` values of `sources` times its scale, NaN for a pair
+/// without complex values (refused by the set); the pairs in parallel, the memory touched first
+/// on the threads that fill it.
+fn in_si(sources: &[Option<(&[Complex64], f64)>], nl: usize) -> Vec<Complex64> {
+    use rayon::prelude::*;
+    let nan = Complex64::new(f64::NAN, f64::NAN);
+    let mut data: Vec<Complex64> = rayon::iter::repeat_n(nan, sources.len() * nl).collect();
+    data.par_chunks_mut(nl.max(1))
+        .zip(sources)
+        .for_each(|(out, source)| {
+            if let Some((values, scale)) = source {
+                out.iter_mut()
+                    .zip(values.iter())
+                    .for_each(|(o, h)| *o = h * scale);
+            }
+        });
+    data
 }
 
 /// The sign and axis code (±1..±3) of a unit direction along a global axis, if it is one.

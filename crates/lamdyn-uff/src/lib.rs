@@ -153,14 +153,64 @@ pub fn read<R: BufRead>(input: R) -> Result<UffFile, UffError> {
 
 /// Reads every dataset of a UFF stream with `options`.
 ///
+/// The stream is scanned in order; the datasets scanned are decoded in batches of about
+/// [`BATCH_BYTES`], the datasets of a batch in parallel, so that a file of many long records
+/// is not decoded on one core while at most a batch's raw bytes wait in memory. Errors come in
+/// the stream's order: a dataset's decoding error before a later one's framing error.
+///
 /// # Errors
 /// The first [`UffError`] of the stream, naming its line.
 pub fn read_with<R: BufRead>(input: R, options: ReadOptions) -> Result<UffFile, UffError> {
     let mut scanner = Scanner::new(input).lenient(options.lenient_counts);
     let mut file = UffFile::default();
-    while let Some(ds) = scanner.next_dataset()? {
+    let (mut batch, mut bytes) = (Vec::new(), 0);
+    loop {
+        // Some(the end or the framing error) once the stream has no more datasets to give.
+        let end = match scanner.next_dataset() {
+            Ok(Some(ds)) => {
+                bytes += ds.payload.len() + ds.lines.iter().map(|(_, l)| l.len()).sum::<usize>();
+                batch.push(ds);
+                None
+            }
+            Ok(None) => Some(Ok(())),
+            Err(e) => Some(Err(e)),
+        };
+        if end.is_some() || bytes >= BATCH_BYTES {
+            decode_batch(std::mem::take(&mut batch), options, &mut file)?;
+            bytes = 0;
+        }
+        if let Some(end) = end {
+            return end.map(|()| file);
+        }
+    }
+}
+
+/// Raw bytes (binary payloads and record lines) scanned before [`read_with`] decodes them.
+pub const BATCH_BYTES: usize = 32 << 20;
+
+/// Decodes `batch` (datasets in the stream's order) in parallel into `file`, with their notices
+/// in that order.
+///
+/// # Errors
+/// The first dataset's error, in the batch's order.
+fn decode_batch(
+    batch: Vec<RawDataset>,
+    options: ReadOptions,
+    file: &mut UffFile,
+) -> Result<(), UffError> {
+    use rayon::prelude::*;
+    let decoded: Vec<_> = batch
+        .par_iter()
+        .map(|ds| {
+            let mut notices = Vec::new();
+            decode(ds, options, &mut notices).map(|d| (d, notices))
+        })
+        .collect();
+    for (ds, result) in batch.iter().zip(decoded) {
         file.notices.extend(ds.notice.clone());
-        match decode(&ds, options, &mut file.notices)? {
+        let (dataset, notices) = result?;
+        file.notices.extend(notices);
+        match dataset {
             Some(dataset) => file.datasets.push(Located {
                 line: ds.line,
                 binary: ds.binary.is_some(),
@@ -172,7 +222,7 @@ pub fn read_with<R: BufRead>(input: R, options: ReadOptions) -> Result<UffFile, 
             )),
         }
     }
-    Ok(file)
+    Ok(())
 }
 
 /// Reads a UFF file from disk; errors name the file.

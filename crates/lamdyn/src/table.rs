@@ -102,7 +102,7 @@ pub enum Format {
     Text,
     /// CSV, SI units.
     Csv,
-    /// JSON, SI units.
+    /// JSON, SI units, compact (one line).
     Json,
 }
 
@@ -199,14 +199,16 @@ impl Report {
         for w in &self.warnings {
             writeln!(err, "lamdyn: warning: {w}")?;
         }
-        // Buffered: stdout flushes at every newline, and the JSON of a long record has
-        // hundreds of thousands of them.
+        // Buffered: stdout flushes at every newline (the text and CSV tables of a long record
+        // have thousands). The JSON is compact, one line: a long record's holds 100 000 numbers
+        // (the CMIF and its lines), and indenting each on its own line made it half as large
+        // again and slower to write and to read; `jq .` shows it indented.
         let mut out = std::io::BufWriter::new(out);
         match format {
             Format::Text => self.write_text(&mut out),
             Format::Csv => self.write_csv(&mut out),
             Format::Json => {
-                serde_json::to_writer_pretty(&mut out, &self.to_json())?;
+                serde_json::to_writer(&mut out, &self.to_json())?;
                 writeln!(out)
             }
         }?;

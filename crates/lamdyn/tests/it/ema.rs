@@ -659,7 +659,8 @@ fn the_dam_shows_its_second_shapes_without_judging_them() {
 }
 
 /// The time of each step is printed: in the text's `time` line and as numbers in the JSON's
-/// `details.seconds`, every step there, none negative, their sum within the process's time.
+/// `details.seconds`, every step there, none negative, their sum within the process's time; the
+/// deviations, computed beside the modes' evidence, within the modes' time and out of the sum.
 #[test]
 fn the_time_of_each_step_is_printed() {
     let dam =
@@ -679,16 +680,19 @@ fn the_time_of_each_step_is_printed() {
         "modes",
     ];
     let seconds = &doc["details"]["seconds"];
+    let step = |k: &str| {
+        let t = seconds[k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k}: {seconds}"));
+        assert!(t >= 0.0, "{k}: {t}");
+        t
+    };
     let total: f64 = steps
         .iter()
-        .map(|k| {
-            let t = seconds[*k]
-                .as_f64()
-                .unwrap_or_else(|| panic!("{k}: {seconds}"));
-            assert!(t >= 0.0, "{k}: {t}");
-            t
-        })
+        .filter(|k| **k != "deviations")
+        .map(|k| step(k))
         .sum();
+    assert!(step("deviations") <= step("modes"), "{seconds}");
     assert!(
         total > 0.0 && total <= wall,
         "{total} s of steps in {wall} s"
