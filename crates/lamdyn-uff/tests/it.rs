@@ -277,6 +277,33 @@ fn malformed_files_name_the_line() {
     }
 }
 
+/// Datasets are decoded in parallel, but they are kept in the file's order, and the first
+/// error in the file's order is the one reported: a bad number in the first dataset before
+/// the truncation of the next.
+#[test]
+fn datasets_and_errors_keep_the_files_order() {
+    let good = std::fs::read(fixtures().join("ufffiles-jl/dataset58_case1_ascii.unv")).unwrap();
+    let text = String::from_utf8(good.clone()).unwrap();
+    let lines_per_copy = text.lines().count();
+    let three = [good.as_slice(), &good, &good].concat();
+    let file = read(three.as_slice()).unwrap();
+    let at: Vec<usize> = file.datasets.iter().map(|d| d.line).collect();
+    assert_eq!(at.len(), 3);
+    assert!(
+        at[1] == at[0] + lines_per_copy && at[2] == at[1] + lines_per_copy,
+        "{at:?}"
+    );
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines[14] = "  1.73331e-04  1.2.3e-01 -5.45225e-07 -1.32963e-05 -1.37127e-06 -6.95395e-06";
+    let bad = lines.join("\n") + "\n";
+    let both = [bad.as_bytes(), &good[..good.len() / 2]].concat();
+    let e = read(both.as_slice()).unwrap_err().to_string();
+    assert!(
+        e.contains("line 15: '1.2.3e-01' is not a finite number"),
+        "{e}"
+    );
+}
+
 #[test]
 fn every_layout_round_trips_in_both_encodings() {
     let dir = fixtures().join("ufffiles-jl");
