@@ -276,11 +276,7 @@ impl EmaTimings {
 
     /// The wall-clock time of the steps: their sum but the deviations (within the modes').
     pub fn total(&self) -> f64 {
-        self.steps()
-            .iter()
-            .filter(|(label, _)| *label != "deviations")
-            .map(|(_, t)| t)
-            .sum()
+        self.diagram + self.selection + self.refinement + self.check + self.residues + self.modes
     }
 }
 
@@ -528,6 +524,22 @@ struct BandCurves<'a> {
 }
 
 impl<'a> BandCurves<'a> {
+    /// The curves `curves` of `set` (at unit scale) in `band_hz`, their noise levels `noise`.
+    fn of(
+        set: &'a FrfSet,
+        curves: &'a [&'a [Complex64]],
+        band_hz: [f64; 2],
+        noise: &'a CurveNoise,
+    ) -> Self {
+        Self {
+            freqs_hz: set.freqs_hz(),
+            curves,
+            quantity: set.quantity(),
+            band_hz,
+            noise,
+        }
+    }
+
     /// The curves at the lines `lines`, for the modes' contributions.
     fn on_lines(&self, lines: &'a [usize]) -> Measured<'a> {
         Measured {
@@ -926,12 +938,14 @@ struct FitEvidence {
     second_shapes: Vec<Option<SecondShape>>,
     /// Whether the data calibrate that test.
     calibrated: bool,
+    /// Each mode's residues from the lines around its pole ([`residues_near_each_pole`]).
+    local_residues: Vec<Option<Vec<Complex64>>>,
 }
 
 impl FitEvidence {
-    /// The evidence of `fit` (in the data's units) on `measured`, whose curves' noise levels
-    /// are `noise`.
-    fn of(fit: &ModalFit, measured: Measured, noise: &CurveNoise) -> Self {
+    /// The evidence of `fit` (in the data's units) on `measured` (its curves in the data's
+    /// units times `scale`), whose curves' noise levels are `noise`.
+    fn of(fit: &ModalFit, measured: Measured, noise: &CurveNoise, scale: f64) -> Self {
         let (second_shapes, contributions) = rayon::join(
             || second_shapes(&fit.poles, measured, noise),
             || contributions(fit, measured),
@@ -940,6 +954,7 @@ impl FitEvidence {
             contributions,
             calibrated: second_shape_calibrated(&second_shapes),
             second_shapes,
+            local_residues: residues_near_each_pole(fit, measured, scale),
         }
     }
 }
@@ -1126,26 +1141,54 @@ fn residues_near_each_pole(
         .collect()
 }
 
-/// The evidence of `fit` (in the data's units) on the `positive` lines of `data` with each
-/// mode's local residues ([`FitEvidence::of`], [`residues_near_each_pole`]), and beside them on
+/// With the automatic selection, the `selected` poles and their `fitted` model after split modes
+/// are merged ([`merge_split_modes`], one warning each into `warnings`, the model refitted by
+/// `fit_poles`); as they are otherwise.
+///
+/// # Errors
+/// As `fit_poles`.
+fn without_split_modes(
+    fitted: SelectedFit,
+    selected: Vec<SelectedPole>,
+    s: &EmaSettings,
+    warnings: &mut Vec<String>,
+    mut fit_poles: impl FnMut(&[SelectedPole]) -> Result<SelectedFit, EmaError>,
+) -> Result<(Vec<SelectedPole>, SelectedFit), EmaError> {
+    if s.near_hz.is_some() {
+        return Ok((selected, fitted));
+    }
+    let (fewer, merged) = merge_split_modes(selected, &fitted.fit);
+    if merged.is_empty() {
+        return Ok((fewer, fitted));
+    }
+    warnings.extend(merged);
+    let refitted = fit_poles(&fewer)?;
+    Ok((fewer, refitted))
+}
+
+/// The evidence of `fit` (in the data's units) on the `positive` lines of `data` (its curves
+/// at unit scale, the data's units times `scale`; [`FitEvidence::of`]), and beside it on
 /// another thread the poles' standard deviations ([`deviations_of`]): neither needs the other.
 /// The whole adds to `timings.modes`, the deviations' own time to `timings.deviations`
 /// ([`EmaTimings`]).
+///
+/// # Errors
+/// As [`deviations_of`].
 fn evidence_beside_deviations(
     data: BandCurves<'_>,
     fit: &ModalFit,
     positive: &[usize],
     scale: f64,
     s: &EmaSettings,
+    on_stage: &dyn Fn(&str),
     timings: &mut EmaTimings,
-) -> (EvidenceAndResidues, Result<Option<Vec<PoleSd>>, EmaError>) {
+) -> Result<(FitEvidence, Option<Vec<PoleSd>>), EmaError> {
+    if s.refine_iterations > 0 {
+        on_stage("the modes' evidence and the poles' standard deviations");
+    }
     let clock = Instant::now();
     let (evidence, (deviations, deviations_s)) = rayon::join(
-        || {
-            let measured = data.on_lines(positive);
-            let evidence = FitEvidence::of(fit, measured, data.noise);
-            (evidence, residues_near_each_pole(fit, measured, scale))
-        },
+        || FitEvidence::of(fit, data.on_lines(positive), data.noise, scale),
         || {
             let clock = Instant::now();
             let deviations = deviations_of(data, &fit.poles, s);
@@ -1154,11 +1197,8 @@ fn evidence_beside_deviations(
     );
     timings.modes += clock.elapsed().as_secs_f64();
     timings.deviations += deviations_s;
-    (evidence, deviations)
+    Ok((evidence, deviations?))
 }
-
-/// The modes' evidence and each mode's local residues ([`evidence_beside_deviations`]).
-type EvidenceAndResidues = (FitEvidence, Vec<Option<Vec<Complex64>>>);
 
 /// The poles' standard deviations ([`pole_deviations`]) when the settings refine them, else
 /// none.
@@ -1223,38 +1263,30 @@ pub fn identify_with(
         || CurveNoise::of(&curves, &positive),
     );
     let peaks = [1, 2].map(|k| cmif_curve_peaks(freqs, &cmif, &in_band, s.cmif_prominence, k));
-    let (mut selected, missing_hz) = select(&diag, &peaks, s, &mut warnings);
+    let (selected, missing_hz) = select(&diag, &peaks, s, &mut warnings);
     if selected.is_empty() {
         return Err(no_stable_pole(band, s.orders.1));
     }
     timings.selection = lap(&mut clock);
-    let data = BandCurves {
-        freqs_hz: freqs,
-        curves: &curves,
-        quantity: set.quantity(),
-        band_hz: band,
-        noise: &noise,
-    };
+    let data = BandCurves::of(set, &curves, band, &noise);
     let fit_poles = |selected: &[SelectedPole], timings: &mut EmaTimings| {
         fit_selected(data, selected, context.as_ref(), s, on_stage, timings)
     };
-    let mut fitted = fit_poles(&selected, &mut timings)?;
-    if s.near_hz.is_none() {
-        let (fewer, merged) = merge_split_modes(selected, &fitted.fit);
-        selected = fewer;
-        if !merged.is_empty() {
-            warnings.extend(merged);
-            fitted = fit_poles(&selected, &mut timings)?;
-        }
-    }
+    let first = fit_poles(&selected, &mut timings)?;
+    let (selected, mut fitted) = without_split_modes(first, selected, s, &mut warnings, |p| {
+        fit_poles(p, &mut timings)
+    })?;
     warnings.extend(std::mem::take(&mut fitted.warnings));
     let scaled_fit = fitted.fit.scaled(1.0 / scale);
-    if s.refine_iterations > 0 {
-        on_stage("the modes' evidence and the poles' standard deviations");
-    }
-    let ((evidence, local_residues), deviations) =
-        evidence_beside_deviations(data, &scaled_fit, &positive, scale, s, &mut timings);
-    let deviations = deviations?;
+    let (evidence, deviations) = evidence_beside_deviations(
+        data,
+        &scaled_fit,
+        &positive,
+        scale,
+        s,
+        on_stage,
+        &mut timings,
+    )?;
     warnings.extend(roving_hammer_note(set));
     clock = Instant::now();
     let sources = ModeSources {
@@ -1266,7 +1298,7 @@ pub fn identify_with(
         refined: fitted.refined.as_deref(),
         deviations: deviations.as_deref(),
         frac_drop: &evidence.contributions.frac_drop,
-        local_residues: &local_residues,
+        local_residues: &evidence.local_residues,
         second_shapes: &evidence.second_shapes,
         second_shape_calibrated: evidence.calibrated,
         line_spacing_hz: crate::band::line_spacing(freqs, &positive),
