@@ -29,12 +29,16 @@ def masked_frf(zeta, refs, seed, mask_of):
 
 
 def poles_of(f, h, targets, truth, with_sdypy):
-    """(f, zeta) of each estimator's pole nearest `truth`, NaN where none."""
+    """(f, zeta) of each estimator's pole nearest `truth`, NaN where none was found or the
+    identification failed."""
     win = bench.windows(targets)
     i = targets.index(truth)
     out = dict.fromkeys(ESTIMATORS, (np.nan, np.nan))
-    r = bench.lamdyn_ema(f, h, targets)
-    k = bench.nearest_index(r.freq_hz, targets, win)[i]
+    try:
+        r = bench.lamdyn_ema(f, h, targets)
+    except Exception:  # noqa: BLE001 - a failed identification finds nothing
+        r = None
+    k = bench.nearest_index(r.freq_hz, targets, win)[i] if r is not None else None
     if k is not None:
         out["diagram"] = r.diagram_freq_hz[k], r.diagram_damping_ratio[k]
         out["refined"] = r.refined_freq_hz[k], r.refined_damping_ratio[k]
