@@ -21,11 +21,11 @@ import damped_bias as bench
 ESTIMATORS = ("diagram", "refined", "checked", "sdypy")
 
 
-def masked_frf(zeta, refs, seed, mask_of):
-    """The plate's FRFs with the noise of `seed` kept where `mask_of(f)` is true."""
+def clean_and_noise(zeta, refs, seed):
+    """The lines, the plate's noise-free FRFs and the 1 % noise of `seed` on them."""
     f, clean = bench.plate_frf(zeta, refs, 0.0, np.random.default_rng(seed))
     _, noisy = bench.plate_frf(zeta, refs, 0.01, np.random.default_rng(seed))
-    return f, clean + (noisy - clean) * mask_of(f)
+    return f, clean, noisy - clean
 
 
 def poles_of(f, h, targets, truth, with_sdypy):
@@ -75,15 +75,18 @@ def main():
           f"{seeds} seeds: bias / sd / RMS of the relative error, %\n")
     print("| noise | estimator | f | zeta |")
     print("|---|---|---|---|")
-    for name, mask in masks.items():
-        errors = {e: ([], []) for e in ESTIMATORS}
-        for seed in range(1000, 1000 + seeds):
-            f, h = masked_frf(zeta, refs, seed, mask)
-            for e, (fe, ze) in poles_of(f, h, targets, truth, with_sdypy).items():
-                errors[e][0].append(100 * (fe / truth - 1))
-                errors[e][1].append(100 * (ze / zeta - 1))
+    errors = {name: {e: ([], []) for e in ESTIMATORS} for name in masks}
+    for seed in range(1000, 1000 + seeds):
+        f, clean, noise = clean_and_noise(zeta, refs, seed)
+        for name, mask in masks.items():
+            found = poles_of(f, clean + noise * mask(f), targets, truth, with_sdypy)
+            for e, (fe, ze) in found.items():
+                errors[name][e][0].append(100 * (fe / truth - 1))
+                errors[name][e][1].append(100 * (ze / zeta - 1))
+    for name in masks:
         for e in ESTIMATORS if with_sdypy else ESTIMATORS[:3]:
-            print(f"| {name} | {e} | {summary(errors[e][0])} | {summary(errors[e][1])} |")
+            f_err, z_err = errors[name][e]
+            print(f"| {name} | {e} | {summary(f_err)} | {summary(z_err)} |")
 
 
 if __name__ == "__main__":
