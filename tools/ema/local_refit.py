@@ -8,7 +8,9 @@ The prototype, per seed:
 2. one LSFD over the whole band 20-200 Hz with those poles (each pole pair's residue per curve,
    complex) and two residual terms per curve (omega^2 and a constant, complex); with
    --oracle-outside the plate's true modes above the band too (what the LSCF's outside roots
-   stand for in lamdyn, given exactly);
+   stand for in lamdyn, given exactly), with --pseudo-outside four pseudo-modes above the band
+   instead (at 1.1, 1.3, 1.7 and 2.3 times its upper edge, zeta 10 %, residues free: no
+   knowledge of the part);
 3. the poles grouped where their half-power bands (f +- zeta f, times GROUP) overlap; for each
    group, the lines within K half-power half-widths of its poles (+ 20 lines), the model of every
    other pole and the residual terms (step 2's residues) subtracted from the data, and the
@@ -21,7 +23,7 @@ fit's poorly determined parameters) goes when those parameters are held and only
 background is left free. Its numbers are in docs/ema.md beside that paragraph.
 
 Usage: python3 tools/ema/local_refit.py ZETA REFERENCES [SEEDS] [K] [GROUP] [--sdypy]
-                                        [--noise-free] [--oracle-outside]
+                                        [--noise-free] [--oracle-outside | --pseudo-outside]
   (REFERENCES: 1 or 3; SEEDS 20, K 5, GROUP 1 by default)
   -> per mode, RMS of the relative error of f / zeta in % over the seeds for lamdyn's diagram
      and checked pole, the prototype ("local") and with --sdypy sdypy-EMA's; then the modes and
@@ -79,9 +81,11 @@ def model_without(w, poles, coefficients, group):
     return (a[:, keep] @ coefficients[keep]).T
 
 
-#: Poles held in the band model beside the identified ones: none, or with --oracle-outside the
-#: plate's true modes above the band (an oracle: what the LSCF's outside roots stand for).
+#: Poles held in the band model beside the identified ones: none, with --oracle-outside the
+#: plate's true modes above the band (an oracle: what the LSCF's outside roots stand for), with
+#: --pseudo-outside pseudo-modes above the band at these multiples of its upper edge and ζ.
 OUTSIDE = np.zeros(0, complex)
+PSEUDO_RATIOS, PSEUDO_ZETA = (1.1, 1.3, 1.7, 2.3), 0.1
 
 
 def groups(poles, reach):
@@ -178,10 +182,13 @@ def main():
     snr = 0.0 if "--noise-free" in sys.argv else 0.01
     seeds = 1 if snr == 0 else seeds
     refs = [0] if references == 1 else [0, 5, 10]
+    global OUTSIDE
     if "--oracle-outside" in sys.argv:
-        global OUTSIDE
         above = [t[0] for t in bench.MODES if t[0] > bench.BAND_HZ[1]]
         OUTSIDE = poles_of(above, np.full(len(above), zeta))
+    elif "--pseudo-outside" in sys.argv:
+        above = [r * bench.BAND_HZ[1] for r in PSEUDO_RATIOS]
+        OUTSIDE = poles_of(above, np.full(len(above), PSEUDO_ZETA))
     targets = [t[0] for t in bench.true_modes()]
     truth = np.array([[t, zeta] for t in targets])
     errors = {}

@@ -97,7 +97,7 @@ fn out_of_column(col: &SelectedPole, p: Complex64) -> String {
 
 /// For each refined pole (index-aligned with `selected`), whether it left its column in the
 /// diagram ([`SelectedPole::holds`]).
-fn left_their_columns(
+pub(crate) fn left_their_columns(
     refined: &[Complex64],
     selected: &[SelectedPole],
     c: &StabilityCriteria,

@@ -4,15 +4,20 @@
 //! [`crate::local_residues`]) and indicators, the regenerated FRFs' correlation with the
 //! measured ones, and the CMIF.
 
-use crate::columns::{HeldPoles, PutBack, in_their_columns};
+use crate::columns::{HeldPoles, PutBack, in_their_columns, left_their_columns};
 use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
+use crate::local_refit::refitted_alone;
 use crate::local_residues::local_residues;
 use crate::lscf::{
     LscfSettings, half_power_bands_overlap, lscf, pole_damping, pole_freq_hz, sample_interval,
 };
-use crate::lsfd::{ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles, shape_of};
+use crate::lsfd::{
+    ModalFit, PoleSd, RefineLines, checked_refinement_lines, lsfd, pole_deviations, refined_poles,
+    shape_of,
+};
 use crate::noise::CurveNoise;
+use crate::projection::LineSamples;
 use crate::quality::{
     Contributions, Measured, ModeEvidence, ModeQuality, SecondShape, assess, contributions,
     second_shape_calibrated,
@@ -583,7 +588,7 @@ fn fit_selected(
         s.estimator
     };
     let refine = || {
-        refined_poles(
+        let joint = refined_poles(
             freqs,
             curves,
             quantity,
@@ -593,7 +598,8 @@ fn fit_selected(
             s.refine_iterations,
             context,
             &progress,
-        )
+        )?;
+        refitted_where_alone(data, joint, selected, s)
     };
     let fitted = match (estimator, context) {
         (PoleEstimator::Diagram, _) => {
@@ -629,6 +635,51 @@ fn fit_selected(
         }
     };
     Ok(fitted)
+}
+
+/// The joint refinement's poles `joint` (index-aligned with `selected`) with each pole that
+/// stayed in its column and stands alone refitted on its own lines, the rest of the band's model
+/// held at `joint` with the poles that left their columns put back (module `local_refit`); a
+/// refit that leaves the column gives way to the joint pole, and the poles put back are as
+/// `joint` has them, for the caller's own put-back and warnings.
+///
+/// # Errors
+/// As [`lsfd`].
+fn refitted_where_alone(
+    data: BandCurves<'_>,
+    joint: Vec<Complex64>,
+    selected: &[SelectedPole],
+    s: &EmaSettings,
+) -> Result<Vec<Complex64>, EmaError> {
+    let held = in_their_columns(&joint, selected, &s.criteria);
+    let members: Vec<usize> = (0..joint.len())
+        .filter(|&r| held.put_back[r].is_none())
+        .collect();
+    let lines = checked_refinement_lines(
+        data.freqs_hz,
+        data.curves,
+        &held.poles,
+        data.band_hz,
+        s.refine_lines,
+    )?;
+    let samples = LineSamples::new(data.freqs_hz, data.curves, data.quantity, &lines)?;
+    let local = refitted_alone(
+        samples,
+        data.band_hz[1],
+        &held.poles,
+        &members,
+        s.refine_iterations,
+    );
+    let left = left_their_columns(&local, selected, &s.criteria);
+    Ok((0..joint.len())
+        .map(|r| {
+            if members.contains(&r) && !left[r] {
+                local[r]
+            } else {
+                joint[r]
+            }
+        })
+        .collect())
 }
 
 /// The poles `refine` returns, and the check of the diagram's `poles` built on another thread

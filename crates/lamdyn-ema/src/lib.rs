@@ -9,6 +9,8 @@
 //! | [`stabilization`] | stabilization diagram, automatic and targeted pole selection |
 //! | [`lsfd`] | residues with lower/upper residuals, synthesis, FRAC, pole refinement |
 //! | [`local_residues`] | each mode's residues from the lines around its pole: the shapes |
+//! | `local_refit` | the refinement's last step: each pole standing alone refitted on its own lines |
+//! | `pole_fit` | Levenberg–Marquardt on the poles, the residues eliminated |
 //! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
 //! | `denominator` | the LSCF model's roots and their partial-fraction columns |
 //! | [`context`] | the refined poles checked in the LSCF model's context (its other roots fixed) |
@@ -30,10 +32,12 @@ pub mod context;
 mod denominator;
 mod error;
 pub mod identify;
+mod local_refit;
 pub mod local_residues;
 pub mod lscf;
 pub mod lsfd;
 pub mod noise;
+mod pole_fit;
 mod projection;
 pub mod quality;
 pub mod second_shape;

@@ -23,7 +23,9 @@
 //! the band (its computational ones) left out. A group of outside roots within a pole's reach
 //! trades with that pole, so each pole is refined in the fit that holds every group not within
 //! its own reach (`LscfContext::groups_held_beside`): one fit per distinct set of groups, each
-//! pole's estimate taken from its own.
+//! pole's estimate taken from its own. Identification then refits each pole that stands alone
+//! on the lines around it with the rest of the band's model held (module `local_refit`): the
+//! joint fit lets the far lines' noise bias it.
 //!
 //! **Shapes.** For one reference, the residues over the responses are the complex mode shape
 //! (up to scale). With a driving point p (response = reference), mass-normalised complex modes
@@ -34,6 +36,7 @@
 
 use crate::denominator::{LscfContext, OutsideModel};
 use crate::error::{EmaError, check_curves, invalid};
+use crate::pole_fit::{levenberg_marquardt, pole_parameters, to_poles};
 pub use crate::projection::LineBasis;
 use crate::projection::{LineSamples, NormalEquations, solve_by_blocks};
 use faer::Mat;
@@ -431,72 +434,9 @@ pub(crate) fn refined_poles(
     Ok(refined)
 }
 
-/// The relative reduction of the sum of squares that the Levenberg–Marquardt steps stop below:
-/// rounding's share of it (a few thousand squared residuals summed in f64).
-const CONVERGED: f64 = 1e-12;
-
-/// Levenberg–Marquardt on the poles' parameters ([`pole_parameters`]) from `poles`, minimising
-/// the residual sum of squares of the residue problem on `samples` with the residues eliminated
-/// (its exact normal equations: [`crate::projection::Projection::normal_equations`]), at most
-/// `iterations` steps (`on_iteration(k, max)` as step k starts); the refined poles, or None
-/// where the residue problem fails at the start.
-fn levenberg_marquardt(
-    samples: &LineSamples,
-    poles: &[Complex64],
-    iterations: usize,
-    on_iteration: &dyn Fn(usize, usize),
-) -> Option<Vec<Complex64>> {
-    let mut u = pole_parameters(poles);
-    let mut at = samples.project(&to_poles(&u))?;
-    let mut cost = at.cost();
-    let mut lambda = 1e-3;
-    let p = u.len();
-    for k in 0..iterations {
-        on_iteration(k + 1, iterations);
-        let normal = at.normal_equations(samples);
-        let (jtj, jtr) = (normal.weighted(|_| 1.0), normal.gradient);
-        let mut improved = false;
-        for _ in 0..8 {
-            let m = Mat::from_fn(p, p, |a, b| {
-                jtj[(a, b)]
-                    + if a == b {
-                        lambda * jtj[(a, a)].max(1e-300)
-                    } else {
-                        0.0
-                    }
-            });
-            let rhs = Mat::from_fn(p, 1, |a, _| -jtr[(a, 0)]);
-            let step = m.full_piv_lu().solve(&rhs);
-            // The Gauss–Newton model's reduction −δᵀJᵀr (within a factor 2 of its exact
-            // value); it only shrinks as λ grows. Below rounding's share of the cost the poles
-            // have converged, and every trial would be refused by rounding alone.
-            let promised: f64 = (0..p).map(|a| -jtr[(a, 0)] * step[(a, 0)]).sum();
-            if promised.is_finite() && promised <= CONVERGED * cost {
-                return Some(to_poles(&u));
-            }
-            let trial: Vec<f64> = (0..p).map(|a| u[a] + step[(a, 0)]).collect();
-            if let Some(next) = samples.project(&to_poles(&trial)) {
-                let ct = next.cost();
-                if ct < cost {
-                    let rel = (cost - ct) / cost;
-                    (u, at, cost) = (trial, next, ct);
-                    lambda = (lambda / 3.0).max(1e-12);
-                    improved = rel > 1e-10;
-                    break;
-                }
-            }
-            lambda *= 4.0;
-        }
-        if !improved {
-            break;
-        }
-    }
-    Some(to_poles(&u))
-}
-
 /// The curves checked ([`check_curves`]), then the lines the refinement fits
 /// ([`refinement_lines`]) in `band_hz`.
-fn checked_refinement_lines(
+pub(crate) fn checked_refinement_lines(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     poles: &[Complex64],
@@ -510,21 +450,6 @@ fn checked_refinement_lines(
         poles,
         fit_lines,
     ))
-}
-
-/// The refinement's parameters of each pole: ln(−Re λ), Im λ.
-fn pole_parameters(poles: &[Complex64]) -> Vec<f64> {
-    poles
-        .iter()
-        .flat_map(|p| [(-p.re).max(1e-12).ln(), p.im])
-        .collect()
-}
-
-/// The poles of the refinement's parameters ([`pole_parameters`]).
-fn to_poles(u: &[f64]) -> Vec<Complex64> {
-    u.chunks(2)
-        .map(|c| Complex64::new(-c[0].exp(), c[1]))
-        .collect()
 }
 
 /// Standard deviations of a pole's frequency and damping ratio.

@@ -95,6 +95,17 @@ impl LineSamples {
         2 * poles + 2 + self.fixed.ncols()
     }
 
+    /// ω of each line, rad/s.
+    pub(crate) fn omega(&self) -> &[f64] {
+        &self.omega
+    }
+
+    /// The two basis columns of each of `poles` (module docs), as real rows: fixed columns
+    /// ([`Self::set_fixed`]) for poles held where they are.
+    pub(crate) fn pole_columns(&self, poles: &[Complex64]) -> Mat<f64> {
+        self.basis(poles).subcols(0, 2 * poles.len()).to_owned()
+    }
+
     /// Rows per curve: two per line.
     pub(crate) fn rows(&self) -> usize {
         self.data.nrows()
@@ -183,6 +194,23 @@ impl LineSamples {
         (r, qtb.subrows(0, rows).to_owned())
     }
 
+    /// The model of `poles` fitted to these samples (residues, residual terms and fixed
+    /// columns), kept to be held beside some of the poles ([`HeldModel::rest_removed`]); None
+    /// where the residue problem fails.
+    pub(crate) fn held_model(&self, poles: &[Complex64]) -> Option<HeldModel<'_>> {
+        let projection = self.project(poles)?;
+        let basis = self.basis(poles);
+        let coefficients = Mat::from_fn(basis.ncols(), self.curves(), |c, o| {
+            projection.unknown(c, o)
+        });
+        Some(HeldModel {
+            samples: self,
+            poles: poles.len(),
+            basis,
+            coefficients,
+        })
+    }
+
     /// The residue problem solved for `poles` (module docs); None where it is singular or not
     /// finite. Needs more rows than unknowns (2 poles + 2). The residual P⊥B = Q [0; (QᵀB)₂],
     /// the part of B outside the basis's span, is kept in Q's coordinates, [0; (QᵀB)₂]: its
@@ -208,6 +236,44 @@ impl LineSamples {
             unknowns,
             residual_in_q,
         })
+    }
+}
+
+/// A model of poles fitted to [`LineSamples`] ([`LineSamples::held_model`]): its basis and
+/// coefficients on the samples' lines.
+pub(crate) struct HeldModel<'a> {
+    samples: &'a LineSamples,
+    /// How many poles the model holds (their columns come first in the basis).
+    poles: usize,
+    /// The basis A of the poles (unscaled), rows × unknowns.
+    basis: Mat<f64>,
+    /// The unknowns X, unknowns × curves: A X is the model.
+    coefficients: Mat<f64>,
+}
+
+impl HeldModel<'_> {
+    /// The samples of the lines `lines` (indices into the samples' lines) less the model
+    /// without the columns of the poles `group` (indices into its poles): what those poles and
+    /// two new residual terms must explain there while every other pole's residues, the residual
+    /// terms and the fixed columns keep their fitted values. No fixed columns.
+    pub(crate) fn rest_removed(&self, group: &[usize], lines: &[usize]) -> LineSamples {
+        let held: Vec<usize> = (0..self.basis.ncols())
+            .filter(|&c| c >= 2 * self.poles || !group.contains(&(c / 2)))
+            .collect();
+        let data = Mat::from_fn(2 * lines.len(), self.samples.curves(), |row, o| {
+            let r = 2 * lines[row / 2] + row % 2;
+            let model: f64 = held
+                .iter()
+                .map(|&c| self.basis[(r, c)] * self.coefficients[(c, o)])
+                .sum();
+            self.samples.data[(r, o)] - model
+        });
+        LineSamples {
+            omega: lines.iter().map(|&i| self.samples.omega[i]).collect(),
+            quantity: self.samples.quantity,
+            data,
+            fixed: Mat::zeros(2 * lines.len(), 0),
+        }
     }
 }
 

@@ -1,0 +1,189 @@
+//! The refinement's last step: each pole that stands alone refitted on the lines around it,
+//! the rest of the band's model held (after [`crate::lsfd::refined_poles`], the joint fit).
+//!
+//! **Why.** The joint refinement fits every pole, the residual terms and the outside roots'
+//! residues over the whole band at once. On the noise of a pole's own lines its estimate is
+//! unbiased; the noise of the rest of the band reaches it through the joint fit: the poorly
+//! determined parameters (a damped close pair, the LSCF's roots outside the band) answer that
+//! noise nonlinearly, and the background they leave at the pole moves it one way (docs/ema.md,
+//! "Where the noise that biases the refined pole comes from"). Here a model of the band is
+//! fitted at the joint fit's poles, with [`PSEUDO_RATIOS`] pseudo-modes above the band in place
+//! of the LSCF's outside roots, and held: every other pole with its residues, the residual terms
+//! and the pseudo-modes. Only the pole, its residues and two new residual terms are fitted on
+//! the pole's lines: what the held terms leave wrong there is smooth and the new residual terms
+//! take it, and the far lines' noise reaches the pole only through that held background.
+//!
+//! **Which poles, which lines.** The model is held at the joint fit's poles with those that
+//! left their columns in the diagram put back (module `columns`), and only the others are
+//! refitted. A pole whose half-power band overlaps another's
+//! (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) keeps its joint estimate: a close pair refitted on its own lines
+//! came out worse than jointly (docs/ema.md). A pole alone is refitted on the fit's lines within
+//! 5 ζ f + 20 Δf of it (the refinement's window, [`crate::lsfd::RefineLines`]), and at least
+//! [`MIN_HALF_WINDOW_LINES`] line spacings: the two new residual terms per curve need lines
+//! beside the peak. A pole whose refit fails, or moves further than its half-power half-width
+//! (a search, not a correction: where the held model lacks modes), or out of its column
+//! (`identify`), keeps its joint estimate. The check ([`crate::context`]) then decides, as for
+//! the joint estimate, whether the refitted pole replaces the diagram's.
+
+use crate::lscf::{half_power_bands_overlap, pole_damping, pole_freq_hz};
+use crate::pole_fit::levenberg_marquardt;
+use crate::projection::LineSamples;
+use num_complex::Complex64;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// The pseudo-modes above the band held in the band's model: at these multiples of the band's
+/// upper edge, with damping [`PSEUDO_DAMPING`]; their residues are fitted with the model's.
+/// They stand for the modes above the band, whose tails a damped pole's lines hold and the
+/// upper residual alone does not follow.
+const PSEUDO_RATIOS: [f64; 4] = [1.1, 1.3, 1.7, 2.3];
+
+/// The damping ratio of the pseudo-modes ([`PSEUDO_RATIOS`]).
+const PSEUDO_DAMPING: f64 = 0.1;
+
+/// The fewest line spacings a refitted pole's lines reach on each side (module docs).
+const MIN_HALF_WINDOW_LINES: f64 = 200.0;
+
+/// The pseudo-modes' poles above a band whose upper edge is `upper_hz`, rad/s.
+fn pseudo_modes(upper_hz: f64) -> Vec<Complex64> {
+    PSEUDO_RATIOS
+        .iter()
+        .map(|r| {
+            let w = 2.0 * PI * r * upper_hz;
+            let z = PSEUDO_DAMPING;
+            Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
+        })
+        .collect()
+}
+
+/// The poles `poles` with each of `members` (indices into `poles`) that stands alone refitted
+/// on its own lines of `samples` (module docs; the refinement's lines of the band whose upper
+/// edge is `upper_hz`), the model of the band held at `poles` with the pseudo-modes
+/// ([`PSEUDO_RATIOS`]); at most `iterations` Levenberg–Marquardt steps each.
+pub(crate) fn refitted_alone(
+    mut samples: LineSamples,
+    upper_hz: f64,
+    poles: &[Complex64],
+    members: &[usize],
+    iterations: usize,
+) -> Vec<Complex64> {
+    samples.set_fixed(samples.pole_columns(&pseudo_modes(upper_hz)));
+    refitted_locally(&samples, poles, members, iterations)
+}
+
+/// The poles `poles` with each of `members` (indices into `poles`) that stands alone refitted
+/// on its own lines of `samples` (module docs), at most `iterations` Levenberg–Marquardt steps
+/// each; the other poles as given. `samples`' fixed columns are held with the rest of the
+/// model.
+fn refitted_locally(
+    samples: &LineSamples,
+    poles: &[Complex64],
+    members: &[usize],
+    iterations: usize,
+) -> Vec<Complex64> {
+    let mut out = poles.to_vec();
+    let Some(held) = samples.held_model(poles) else {
+        return out;
+    };
+    let freqs: Vec<f64> = samples.omega().iter().map(|w| w / (2.0 * PI)).collect();
+    let spacing = line_spacing(&freqs);
+    // Each pole's refit is independent of the others': in parallel.
+    let refits: Vec<(usize, Complex64)> = members
+        .par_iter()
+        .filter(|&&r| stands_alone(poles, r))
+        .filter_map(|&r| {
+            let lines = pole_lines(&freqs, poles[r], spacing);
+            let local = held.rest_removed(&[r], &lines);
+            match levenberg_marquardt(&local, &[poles[r]], iterations, &|_, _| {})?[..] {
+                [p] if is_a_correction(poles[r], p) => Some((r, p)),
+                _ => None,
+            }
+        })
+        .collect();
+    for (r, p) in refits {
+        out[r] = p;
+    }
+    out
+}
+
+/// Whether the refit `refit` of the pole `start` is a correction of it, not another resonance:
+/// finite and within the half-power half-width of `start` in the complex plane
+/// (|λ − λ₀| ≤ ζ₀|λ₀| = −Re λ₀). Where the held model misfits (modes missing from it) the refit
+/// can run to the band's edge, and the joint estimate is kept.
+fn is_a_correction(start: Complex64, refit: Complex64) -> bool {
+    refit.is_finite() && (refit - start).norm() <= -start.re
+}
+
+/// Whether the half-power band of pole `r` overlaps no other pole's.
+fn stands_alone(poles: &[Complex64], r: usize) -> bool {
+    poles
+        .iter()
+        .enumerate()
+        .all(|(q, &p)| q == r || !half_power_bands_overlap(p, poles[r]))
+}
+
+/// The smallest gap between neighbouring lines of `freqs` (Hz, ascending): the line spacing
+/// where the fit keeps every line (the poles' windows); 0 for fewer than two lines.
+fn line_spacing(freqs: &[f64]) -> f64 {
+    let gap = freqs
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if gap.is_finite() { gap } else { 0.0 }
+}
+
+/// The indices of the lines of `freqs` (Hz) within 5 ζ f + 20 Δf of `pole`, and at least
+/// [`MIN_HALF_WINDOW_LINES`] Δf (module docs).
+fn pole_lines(freqs: &[f64], pole: Complex64, spacing: f64) -> Vec<usize> {
+    let f = pole_freq_hz(pole);
+    let reach =
+        (5.0 * pole_damping(pole) * f + 20.0 * spacing).max(MIN_HALF_WINDOW_LINES * spacing);
+    (0..freqs.len())
+        .filter(|&i| (freqs[i] - f).abs() <= reach)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pole(f: f64, z: f64) -> Complex64 {
+        let w = 2.0 * PI * f;
+        Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
+    }
+
+    #[test]
+    fn a_refit_within_the_half_power_half_width_is_a_correction() {
+        let start = pole(100.0, 0.02);
+        assert!(is_a_correction(start, pole(100.5, 0.021)));
+        assert!(!is_a_correction(start, pole(103.0, 0.02)));
+        assert!(!is_a_correction(start, pole(100.0, 0.05)));
+        assert!(!is_a_correction(start, Complex64::new(f64::NAN, 1.0)));
+    }
+
+    #[test]
+    fn a_pole_stands_alone_unless_a_half_power_band_overlaps_its_own() {
+        // 100 / 103 Hz at 2 % overlap (3 < 2 + 2.06), 130 Hz stands alone.
+        let poles = [pole(130.0, 0.02), pole(103.0, 0.02), pole(100.0, 0.02)];
+        assert!(stands_alone(&poles, 0));
+        assert!(!stands_alone(&poles, 1));
+        assert!(!stands_alone(&poles, 2));
+    }
+
+    #[test]
+    fn a_pole_s_lines_reach_five_half_widths_and_twenty_lines_at_least_two_hundred() {
+        let freqs: Vec<f64> = (0..4000).map(|k| 0.1 * k as f64).collect();
+        let spacing = line_spacing(&freqs);
+        // 8 % at 100 Hz: 5 · 0.08 · 100 + 2 = 42 Hz each side.
+        let lines = pole_lines(&freqs, pole(100.0, 0.08), spacing);
+        let (first, last) = (freqs[lines[0]], freqs[*lines.last().unwrap()]);
+        assert!((first - 58.0).abs() < 0.1 + 1e-9, "{first}");
+        assert!((last - 142.0).abs() < 0.1 + 1e-9, "{last}");
+        // 0.1 % at 100 Hz: 0.5 + 2 Hz, raised to 200 lines, 20 Hz, each side.
+        let lines = pole_lines(&freqs, pole(100.0, 0.001), spacing);
+        // 401 lines, the two at ±20 Hz exactly on the edge either side of it by rounding.
+        assert!((399..=401).contains(&lines.len()), "{}", lines.len());
+        assert_eq!(lines.len(), lines[lines.len() - 1] - lines[0] + 1);
+    }
+}
