@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
-"""A prototype estimator, not in lamdyn: each pole refitted on the lines around it with the rest
-of the band's model held, beside a local background. Measured against lamdyn's diagram and
-checked pole (and sdypy-EMA 0.31 with --sdypy) on the damped plate of damped_bias.py.
+"""A prototype: each pole refitted on the lines around it with the rest of the band's model held,
+beside a local background. Measured against lamdyn's diagram and checked pole (and sdypy-EMA
+0.31 with --sdypy) on the damped plate of damped_bias.py. lamdyn does this since 2026-12-03 for
+the poles that stand alone, with the pseudo-modes of --pseudo-outside and a real two-term
+background (crates/lamdyn-ema/src/local_refit.rs); the prototype also refits groups of
+overlapping poles and compares the outside models.
 
 The prototype, per seed:
 1. lamdyn's final (checked) poles (every selected mode, `damped_bias.lamdyn_ema`);

@@ -44,6 +44,8 @@ pub mod second_shape;
 pub mod shapes;
 pub mod spectra;
 pub mod stabilization;
+#[cfg(test)]
+mod test_frfs;
 pub mod thin_qr;
 pub mod welch;
 

@@ -147,10 +147,36 @@ fn pole_lines(freqs: &[f64], pole: Complex64, spacing: f64) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_frfs::{accelerances, pole};
 
-    fn pole(f: f64, z: f64) -> Complex64 {
-        let w = 2.0 * PI * f;
-        Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
+    #[test]
+    fn a_pole_alone_is_refitted_towards_the_truth_on_exact_frfs() {
+        let modes = vec![
+            (20.0, 0.02, vec![1.0, 0.6, -0.4, 0.9]),
+            (50.0, 0.05, vec![0.8, -0.7, 0.5, 0.3]),
+            (80.0, 0.02, vec![0.5, 0.9, 0.7, -0.6]),
+        ];
+        let truth: Vec<Complex64> = modes.iter().map(|m| pole(m.0, m.1)).collect();
+        let freqs: Vec<f64> = (1..=1200).map(|k| 0.1 * f64::from(k)).collect();
+        let curves = accelerances(&freqs, &modes);
+        let refs: Vec<&[Complex64]> = curves.iter().map(Vec::as_slice).collect();
+        let lines: Vec<usize> = (150..1000).collect(); // 15.1-100 Hz
+        let samples =
+            || LineSamples::new(&freqs, &refs, lamdyn_frf::Quantity::Accelerance, &lines).unwrap();
+        let at_truth = refitted_alone(samples(), 100.0, &truth, &[0, 1, 2], 30);
+        for (p, t) in at_truth.iter().zip(&truth) {
+            assert!((p - t).norm() < 1e-6 * t.norm(), "{p} against {t}");
+        }
+        // The 50 Hz pole 0.2 % high in f and 10 % high in zeta, the others exact. The held model
+        // is fitted at that start, and the other poles' residues and the residual terms take
+        // part of its misfit, so one refit takes most of the error, not all (measured: |Δλ|
+        // 1.70 → 0.42 rad/s); the refinement starts it from the joint fit's pole, nearer.
+        let mut start = truth.clone();
+        start[1] = pole(50.1, 0.055);
+        let refit = refitted_alone(samples(), 100.0, &start, &[1], 30);
+        let (before, after) = ((start[1] - truth[1]).norm(), (refit[1] - truth[1]).norm());
+        assert!(after < 0.3 * before, "|error| {before} -> {after}");
+        assert_eq!((refit[0], refit[2]), (start[0], start[2]));
     }
 
     #[test]

@@ -174,35 +174,7 @@ fn local_basis(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn pole(f: f64, z: f64) -> Complex64 {
-        let w = 2.0 * PI * f;
-        Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
-    }
-
-    /// Accelerance of modes (f, ζ, shape over the curves) at the lines: the modal model of
-    /// the band's fit with A = φφ_p/(2iω_d), driving point p = curve 0.
-    fn accelerances(freqs: &[f64], modes: &[(f64, f64, Vec<f64>)]) -> Vec<Vec<Complex64>> {
-        let curves = modes[0].2.len();
-        (0..curves)
-            .map(|o| {
-                freqs
-                    .iter()
-                    .map(|&f| {
-                        let s = Complex64::new(0.0, 2.0 * PI * f);
-                        modes
-                            .iter()
-                            .map(|(fr, z, phi)| {
-                                let p = pole(*fr, *z);
-                                let a = phi[o] * phi[0] / Complex64::new(0.0, 2.0 * p.im);
-                                s * s * (a / (s - p) + a.conj() / (s - p.conj()))
-                            })
-                            .sum()
-                    })
-                    .collect()
-            })
-            .collect()
-    }
+    use crate::test_frfs::{accelerances, pole};
 
     #[test]
     fn a_damped_mode_beside_modes_outside_the_band_keeps_its_real_shape() {
