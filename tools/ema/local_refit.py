@@ -163,7 +163,7 @@ def seed_poles(zeta, refs, snr, seed, k, reach, with_sdypy):
         r = None
     if r is not None:
         curves = h.reshape(-1, h.shape[2])
-        local = local_poles(f, curves, poles_of(r.freq_hz, r.damping_ratio),
+        local = local_poles(f, curves, np.asarray(r["poles"]),
                             k, reach)
         picks = bench.nearest_index(r.freq_hz, targets, bench.windows(targets))
         for i, j in enumerate(picks):

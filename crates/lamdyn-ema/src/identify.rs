@@ -7,14 +7,13 @@
 use crate::columns::{HeldPoles, PutBack, in_their_columns, left_their_columns};
 use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
-use crate::local_refit::refitted_alone;
+use crate::local_refit::{RefitBand, refitted_alone};
 use crate::local_residues::local_residues;
 use crate::lscf::{
     LscfSettings, half_power_bands_overlap, lscf, pole_damping, pole_freq_hz, sample_interval,
 };
 use crate::lsfd::{
-    ModalFit, PoleSd, RefineLines, checked_refinement_lines, lsfd, pole_deviations, refined_poles,
-    shape_of,
+    ModalFit, PoleSd, RefineLines, lsfd, pole_deviations, refined_poles, refinement_lines, shape_of,
 };
 use crate::noise::CurveNoise;
 use crate::projection::LineSamples;
@@ -652,28 +651,21 @@ fn refitted_where_alone(
     s: &EmaSettings,
 ) -> Result<Vec<Complex64>, EmaError> {
     let held = in_their_columns(&joint, selected, &s.criteria);
-    let members: Vec<usize> = (0..joint.len())
-        .filter(|&r| held.put_back[r].is_none())
-        .collect();
-    let lines = checked_refinement_lines(
-        data.freqs_hz,
-        data.curves,
-        &held.poles,
-        data.band_hz,
-        s.refine_lines,
-    )?;
+    let kept = |r: usize| held.put_back[r].is_none();
+    let members: Vec<usize> = (0..joint.len()).filter(|&r| kept(r)).collect();
+    // The curves were checked by the joint refinement; the lines are its, around these poles.
+    let band_lines = crate::band::positive_lines(data.freqs_hz, data.band_hz);
+    let lines = refinement_lines(data.freqs_hz, &band_lines, &held.poles, s.refine_lines);
     let samples = LineSamples::new(data.freqs_hz, data.curves, data.quantity, &lines)?;
-    let local = refitted_alone(
-        samples,
-        data.band_hz[1],
-        &held.poles,
-        &members,
-        s.refine_iterations,
-    );
+    let band = RefitBand {
+        upper_hz: data.band_hz[1],
+        spacing_hz: crate::band::line_spacing(data.freqs_hz, &band_lines),
+    };
+    let local = refitted_alone(samples, band, &held.poles, &members, s.refine_iterations);
     let left = left_their_columns(&local, selected, &s.criteria);
     Ok((0..joint.len())
         .map(|r| {
-            if members.contains(&r) && !left[r] {
+            if kept(r) && !left[r] {
                 local[r]
             } else {
                 joint[r]

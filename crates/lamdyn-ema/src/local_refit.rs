@@ -25,7 +25,8 @@
 //! (`identify`), keeps its joint estimate. The check ([`crate::context`]) then decides, as for
 //! the joint estimate, whether the refitted pole replaces the diagram's.
 
-use crate::lscf::{half_power_bands_overlap, pole_damping, pole_freq_hz};
+use crate::lscf::{half_power_bands_overlap, pole_freq_hz};
+use crate::lsfd::window_reach_hz;
 use crate::pole_fit::levenberg_marquardt;
 use crate::projection::LineSamples;
 use num_complex::Complex64;
@@ -57,26 +58,34 @@ fn pseudo_modes(upper_hz: f64) -> Vec<Complex64> {
 }
 
 /// The poles `poles` with each of `members` (indices into `poles`) that stands alone refitted
-/// on its own lines of `samples` (module docs; the refinement's lines of the band whose upper
-/// edge is `upper_hz`), the model of the band held at `poles` with the pseudo-modes
+/// on its own lines of `samples` (module docs; the refinement's lines of `band`), the model of
+/// the band held at `poles` with the pseudo-modes
 /// ([`PSEUDO_RATIOS`]); at most `iterations` Levenberg–Marquardt steps each.
 pub(crate) fn refitted_alone(
     mut samples: LineSamples,
-    upper_hz: f64,
+    band: RefitBand,
     poles: &[Complex64],
     members: &[usize],
     iterations: usize,
 ) -> Vec<Complex64> {
-    samples.set_fixed(samples.pole_columns(&pseudo_modes(upper_hz)));
-    refitted_locally(&samples, poles, members, iterations)
+    samples.set_fixed(samples.pole_columns(&pseudo_modes(band.upper_hz)));
+    refitted_locally(&samples, band.spacing_hz, poles, members, iterations)
+}
+
+/// What the local step needs of the band: its upper edge and its line spacing, Hz.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RefitBand {
+    pub(crate) upper_hz: f64,
+    pub(crate) spacing_hz: f64,
 }
 
 /// The poles `poles` with each of `members` (indices into `poles`) that stands alone refitted
-/// on its own lines of `samples` (module docs), at most `iterations` Levenberg–Marquardt steps
-/// each; the other poles as given. `samples`' fixed columns are held with the rest of the
+/// on its own lines of `samples` (module docs; lines `spacing` Hz apart in the windows), at most
+/// `iterations` Levenberg–Marquardt steps each; the other poles as given. `samples`' fixed columns are held with the rest of the
 /// model.
 fn refitted_locally(
     samples: &LineSamples,
+    spacing: f64,
     poles: &[Complex64],
     members: &[usize],
     iterations: usize,
@@ -86,7 +95,6 @@ fn refitted_locally(
         return out;
     };
     let freqs: Vec<f64> = samples.omega().iter().map(|w| w / (2.0 * PI)).collect();
-    let spacing = line_spacing(&freqs);
     // Each pole's refit is independent of the others': in parallel.
     let refits: Vec<(usize, Complex64)> = members
         .par_iter()
@@ -122,23 +130,11 @@ fn stands_alone(poles: &[Complex64], r: usize) -> bool {
         .all(|(q, &p)| q == r || !half_power_bands_overlap(p, poles[r]))
 }
 
-/// The smallest gap between neighbouring lines of `freqs` (Hz, ascending): the line spacing
-/// where the fit keeps every line (the poles' windows); 0 for fewer than two lines.
-fn line_spacing(freqs: &[f64]) -> f64 {
-    let gap = freqs
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .filter(|d| *d > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    if gap.is_finite() { gap } else { 0.0 }
-}
-
 /// The indices of the lines of `freqs` (Hz) within 5 ζ f + 20 Δf of `pole`, and at least
 /// [`MIN_HALF_WINDOW_LINES`] Δf (module docs).
 fn pole_lines(freqs: &[f64], pole: Complex64, spacing: f64) -> Vec<usize> {
     let f = pole_freq_hz(pole);
-    let reach =
-        (5.0 * pole_damping(pole) * f + 20.0 * spacing).max(MIN_HALF_WINDOW_LINES * spacing);
+    let reach = window_reach_hz(pole, spacing).max(MIN_HALF_WINDOW_LINES * spacing);
     (0..freqs.len())
         .filter(|&i| (freqs[i] - f).abs() <= reach)
         .collect()
@@ -163,7 +159,11 @@ mod tests {
         let lines: Vec<usize> = (150..1000).collect(); // 15.1-100 Hz
         let samples =
             || LineSamples::new(&freqs, &refs, lamdyn_frf::Quantity::Accelerance, &lines).unwrap();
-        let at_truth = refitted_alone(samples(), 100.0, &truth, &[0, 1, 2], 30);
+        let band = RefitBand {
+            upper_hz: 100.0,
+            spacing_hz: 0.1,
+        };
+        let at_truth = refitted_alone(samples(), band, &truth, &[0, 1, 2], 30);
         for (p, t) in at_truth.iter().zip(&truth) {
             assert!((p - t).norm() < 1e-6 * t.norm(), "{p} against {t}");
         }
@@ -173,7 +173,7 @@ mod tests {
         // 1.70 → 0.42 rad/s); the refinement starts it from the joint fit's pole, nearer.
         let mut start = truth.clone();
         start[1] = pole(50.1, 0.055);
-        let refit = refitted_alone(samples(), 100.0, &start, &[1], 30);
+        let refit = refitted_alone(samples(), band, &start, &[1], 30);
         let (before, after) = ((start[1] - truth[1]).norm(), (refit[1] - truth[1]).norm());
         assert!(after < 0.3 * before, "|error| {before} -> {after}");
         assert_eq!((refit[0], refit[2]), (start[0], start[2]));
@@ -200,7 +200,7 @@ mod tests {
     #[test]
     fn a_pole_s_lines_reach_five_half_widths_and_twenty_lines_at_least_two_hundred() {
         let freqs: Vec<f64> = (0..4000).map(|k| 0.1 * k as f64).collect();
-        let spacing = line_spacing(&freqs);
+        let spacing = 0.1;
         // 8 % at 100 Hz: 5 · 0.08 · 100 + 2 = 42 Hz each side.
         let lines = pole_lines(&freqs, pole(100.0, 0.08), spacing);
         let (first, last) = (freqs[lines[0]], freqs[*lines.last().unwrap()]);

@@ -313,6 +313,13 @@ impl Default for RefineLines {
 /// on a fine line spacing) is thinned evenly to about this many.
 const WINDOW_LINES: usize = 1000;
 
+/// The reach of a pole's window each side of its frequency, Hz: 5 ζ f + 20 Δf for lines
+/// `spacing_hz` apart ([`RefineLines`]).
+pub(crate) fn window_reach_hz(pole: Complex64, spacing_hz: f64) -> f64 {
+    let (fp, z) = (pole.norm() / (2.0 * PI), -pole.re / pole.norm());
+    5.0 * z * fp + 20.0 * spacing_hz
+}
+
 /// The lines the refinement fits (see [`RefineLines`]).
 pub(crate) fn refinement_lines(
     freqs_hz: &[f64],
@@ -333,8 +340,7 @@ pub(crate) fn refinement_lines(
     let windows: Vec<(f64, f64, usize)> = poles
         .iter()
         .map(|p| {
-            let (fp, z) = (p.norm() / (2.0 * PI), -p.re / p.norm());
-            let reach = 5.0 * z * fp + 20.0 * df;
+            let (fp, reach) = (p.norm() / (2.0 * PI), window_reach_hz(*p, df));
             let lines = (2.0 * reach / df) as usize + 1;
             (fp, reach, lines.div_ceil(WINDOW_LINES).max(1))
         })
@@ -436,7 +442,7 @@ pub(crate) fn refined_poles(
 
 /// The curves checked ([`check_curves`]), then the lines the refinement fits
 /// ([`refinement_lines`]) in `band_hz`.
-pub(crate) fn checked_refinement_lines(
+fn checked_refinement_lines(
     freqs_hz: &[f64],
     curves: &[&[Complex64]],
     poles: &[Complex64],

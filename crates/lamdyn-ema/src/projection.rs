@@ -198,16 +198,13 @@ impl LineSamples {
     /// columns), kept to be held beside some of the poles ([`HeldModel::rest_removed`]); None
     /// where the residue problem fails.
     pub(crate) fn held_model(&self, poles: &[Complex64]) -> Option<HeldModel<'_>> {
-        let projection = self.project(poles)?;
-        let basis = self.basis(poles);
-        let coefficients = Mat::from_fn(basis.ncols(), self.curves(), |c, o| {
-            projection.unknown(c, o)
-        });
+        let (basis, scale) = self.scaled_basis(poles)?;
+        let projection = self.project_on(poles, &basis, scale)?;
         Some(HeldModel {
             samples: self,
             poles: poles.len(),
             basis,
-            coefficients,
+            coefficients: projection.unknowns,
         })
     }
 
@@ -218,7 +215,13 @@ impl LineSamples {
     /// never applied.
     pub(crate) fn project(&self, poles: &[Complex64]) -> Option<Projection> {
         let (a, scale) = self.scaled_basis(poles)?;
-        let qr = ThinQr::new(&a);
+        self.project_on(poles, &a, scale)
+    }
+
+    /// [`Self::project`] on the basis `a` of `poles` already scaled by the column norms
+    /// `scale` ([`Self::scaled_basis`]).
+    fn project_on(&self, poles: &[Complex64], a: &Mat<f64>, scale: Vec<f64>) -> Option<Projection> {
+        let qr = ThinQr::new(a);
         let r = qr.r();
         let n = r.nrows();
         let mut residual_in_q = self.data.clone();
@@ -245,9 +248,9 @@ pub(crate) struct HeldModel<'a> {
     samples: &'a LineSamples,
     /// How many poles the model holds (their columns come first in the basis).
     poles: usize,
-    /// The basis A of the poles (unscaled), rows × unknowns.
+    /// The basis with its columns scaled to unit norm, A S⁻¹, rows × unknowns.
     basis: Mat<f64>,
-    /// The unknowns X, unknowns × curves: A X is the model.
+    /// The scaled unknowns S X, unknowns × curves: (A S⁻¹)(S X) = A X is the model.
     coefficients: Mat<f64>,
 }
 
