@@ -29,6 +29,27 @@
 //! diagram's poles already fit the context model, and the refinement's moves bring no
 //! significant drop; with noise the linearised estimator's bias does.
 //!
+//! **Poles refitted alone.** The local step (module `local_refit`) refits a pole that stands
+//! alone on its own lines with the rest of the band's model held, pseudo-modes in place of the
+//! outside roots. Where the context model's misfit is systematic (damped modes: the outside
+//! roots and the damped tails do not fit, module `local_refit`), the diagram's pole carries
+//! that misfit's bias, J is lowest near it, and the less biased refit does not lower J
+//! significantly: it was refused where it lay nearer the truth (the virtual plates of
+//! docs/ema.md, "Damped poles"). Such a pole is therefore taken unless it *raises* J
+//! significantly: by more than the same χ² point times the residual variance or times the
+//! curves' noise variance (module `noise`), whichever is smaller. Where the context model
+//! misfits beyond the noise (noise-free FRFs of a viscoelastic part, whose modulus follows the
+//! frequency so that no pole fits exactly), a rise the noise cannot explain is the context
+//! model contradicting the refit. Provided, too, that the refit is a correction: it moves the
+//! diagram's pole by more than `LOCAL_RESOLUTION` of its half-power half-width (the local
+//! model of the modes outside the band is approximate: on exact FRFs it moves an exact
+//! diagram pole by a small fraction of that, docs/ema.md, and a move that small is no
+//! evidence) and by no more than `LOCAL_CORRECTION` of it. The noise's bias on the diagram's
+//! pole is a small fraction of the half-width; a larger move that the context model does not
+//! find better is the data's indifference (a weak mode, a measured record the modal model
+//! does not describe: docs/ema.md, method step 4), and there the diagram's pole is kept, its
+//! deviation widened by the difference (module `identify`).
+//!
 //! **Each curve in units of its noise.** The χ² test holds where every residual has one
 //! variance. Curves measured with different noise (channels of different sensitivity, noise in
 //! proportion to each curve's level) are weighted by 1/σ̂ of each, σ̂ its line-to-line noise
@@ -153,6 +174,8 @@ pub struct RefinementCheck<'a> {
     /// The context problem and J at the diagram's poles; None where that J is not finite (the
     /// diagram's poles are kept then).
     model: Option<(ContextProblem<'a>, f64)>,
+    /// The weighted curves' noise variance per residual ([`CurveNoise::weighted_variance`]).
+    noise_variance: Option<f64>,
 }
 
 impl<'a> RefinementCheck<'a> {
@@ -183,37 +206,52 @@ impl<'a> RefinementCheck<'a> {
             band_hz,
             diagram: diagram.to_vec(),
             model,
+            noise_variance: noise.weighted_variance(),
         }
     }
 
     /// The poles taken of `refined` (index-aligned with the diagram's poles; those the
     /// refinement lost already put back by the caller, module docs): each refined pole that
     /// keeps to its own (module docs, "Moves that change the model") and lowers the context's
-    /// sum of squares significantly by itself; then, of each pair of neighbours whose
+    /// sum of squares significantly by itself, or, where `refitted_alone` (module
+    /// `local_refit`), does not raise it significantly and is a correction of the diagram's
+    /// pole (module docs, "Poles refitted alone"); then, of each pair of neighbours whose
     /// half-power bands overlap (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which was taken alone,
     /// both refined poles where together they do (coupled in the fit: one of a close pair moved
     /// alone can fit worse); the diagram's pole elsewhere.
-    pub fn taken(&self, refined: &[Complex64]) -> Vec<Complex64> {
+    pub fn taken(&self, refined: &[Complex64], refitted_alone: &[bool]) -> Vec<Complex64> {
         let diagram = &self.diagram;
         let Some((problem, base)) = &self.model else {
             return diagram.clone();
         };
         let variance = base / problem.dof(diagram.len()) as f64;
         let own = stays_with_its_own(diagram, refined);
-        let significant = |members: &[usize]| {
+        // J's drop with `members` refined, None where one of them left its own or J is not
+        // finite there.
+        let drop = |members: &[usize]| {
             if !members.iter().all(|&r| own[r]) {
-                return false;
+                return None;
             }
             let mut trial = diagram.clone();
             for &r in members {
                 trial[r] = refined[r];
             }
-            let drop = problem.cost(&trial).map_or(0.0, |c| base - c);
-            drop > chi_square_99(2 * members.len()) * variance
+            problem.cost(&trial).map(|c| base - c)
         };
+        let significant = |members: &[usize]| {
+            drop(members).is_some_and(|d| d > chi_square_99(2 * members.len()) * variance)
+        };
+        let limit = chi_square_99(2) * variance;
+        // A rise is judged against the noise where the context misfits beyond it.
+        let rise_limit =
+            chi_square_99(2) * self.noise_variance.map_or(variance, |n| n.min(variance));
         let alone: Vec<bool> = (0..diagram.len())
             .into_par_iter()
-            .map(|r| significant(&[r]))
+            .map(|r| {
+                let local = refitted_alone.get(r) == Some(&true)
+                    && a_local_correction(diagram[r], refined[r]);
+                drop(&[r]).is_some_and(|d| d > limit || (local && d > -rise_limit))
+            })
             .collect();
         let mut taken: Vec<Complex64> = (0..diagram.len())
             .map(|r| if alone[r] { refined[r] } else { diagram[r] })
@@ -231,8 +269,12 @@ impl<'a> RefinementCheck<'a> {
     ///
     /// # Errors
     /// As [`lsfd`].
-    pub fn fit(&self, refined: &[Complex64]) -> Result<ModalFit, EmaError> {
-        let taken = self.taken(refined);
+    pub fn fit(
+        &self,
+        refined: &[Complex64],
+        refitted_alone: &[bool],
+    ) -> Result<ModalFit, EmaError> {
+        let taken = self.taken(refined, refitted_alone);
         lsfd(
             self.freqs_hz,
             self.curves,
@@ -241,6 +283,23 @@ impl<'a> RefinementCheck<'a> {
             self.band_hz,
         )
     }
+}
+
+/// The local step's resolution as a fraction of a pole's half-power half-width (−Re λ): a
+/// refit nearer the diagram's pole than this is no evidence against it (module docs, "Poles
+/// refitted alone").
+const LOCAL_RESOLUTION: f64 = 3e-4;
+
+/// The furthest a pole refitted alone moves from the diagram's pole, as a fraction of its
+/// half-power half-width, and is still taken as a correction of the diagram's bias where the
+/// context model does not find it better (module docs, "Poles refitted alone").
+const LOCAL_CORRECTION: f64 = 0.03;
+
+/// Whether `refit` lies further from `diagram` than [`LOCAL_RESOLUTION`] of its half-power
+/// half-width and no further than [`LOCAL_CORRECTION`] of it.
+fn a_local_correction(diagram: Complex64, refit: Complex64) -> bool {
+    let moved = (refit - diagram).norm() / -diagram.re;
+    moved > LOCAL_RESOLUTION && moved <= LOCAL_CORRECTION
 }
 
 /// For each refined pole, whether it lies nearer its own diagram pole than any other (in the
@@ -351,8 +410,111 @@ mod tests {
                 &context,
                 &noise,
             );
-            assert_eq!(check.taken(&refined), refined.to_vec());
+            assert_eq!(check.taken(&refined, &[false]), refined.to_vec());
         }
+    }
+
+    /// One mode in the context model's form with noise; the diagram's pole off by so little
+    /// that moving it to the truth lowers J by less than the χ² point: refused as a joint
+    /// refinement, taken as a pole refitted alone (module docs, "Poles refitted alone").
+    #[test]
+    fn a_pole_refitted_alone_is_taken_where_the_context_cannot_tell() {
+        let pole = |f: f64, z: f64| Complex64::new(-z * 2.0 * PI * f, 2.0 * PI * f);
+        let context = LscfContext {
+            dt: 1.0 / 140.0,
+            roots: vec![],
+        };
+        let freqs: Vec<f64> = (0..=7000).map(|k| 0.01 * f64::from(k)).collect();
+        let band = [30.0, 70.0];
+        let all: Vec<usize> = (0..freqs.len()).collect();
+        let truth = pole(50.0, 0.05);
+        let (g1, g2) = pair_columns(&context.omega(&freqs, &all), context.root(truth));
+        let lines = crate::band::positive_lines(&freqs, band);
+        let clean: Vec<Complex64> = g1.iter().zip(&g2).map(|(a, b)| a + 0.3 * b).collect();
+        let rms =
+            (lines.iter().map(|&k| clean[k].norm_sqr()).sum::<f64>() / lines.len() as f64).sqrt();
+        let mut noise = gaussian_sequence(11);
+        let curve: Vec<Complex64> = clean.iter().map(|h| h + 0.05 * rms * noise()).collect();
+        let curves: [&[Complex64]; 1] = [&curve];
+        let check = RefinementCheck::new(
+            &freqs,
+            &curves,
+            Quantity::Receptance,
+            &[pole(50.0 * (1.0 + 1e-4), 0.05)],
+            band,
+            RefineLines::All,
+            &context,
+            &CurveNoise::of(&curves, &lines),
+        );
+        let diagram = check.diagram.clone();
+        assert!(a_local_correction(diagram[0], truth));
+        assert_eq!(check.taken(&[truth], &[false]), diagram);
+        assert_eq!(check.taken(&[truth], &[true]), vec![truth]);
+    }
+
+    /// One mode and a smooth background the context model lacks, with noise a thousandth of
+    /// that background: J/dof is the misfit, far above the noise. A refit that raises J by
+    /// less than the χ² point times J/dof, but by more than the noise explains, is taken when
+    /// judged against J/dof alone and refused against the noise (module docs, "Poles refitted
+    /// alone").
+    #[test]
+    fn a_refit_that_raises_a_misfitting_context_beyond_the_noise_is_refused() {
+        let pole = |f: f64, z: f64| Complex64::new(-z * 2.0 * PI * f, 2.0 * PI * f);
+        let context = LscfContext {
+            dt: 1.0 / 140.0,
+            roots: vec![],
+        };
+        let freqs: Vec<f64> = (0..=7000).map(|k| 0.01 * f64::from(k)).collect();
+        let band = [30.0, 70.0];
+        let all: Vec<usize> = (0..freqs.len()).collect();
+        let truth = pole(50.0, 0.05);
+        let (g1, g2) = pair_columns(&context.omega(&freqs, &all), context.root(truth));
+        let lines = crate::band::positive_lines(&freqs, band);
+        let mut noise = gaussian_sequence(12);
+        let curve: Vec<Complex64> = (0..freqs.len())
+            .map(|k| {
+                let background = 3.0 * ((freqs[k] - 50.0) / 20.0).powi(3);
+                g1[k] + 0.3 * g2[k] + background + 3e-4 * noise()
+            })
+            .collect();
+        let curves: [&[Complex64]; 1] = [&curve];
+        let mut check = RefinementCheck::new(
+            &freqs,
+            &curves,
+            Quantity::Receptance,
+            &[truth],
+            band,
+            RefineLines::All,
+            &context,
+            &CurveNoise::of(&curves, &lines),
+        );
+        let floor = check.noise_variance;
+        assert!(floor.is_some());
+        // The moves a local correction may make, from its resolution to its reach.
+        let moves = (1..=30).map(|k| truth * Complex64::new(1.0, 1e-3 * f64::from(k) * 0.05));
+        let taken_without_the_floor: Vec<Complex64> = moves
+            .filter(|&p| {
+                check.noise_variance = None;
+                check.taken(&[p], &[true]) == vec![p]
+            })
+            .collect();
+        assert!(!taken_without_the_floor.is_empty());
+        check.noise_variance = floor;
+        for p in taken_without_the_floor {
+            assert_eq!(check.taken(&[p], &[true]), vec![truth], "{p}");
+        }
+    }
+
+    #[test]
+    fn a_local_correction_moves_a_pole_more_than_its_resolution_and_little() {
+        // Half-power half-width 10 rad/s; a move of `fraction` of it along the imaginary axis.
+        let diagram = Complex64::new(-10.0, 500.0);
+        let moved = |fraction: f64| diagram + Complex64::new(0.0, 10.0 * fraction);
+        let is_a_correction = |fraction: f64| a_local_correction(diagram, moved(fraction));
+        assert!(!is_a_correction(0.5 * LOCAL_RESOLUTION));
+        assert!(is_a_correction(2.0 * LOCAL_RESOLUTION));
+        assert!(is_a_correction(0.99 * LOCAL_CORRECTION));
+        assert!(!is_a_correction(1.5 * LOCAL_CORRECTION));
     }
 
     #[test]

@@ -615,22 +615,22 @@ fn fit_selected(
             let (refined, check) =
                 refined_beside_the_check(data, &poles, s.refine_lines, c, refine)?;
             timings.refinement += lap(&mut clock);
-            let held = in_their_columns(&refined, selected, &s.criteria);
+            let held = in_their_columns(&refined.poles, selected, &s.criteria);
             // The scope has run the spawned check; without it (never) the diagram's poles.
             let fit = match &check {
-                Some(check) => check.fit(&held.poles)?,
+                Some(check) => check.fit(&held.poles, &refined.alone)?,
                 None => lsfd(freqs, curves, quantity, &poles, band)?,
             };
             timings.check += lap(&mut clock);
-            SelectedFit::refined(fit, refined, held)
+            SelectedFit::refined(fit, refined.poles, held)
         }
         _ => {
             let refined = refine()?;
-            let held = in_their_columns(&refined, selected, &s.criteria);
+            let held = in_their_columns(&refined.poles, selected, &s.criteria);
             timings.refinement += lap(&mut clock);
             let fit = lsfd(freqs, curves, quantity, &held.poles, band)?;
             timings.residues += lap(&mut clock);
-            SelectedFit::refined(fit, refined, held)
+            SelectedFit::refined(fit, refined.poles, held)
         }
     };
     Ok(fitted)
@@ -649,7 +649,7 @@ fn refitted_where_alone(
     joint: Vec<Complex64>,
     selected: &[SelectedPole],
     s: &EmaSettings,
-) -> Result<Vec<Complex64>, EmaError> {
+) -> Result<RefinedPoles, EmaError> {
     let held = in_their_columns(&joint, selected, &s.criteria);
     let kept = |r: usize| held.put_back[r].is_none();
     let members: Vec<usize> = (0..joint.len()).filter(|&r| kept(r)).collect();
@@ -663,15 +663,20 @@ fn refitted_where_alone(
     };
     let local = refitted_alone(samples, band, &held.poles, &members, s.refine_iterations);
     let left = left_their_columns(&local, selected, &s.criteria);
-    Ok((0..joint.len())
-        .map(|r| {
-            if kept(r) && !left[r] {
-                local[r]
-            } else {
-                joint[r]
-            }
-        })
-        .collect())
+    let alone: Vec<bool> = (0..joint.len())
+        .map(|r| kept(r) && !left[r] && local[r] != held.poles[r])
+        .collect();
+    let poles = (0..joint.len())
+        .map(|r| if alone[r] { local[r] } else { joint[r] })
+        .collect();
+    Ok(RefinedPoles { poles, alone })
+}
+
+/// The refinement's poles, index-aligned with the selection, and which of them the local step
+/// refitted alone ([`refitted_where_alone`]).
+struct RefinedPoles {
+    poles: Vec<Complex64>,
+    alone: Vec<bool>,
 }
 
 /// The poles `refine` returns, and the check of the diagram's `poles` built on another thread
@@ -682,8 +687,8 @@ fn refined_beside_the_check<'a>(
     poles: &[Complex64],
     fit_lines: RefineLines,
     context: &'a LscfContext,
-    refine: impl FnOnce() -> Result<Vec<Complex64>, EmaError>,
-) -> Result<(Vec<Complex64>, Option<RefinementCheck<'a>>), EmaError> {
+    refine: impl FnOnce() -> Result<RefinedPoles, EmaError>,
+) -> Result<(RefinedPoles, Option<RefinementCheck<'a>>), EmaError> {
     let mut check = None;
     let refined = rayon::in_place_scope(|scope| {
         scope.spawn(|_| {

@@ -71,17 +71,31 @@ impl CurveNoise {
     /// floored at 1e-12 of the largest (a curve of zeros or of exact values does not take an
     /// unbounded weight). All ones where any curve has no estimate or every σ̂² is zero.
     pub fn weights(&self) -> Vec<f64> {
-        let ones = vec![1.0; self.variances.len()];
-        let Some(variances) = self.variances.iter().copied().collect::<Option<Vec<f64>>>() else {
-            return ones;
+        let Some(floored) = self.floored_variances() else {
+            return vec![1.0; self.variances.len()];
         };
-        let largest = variances.iter().copied().fold(0.0, f64::max);
-        if largest <= 0.0 {
-            return ones;
-        }
-        let floored: Vec<f64> = variances.iter().map(|v| v.max(1e-12 * largest)).collect();
         let mean = floored.iter().sum::<f64>() / floored.len() as f64;
         floored.iter().map(|v| (mean / v).sqrt()).collect()
+    }
+
+    /// The noise variance of each part (real, imaginary) of every curve weighted by
+    /// [`Self::weights`]: the mean σ̂²; None where the weights are all ones for want of
+    /// estimates.
+    pub fn weighted_variance(&self) -> Option<f64> {
+        let floored = self.floored_variances()?;
+        Some(floored.iter().sum::<f64>() / floored.len() as f64)
+    }
+
+    /// Every curve's σ̂² floored at 1e-12 of the largest; None where a curve has no estimate
+    /// or every σ̂² is zero.
+    fn floored_variances(&self) -> Option<Vec<f64>> {
+        let variances = self
+            .variances
+            .iter()
+            .copied()
+            .collect::<Option<Vec<f64>>>()?;
+        let largest = variances.iter().copied().fold(0.0, f64::max);
+        (largest > 0.0).then(|| variances.iter().map(|v| v.max(1e-12 * largest)).collect())
     }
 }
 
@@ -153,6 +167,14 @@ pub(crate) mod tests {
         let scaled: Vec<Complex64> = loud.iter().map(|h| h * 1000.0).collect();
         let ws = CurveNoise::of(&[&quiet, &scaled], &lines).weights();
         assert!((ws[0] / ws[1] / (w[0] / w[1]) / 1000.0 - 1.0).abs() < 1e-9);
+        // Weighted, each curve's noise variance per part is the mean σ̂²: (1e-4 + 16e-4) / 2.
+        let noise = CurveNoise::of(&[&quiet, &loud], &lines);
+        let v = noise.weighted_variance().unwrap();
+        assert!((v / 8.5e-4 - 1.0).abs() < 0.1, "{v}");
+        for (o, w) in w.iter().enumerate() {
+            let weighted = noise.variance(o).unwrap() * w * w;
+            assert!((weighted / v - 1.0).abs() < 1e-12, "{weighted} against {v}");
+        }
     }
 
     #[test]
