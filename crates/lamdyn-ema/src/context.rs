@@ -414,83 +414,105 @@ mod tests {
         }
     }
 
-    /// One mode in the context model's form with noise; the diagram's pole off by so little
-    /// that moving it to the truth lowers J by less than the χ² point: refused as a joint
-    /// refinement, taken as a pole refitted alone (module docs, "Poles refitted alone").
+    /// One mode at 50 Hz, ζ 5 %, in the context model's own form (one pair of partial
+    /// fractions, no other roots) on 0.01 Hz lines, checked over 30–70 Hz.
+    struct OneMode {
+        context: LscfContext,
+        freqs: Vec<f64>,
+        lines: Vec<usize>,
+        truth: Complex64,
+        /// The mode's curve at every line.
+        clean: Vec<Complex64>,
+    }
+
+    impl OneMode {
+        const BAND: [f64; 2] = [30.0, 70.0];
+
+        fn new() -> Self {
+            let context = LscfContext {
+                dt: 1.0 / 140.0,
+                roots: vec![],
+            };
+            let freqs: Vec<f64> = (0..=7000).map(|k| 0.01 * f64::from(k)).collect();
+            let all: Vec<usize> = (0..freqs.len()).collect();
+            let truth = Complex64::new(-0.05 * 2.0 * PI * 50.0, 2.0 * PI * 50.0);
+            let (g1, g2) = pair_columns(&context.omega(&freqs, &all), context.root(truth));
+            let clean = g1.iter().zip(&g2).map(|(a, b)| a + 0.3 * b).collect();
+            let lines = crate::band::positive_lines(&freqs, Self::BAND);
+            Self {
+                context,
+                freqs,
+                lines,
+                truth,
+                clean,
+            }
+        }
+
+        /// The check of the diagram's pole `diagram` on `curves`.
+        fn check<'a>(
+            &'a self,
+            curves: &'a [&'a [Complex64]],
+            diagram: Complex64,
+        ) -> RefinementCheck<'a> {
+            RefinementCheck::new(
+                &self.freqs,
+                curves,
+                Quantity::Receptance,
+                &[diagram],
+                Self::BAND,
+                RefineLines::All,
+                &self.context,
+                &CurveNoise::of(curves, &self.lines),
+            )
+        }
+    }
+
+    /// One mode with noise; the diagram's pole off by so little that moving it to the truth
+    /// lowers J by less than the χ² point: refused as a joint refinement, taken as a pole
+    /// refitted alone (module docs, "Poles refitted alone").
     #[test]
     fn a_pole_refitted_alone_is_taken_where_the_context_cannot_tell() {
-        let pole = |f: f64, z: f64| Complex64::new(-z * 2.0 * PI * f, 2.0 * PI * f);
-        let context = LscfContext {
-            dt: 1.0 / 140.0,
-            roots: vec![],
-        };
-        let freqs: Vec<f64> = (0..=7000).map(|k| 0.01 * f64::from(k)).collect();
-        let band = [30.0, 70.0];
-        let all: Vec<usize> = (0..freqs.len()).collect();
-        let truth = pole(50.0, 0.05);
-        let (g1, g2) = pair_columns(&context.omega(&freqs, &all), context.root(truth));
-        let lines = crate::band::positive_lines(&freqs, band);
-        let clean: Vec<Complex64> = g1.iter().zip(&g2).map(|(a, b)| a + 0.3 * b).collect();
-        let rms =
-            (lines.iter().map(|&k| clean[k].norm_sqr()).sum::<f64>() / lines.len() as f64).sqrt();
+        let mode = OneMode::new();
+        let lines = &mode.lines;
+        let rms = (lines.iter().map(|&k| mode.clean[k].norm_sqr()).sum::<f64>()
+            / lines.len() as f64)
+            .sqrt();
         let mut noise = gaussian_sequence(11);
-        let curve: Vec<Complex64> = clean.iter().map(|h| h + 0.05 * rms * noise()).collect();
+        let curve: Vec<Complex64> = mode
+            .clean
+            .iter()
+            .map(|h| h + 0.05 * rms * noise())
+            .collect();
         let curves: [&[Complex64]; 1] = [&curve];
-        let check = RefinementCheck::new(
-            &freqs,
-            &curves,
-            Quantity::Receptance,
-            &[pole(50.0 * (1.0 + 1e-4), 0.05)],
-            band,
-            RefineLines::All,
-            &context,
-            &CurveNoise::of(&curves, &lines),
-        );
+        let truth = mode.truth;
+        let check = mode.check(&curves, truth * Complex64::new(1.0 + 1e-4, 0.0));
         let diagram = check.diagram.clone();
         assert!(a_local_correction(diagram[0], truth));
         assert_eq!(check.taken(&[truth], &[false]), diagram);
         assert_eq!(check.taken(&[truth], &[true]), vec![truth]);
     }
 
-    /// One mode and a smooth background the context model lacks, with noise a thousandth of
-    /// that background: J/dof is the misfit, far above the noise. A refit that raises J by
+    /// One mode and a smooth background the context model lacks, with noise a ten-thousandth
+    /// of that background: J/dof is the misfit, far above the noise. A refit that raises J by
     /// less than the χ² point times J/dof, but by more than the noise explains, is taken when
     /// judged against J/dof alone and refused against the noise (module docs, "Poles refitted
     /// alone").
     #[test]
     fn a_refit_that_raises_a_misfitting_context_beyond_the_noise_is_refused() {
-        let pole = |f: f64, z: f64| Complex64::new(-z * 2.0 * PI * f, 2.0 * PI * f);
-        let context = LscfContext {
-            dt: 1.0 / 140.0,
-            roots: vec![],
-        };
-        let freqs: Vec<f64> = (0..=7000).map(|k| 0.01 * f64::from(k)).collect();
-        let band = [30.0, 70.0];
-        let all: Vec<usize> = (0..freqs.len()).collect();
-        let truth = pole(50.0, 0.05);
-        let (g1, g2) = pair_columns(&context.omega(&freqs, &all), context.root(truth));
-        let lines = crate::band::positive_lines(&freqs, band);
+        let mode = OneMode::new();
         let mut noise = gaussian_sequence(12);
-        let curve: Vec<Complex64> = (0..freqs.len())
+        let curve: Vec<Complex64> = (0..mode.freqs.len())
             .map(|k| {
-                let background = 3.0 * ((freqs[k] - 50.0) / 20.0).powi(3);
-                g1[k] + 0.3 * g2[k] + background + 3e-4 * noise()
+                let background = 3.0 * ((mode.freqs[k] - 50.0) / 20.0).powi(3);
+                mode.clean[k] + background + 3e-4 * noise()
             })
             .collect();
         let curves: [&[Complex64]; 1] = [&curve];
-        let mut check = RefinementCheck::new(
-            &freqs,
-            &curves,
-            Quantity::Receptance,
-            &[truth],
-            band,
-            RefineLines::All,
-            &context,
-            &CurveNoise::of(&curves, &lines),
-        );
+        let truth = mode.truth;
+        let mut check = mode.check(&curves, truth);
         let floor = check.noise_variance;
         assert!(floor.is_some());
-        // The moves a local correction may make, from its resolution to its reach.
+        // Moves of k thousandths of the half-power half-width, within a local correction's.
         let moves = (1..=30).map(|k| truth * Complex64::new(1.0, 1e-3 * f64::from(k) * 0.05));
         let taken_without_the_floor: Vec<Complex64> = moves
             .filter(|&p| {
