@@ -214,8 +214,9 @@ impl<'a> RefinementCheck<'a> {
     /// refinement lost already put back by the caller, module docs): each refined pole that
     /// keeps to its own (module docs, "Moves that change the model") and lowers the context's
     /// sum of squares significantly by itself, or, where `refitted_alone` (module
-    /// `local_refit`), does not raise it significantly and is a correction of the diagram's
-    /// pole (module docs, "Poles refitted alone"); then, of each pair of neighbours whose
+    /// `local_refit`), does not raise it significantly (against the smaller of the residual
+    /// variance and the curves' noise variance) and is a correction of the diagram's pole
+    /// (module docs, "Poles refitted alone"); then, of each pair of neighbours whose
     /// half-power bands overlap (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) and neither of which was taken alone,
     /// both refined poles where together they do (coupled in the fit: one of a close pair moved
     /// alone can fit worse); the diagram's pole elsewhere.

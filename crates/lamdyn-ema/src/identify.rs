@@ -640,7 +640,9 @@ fn fit_selected(
 /// stayed in its column and stands alone refitted on its own lines, the rest of the band's model
 /// held at `joint` with the poles that left their columns put back (module `local_refit`); a
 /// refit that leaves the column gives way to the joint pole, and the poles put back are as
-/// `joint` has them, for the caller's own put-back and warnings.
+/// `joint` has them, for the caller's own put-back and warnings. Says which poles are the
+/// local step's: the check judges those by their own rule (module `context`, "Poles refitted
+/// alone").
 ///
 /// # Errors
 /// As [`lsfd`].
