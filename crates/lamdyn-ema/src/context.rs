@@ -249,6 +249,10 @@ impl<'a> RefinementCheck<'a> {
         let alone: Vec<bool> = (0..diagram.len())
             .into_par_iter()
             .map(|r| {
+                // A pole put back or left where it was changes nothing: no trial to fit.
+                if refined[r] == diagram[r] {
+                    return false;
+                }
                 let local = refitted_alone.get(r) == Some(&true)
                     && a_local_correction(diagram[r], refined[r]);
                 drop(&[r]).is_some_and(|d| d > limit || (local && d > -rise_limit))
