@@ -43,6 +43,8 @@ MODES = sorted(
 BAND_HZ = (20.0, 200.0)
 #: Response points (x, y) on the unit plate (width 1, height 0.8): away from every nodal line.
 POINTS = [(x, y) for y in (0.13, 0.41, 0.67) for x in (0.11, 0.33, 0.57, 0.83)]
+#: The references of the cases: the driving point alone, or three points.
+REFERENCE_SETS = ([0], [0, 5, 10])
 DF_HZ = 0.1
 F_MAX_HZ = 250.0
 
@@ -366,7 +368,7 @@ def main():
     a = ap.parse_args()
     rows, saved = [], {}
     for zeta in map(float, a.levels.split(",")):
-        for refs in ([0], [0, 5, 10]):
+        for refs in REFERENCE_SETS:
             for snr in (0.0, 0.01):
                 seeds = 1 if snr == 0 else a.seeds
                 worst, errors = report(zeta, refs, snr, seeds, not a.no_sdypy, a.channel_noise)

@@ -115,7 +115,7 @@ def main():
     a = ap.parse_args()
     rows, notes = [], []
     for zeta in map(float, a.levels.split(",")):
-        for refs in ([0], [0, 5, 10]):
+        for refs in db.REFERENCE_SETS:
             row, more = case_lines(zeta, refs, a.seeds, a.mass_line)
             rows.append(row)
             notes.extend(more)

@@ -24,8 +24,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import damped_bias as db  # noqa: E402
 
-#: The references of damped_bias.py's cases: the driving point, or three points.
-REFERENCES = {1: [0], 3: [0, 5, 10]}
+#: damped_bias.py's reference sets by their count.
+REFERENCES = {len(refs): refs for refs in db.REFERENCE_SETS}
 
 
 def pole_lines(r, k, target, zeta):
