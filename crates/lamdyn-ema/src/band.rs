@@ -1,6 +1,11 @@
 //! The lines of a band, edges included with a relative slack of [`EDGE_SLACK`]: a frequency
 //! axis computed from a printed time step (0.4999999999999526 Hz for 0.5 Hz) must select the
 //! same lines as the exact one, since one line more or less at an edge moves a pole near it.
+//! And the pseudo-modes that stand for the modes above a band in the refinement's models
+//! (`pseudo_modes_above`).
+
+use num_complex::Complex64;
+use std::f64::consts::PI;
 
 /// Relative slack at the band's edges.
 pub const EDGE_SLACK: f64 = 1e-9;
@@ -27,6 +32,29 @@ pub fn line_spacing(freqs_hz: &[f64], lines: &[usize]) -> f64 {
         [a, b, ..] => (freqs_hz[*b] - freqs_hz[*a]).abs(),
         _ => 0.0,
     }
+}
+
+/// The multiples of the band's upper edge at which [`pseudo_modes_above`] puts its poles.
+const PSEUDO_RATIOS: [f64; 4] = [1.1, 1.3, 1.7, 2.3];
+
+/// The damping ratio of the pseudo-modes ([`PSEUDO_RATIOS`]).
+const PSEUDO_DAMPING: f64 = 0.1;
+
+/// The poles (rad/s) of the pseudo-modes above a band whose upper edge is `upper_hz`: at
+/// [`PSEUDO_RATIOS`] times it, with damping [`PSEUDO_DAMPING`]. Held fixed with free residues
+/// in a refinement's model, they stand for the modes above the band, knowing nothing of the
+/// part: the tails of damped modes just above it, which the upper residual alone does not
+/// follow and a free pole would otherwise leave its column to take (docs/ema.md, "Damped
+/// poles").
+pub(crate) fn pseudo_modes_above(upper_hz: f64) -> Vec<Complex64> {
+    PSEUDO_RATIOS
+        .iter()
+        .map(|r| {
+            let w = 2.0 * PI * r * upper_hz;
+            let z = PSEUDO_DAMPING;
+            Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -23,15 +23,6 @@ pub struct LscfContext {
     pub roots: Vec<Complex64>,
 }
 
-/// Which outside groups of roots a refinement holds ([`LscfContext::groups_held_beside`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct OutsideModel {
-    /// The group above the band.
-    pub above: bool,
-    /// The group below the band.
-    pub below: bool,
-}
-
 /// One root held fixed: one real column, or two for a conjugate pair.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum FixedRoot {
@@ -74,67 +65,48 @@ impl LscfContext {
             .collect()
     }
 
-    /// The two groups of roots that stand for what lies outside `band_hz`: above the band, the
-    /// negative real roots (their poles at the damped frequency 1/(2Δt), the band's upper edge,
-    /// where the model gathers the modes above it); below, the positive real roots (at 0 Hz)
+    /// The roots that stand for what lies below `band_hz`: the positive real roots (at 0 Hz)
     /// and the conjugate pairs whose pole's damped frequency lies below the band (one root of
     /// each pair). The computational roots inside the band, with which a damped pole would
-    /// compete, are in neither.
-    pub(crate) fn outside_groups(&self, band_hz: [f64; 2]) -> [Vec<Complex64>; 2] {
-        let above = self
-            .roots
-            .iter()
-            .copied()
-            .filter(|&x| is_real(x) && x.re < 0.0)
-            .collect();
-        let below = self
-            .roots
+    /// compete, are not among them, nor the negative real roots, where the model gathers the
+    /// modes above the band at its upper edge (1/(2Δt)): a damped mode just above the band is a
+    /// poor fit to them, and the refinement holds pseudo-modes there instead
+    /// ([`crate::band::pseudo_modes_above`]).
+    pub(crate) fn roots_below(&self, band_hz: [f64; 2]) -> Vec<Complex64> {
+        self.roots
             .iter()
             .copied()
             .filter(|&x| {
                 (is_real(x) && x.re > 0.0)
                     || (x.im < 0.0 && !is_real(x) && self.pole(x).im / (2.0 * PI) < band_hz[0])
             })
-            .collect();
-        [above, below]
+            .collect()
     }
 
-    /// Which of the outside `groups` ([`Self::outside_groups`]: above, below) the refinement
-    /// of `pole` (rad/s) holds: a group is left out where one of its roots' poles lies within
-    /// three half-power half-widths (or 1 % of |λ|) of `pole`, since a damped pole next to the
-    /// band's edge trades with them (measured in docs/ema.md, "Damped poles").
-    pub(crate) fn groups_held_beside(
-        &self,
-        groups: &[Vec<Complex64>; 2],
-        pole: Complex64,
-    ) -> OutsideModel {
-        let clear = |group: &Vec<Complex64>| {
-            !group.iter().any(|x| {
-                let q = self.pole(*x);
-                within_reach(pole, Complex64::new(q.re, q.im.abs()))
-            })
-        };
-        OutsideModel {
-            above: clear(&groups[0]),
-            below: clear(&groups[1]),
-        }
+    /// Whether the refinement of `pole` (rad/s) holds the roots `below` ([`Self::roots_below`]):
+    /// not where one of their poles lies within three half-power half-widths (or 1 % of |λ|) of
+    /// `pole`, since a damped pole next to the band's edge trades with them (measured in
+    /// docs/ema.md, "Damped poles").
+    pub(crate) fn holds_below_beside(&self, below: &[Complex64], pole: Complex64) -> bool {
+        !below.iter().any(|x| {
+            let q = self.pole(*x);
+            within_reach(pole, Complex64::new(q.re, q.im.abs()))
+        })
     }
 
-    /// The columns of the outside `groups` ([`Self::outside_groups`]) that `model` holds on
-    /// `lines` (indices into `freqs_hz`), as real rows (re, im of each line) scaled to unit
-    /// norm. No direct term: the refinement's residual terms hold the constant.
-    pub(crate) fn outside_columns(
+    /// The columns of the roots `held` on `lines` (indices into `freqs_hz`), as real rows (re,
+    /// im of each line) scaled to unit norm: one per real root, two per conjugate pair (one
+    /// root of each pair given). No direct term: the refinement's residual terms hold the
+    /// constant.
+    pub(crate) fn held_root_columns(
         &self,
         freqs_hz: &[f64],
         lines: &[usize],
-        groups: &[Vec<Complex64>; 2],
-        model: OutsideModel,
+        held: &[Complex64],
     ) -> Mat<f64> {
-        let held: Vec<FixedRoot> = [(model.above, &groups[0]), (model.below, &groups[1])]
-            .into_iter()
-            .filter(|(kept, _)| *kept)
-            .flat_map(|(_, group)| group.iter().copied())
-            .map(|x| {
+        let held: Vec<FixedRoot> = held
+            .iter()
+            .map(|&x| {
                 if is_real(x) {
                     FixedRoot::Real(x.re)
                 } else {

@@ -104,8 +104,9 @@ impl Default for EmaSettings {
 pub enum PoleEstimator {
     /// The diagram's pole.
     Diagram,
-    /// The refined pole (the output error beside real residual terms and the LSCF model's
-    /// roots outside the band, [`crate::lsfd`]), unchecked.
+    /// The refined pole (the output error beside real residual terms and the outside model:
+    /// pseudo-modes above the band, the LSCF model's roots below it; [`crate::lsfd`]),
+    /// unchecked.
     Refined,
     /// The refined pole where the LSCF model's context says it fits the curves significantly
     /// better than the diagram's, the diagram's pole elsewhere ([`crate::context`]).

@@ -1,17 +1,18 @@
 //! The refinement's last step: each pole that stands alone refitted on the lines around it,
 //! the rest of the band's model held (after [`crate::lsfd::refined_poles`], the joint fit).
 //!
-//! **Why.** The joint refinement fits every pole, the residual terms and the outside roots'
+//! **Why.** The joint refinement fits every pole, the residual terms and the outside model's
 //! residues over the whole band at once. On the noise of a pole's own lines its estimate is
 //! unbiased; the noise of the rest of the band reaches it through the joint fit: the poorly
-//! determined parameters (a damped close pair, the LSCF's roots outside the band) answer that
-//! noise nonlinearly, and the background they leave at the pole moves it one way (docs/ema.md,
+//! determined parameters (a damped close pair, the outside model) answer that noise
+//! nonlinearly, and the background they leave at the pole moves it one way (docs/ema.md,
 //! "Where the noise that biases the refined pole comes from"). Here a model of the band is
-//! fitted at the joint fit's poles, with [`PSEUDO_RATIOS`] pseudo-modes above the band in place
-//! of the LSCF's outside roots, and held: every other pole with its residues, the residual terms
-//! and the pseudo-modes. Only the pole, its residues and two new residual terms are fitted on
-//! the pole's lines: what the held terms leave wrong there is smooth and the new residual terms
-//! take it, and the far lines' noise reaches the pole only through that held background.
+//! fitted at the joint fit's poles, with the pseudo-modes above the band
+//! ([`crate::band::pseudo_modes_above`]) and none of the LSCF's roots outside it, and held:
+//! every other pole with its residues, the residual terms and the pseudo-modes. Only the pole,
+//! its residues and two new residual terms are fitted on the pole's lines: what the held terms
+//! leave wrong there is smooth and the new residual terms take it, and the far lines' noise
+//! reaches the pole only through that held background.
 //!
 //! **Which poles, which lines.** The model is held at the joint fit's poles with those that
 //! left their columns in the diagram put back (module `columns`), and only the others are
@@ -35,6 +36,7 @@
 //! first refits (one more pass changed little: docs/ema.md). Poles whose lines no refitted
 //! neighbour reaches (lightly damped modes apart) are refitted once.
 
+use crate::band::pseudo_modes_above;
 use crate::lscf::{half_power_bands_overlap, pole_freq_hz};
 use crate::lsfd::window_reach_hz;
 use crate::pole_fit::levenberg_marquardt;
@@ -43,33 +45,12 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// The pseudo-modes above the band held in the band's model: at these multiples of the band's
-/// upper edge, with damping [`PSEUDO_DAMPING`]; their residues are fitted with the model's.
-/// They stand for the modes above the band, whose tails a damped pole's lines hold and the
-/// upper residual alone does not follow.
-const PSEUDO_RATIOS: [f64; 4] = [1.1, 1.3, 1.7, 2.3];
-
-/// The damping ratio of the pseudo-modes ([`PSEUDO_RATIOS`]).
-const PSEUDO_DAMPING: f64 = 0.1;
-
 /// The fewest line spacings a refitted pole's lines reach on each side (module docs).
 const MIN_HALF_WINDOW_LINES: f64 = 200.0;
 
-/// The pseudo-modes' poles above a band whose upper edge is `upper_hz`, rad/s.
-fn pseudo_modes(upper_hz: f64) -> Vec<Complex64> {
-    PSEUDO_RATIOS
-        .iter()
-        .map(|r| {
-            let w = 2.0 * PI * r * upper_hz;
-            let z = PSEUDO_DAMPING;
-            Complex64::new(-z * w, w * (1.0 - z * z).sqrt())
-        })
-        .collect()
-}
-
 /// The poles `poles` with each of `members` (indices into `poles`) that stands alone refitted
 /// on its own lines of `samples` (module docs; the refinement's lines of `band`), the model of
-/// the band held at `poles` with the pseudo-modes ([`PSEUDO_RATIOS`]); then, where refitted
+/// the band held at `poles` with the pseudo-modes ([`pseudo_modes_above`]); then, where refitted
 /// neighbours' lines overlap, refitted once more with the model held at the first refits
 /// (module docs, "Twice where neighbours share lines"). At most `iterations`
 /// Levenberg–Marquardt steps each; no pole ends further than its half-power half-width from
@@ -81,7 +62,7 @@ pub(crate) fn refitted_alone(
     members: &[usize],
     iterations: usize,
 ) -> Vec<Complex64> {
-    samples.set_fixed(samples.pole_columns(&pseudo_modes(band.upper_hz)));
+    samples.set_fixed(samples.pole_columns(&pseudo_modes_above(band.upper_hz)));
     let spacing = band.spacing_hz;
     let first = refitted_locally(&samples, spacing, poles, members, iterations);
     let again = sharing_lines_with_a_refit(&first, poles, members, spacing);

@@ -16,16 +16,18 @@
 //! They are refined by Levenberg–Marquardt on Σ_o Σ_k |H_o − Ĥ_o|² over the poles alone, the
 //! residues being the LSFD solution for each trial (variable projection [Golub & Pereyra
 //! 1973]); with white noise this is the maximum-likelihood estimate *if* the model held. The
-//! residual terms cannot hold damped modes above the band, and a damped pole next to the band's
-//! edge takes up the misfit; so, given the LSCF model's denominator the diagram was read from,
-//! the refinement holds that model's roots outside the band beside its poles as fixed partial
-//! fractions (in the Ω domain, residues free: `LscfContext::outside_columns`), the roots inside
-//! the band (its computational ones) left out. A group of outside roots within a pole's reach
-//! trades with that pole, so each pole is refined in the fit that holds every group not within
-//! its own reach (`LscfContext::groups_held_beside`): one fit per distinct set of groups, each
-//! pole's estimate taken from its own. Identification then refits each pole that stands alone
-//! on the lines around it with the rest of the band's model held (module `local_refit`): the
-//! joint fit lets the far lines' noise bias it.
+//! residual terms cannot hold damped modes outside the band, and a damped pole next to the
+//! band's edge takes up the misfit; so, given the LSCF model's denominator the diagram was read
+//! from, the refinement holds an outside model beside its poles as fixed partial fractions with
+//! free residues: below the band, that model's roots there (in the Ω domain:
+//! `LscfContext::roots_below`); above it, four pseudo-modes (`band::pseudo_modes_above`), which
+//! follow the tail of a damped mode just above the band where the LSCF model's negative real
+//! roots, gathered at the band's upper edge, did not and a free pole left its column to take it
+//! (docs/ema.md, "Damped poles"). The roots below the band trade with a pole within their reach,
+//! so such a pole is refined in a second fit without them (`LscfContext::holds_below_beside`),
+//! each pole's estimate taken from its own fit. Identification then refits each pole that
+//! stands alone on the lines around it with the rest of the band's model held (module
+//! `local_refit`): the joint fit lets the far lines' noise bias it.
 //!
 //! **Shapes.** For one reference, the residues over the responses are the complex mode shape
 //! (up to scale). With a driving point p (response = reference), mass-normalised complex modes
@@ -34,7 +36,7 @@
 //! the band); the identified modes take their shapes from residues fitted near each pole
 //! ([`crate::local_residues`]).
 
-use crate::denominator::{LscfContext, OutsideModel};
+use crate::denominator::LscfContext;
 use crate::error::{EmaError, check_curves, invalid};
 use crate::pole_fit::{levenberg_marquardt, pole_parameters, to_poles};
 pub use crate::projection::LineBasis;
@@ -388,11 +390,12 @@ pub fn refine_with(
 }
 
 /// The poles of [`refine_with`] without their residues (`poles` themselves where the residue
-/// problem fails at the start); with `outside`, the LSCF model the poles were read from, its
-/// roots outside the band held fixed beside them: each pole from the fit that holds the groups
-/// of roots not within its reach (module docs), every pole free in each fit. `on_iteration(k,
-/// max)` counts the iterations over all the fits, one after the other (k of at most `max` =
-/// fits × `iterations`).
+/// problem fails at the start); with `outside`, the LSCF model the poles were read from, the
+/// outside model held fixed beside them (module docs): the pseudo-modes above the band, and
+/// that model's roots below it except for a pole within their reach, which comes from a second
+/// fit without them (every pole free in each fit). `on_iteration(k, max)` counts the
+/// iterations over all the fits, one after the other (k of at most `max` = fits ×
+/// `iterations`).
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -417,20 +420,21 @@ pub(crate) fn refined_poles(
     let Some(c) = outside else {
         return Ok(refine(&samples, on_iteration));
     };
-    let groups = c.outside_groups(band_hz);
-    // Each distinct outside model with the poles whose estimates its fit gives.
-    let mut fits: Vec<(OutsideModel, Vec<usize>)> = Vec::new();
-    for (r, &p) in poles.iter().enumerate() {
-        let model = c.groups_held_beside(&groups, p);
-        match fits.iter_mut().find(|(m, _)| *m == model) {
-            Some((_, members)) => members.push(r),
-            None => fits.push((model, vec![r])),
-        }
-    }
+    let below = c.roots_below(band_hz);
+    let pseudo = samples.pole_columns(&crate::band::pseudo_modes_above(band_hz[1]));
+    // Two fits at most: one holds the roots below the band, for the poles they do not reach;
+    // the other does without them, for the poles they reach. Each gives its members' poles.
+    let (beside, apart): (Vec<usize>, Vec<usize>) =
+        (0..poles.len()).partition(|&r| c.holds_below_beside(&below, poles[r]));
+    let fits: Vec<(&[Complex64], Vec<usize>)> = [(&below[..], beside), (&[][..], apart)]
+        .into_iter()
+        .filter(|(_, members)| !members.is_empty())
+        .collect();
     let mut refined = poles.to_vec();
     let count = fits.len();
-    for (j, (model, members)) in fits.into_iter().enumerate() {
-        samples.set_fixed(c.outside_columns(freqs_hz, &lines, &groups, model));
+    for (j, (held, members)) in fits.into_iter().enumerate() {
+        let roots = c.held_root_columns(freqs_hz, &lines, held);
+        samples.set_fixed(side_by_side(&roots, &pseudo));
         // The iterations counted over all the fits, one after the other.
         let fit = refine(&samples, &|k, max| on_iteration(j * max + k, count * max));
         for r in members {
@@ -438,6 +442,14 @@ pub(crate) fn refined_poles(
         }
     }
     Ok(refined)
+}
+
+/// The columns of `a` and then those of `b` (as many rows).
+fn side_by_side(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
+    let n = a.ncols();
+    Mat::from_fn(a.nrows(), n + b.ncols(), |i, j| {
+        if j < n { a[(i, j)] } else { b[(i, j - n)] }
+    })
 }
 
 /// The curves checked ([`check_curves`]), then the lines the refinement fits
