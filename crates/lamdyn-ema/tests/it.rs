@@ -1236,8 +1236,9 @@ fn refined_within(
 /// which has no LSCF model beside it); with the outside model held fixed (`identify`'s
 /// refinement: pseudo-modes above the band, the LSCF model's roots below it) every mode is
 /// within 0.019 % in damping and 1e-6 in frequency (measured; 0.09 % and 1e-5 with the LSCF
-/// model's roots above the band in place of the pseudo-modes), asserted at 0.2 % and 1e-4: an order of magnitude under the residual terms'
-/// smallest bias on this plate (0.35 % at 180.6 Hz).
+/// model's roots above the band in place of the pseudo-modes), asserted at 0.2 % and 1e-4: an
+/// order of magnitude under the residual terms' smallest bias on this plate (0.35 % at
+/// 180.6 Hz).
 #[test]
 fn damped_modes_above_the_band_do_not_bias_the_refinement() {
     let zeta = 0.02;
