@@ -434,7 +434,7 @@ pub(crate) fn refined_poles(
     let count = fits.len();
     for (j, (held, members)) in fits.into_iter().enumerate() {
         let roots = c.held_root_columns(freqs_hz, &lines, held);
-        samples.set_fixed(side_by_side(&roots, &pseudo));
+        samples.set_fixed(faer::concat![[roots, pseudo]]);
         // The iterations counted over all the fits, one after the other.
         let fit = refine(&samples, &|k, max| on_iteration(j * max + k, count * max));
         for r in members {
@@ -442,14 +442,6 @@ pub(crate) fn refined_poles(
         }
     }
     Ok(refined)
-}
-
-/// The columns of `a` and then those of `b` (as many rows).
-fn side_by_side(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
-    let n = a.ncols();
-    Mat::from_fn(a.nrows(), n + b.ncols(), |i, j| {
-        if j < n { a[(i, j)] } else { b[(i, j - n)] }
-    })
 }
 
 /// The curves checked ([`check_curves`]), then the lines the refinement fits
