@@ -16,9 +16,12 @@
 //!
 //! **Which poles, which lines.** The model is held at the joint fit's poles with those that
 //! left their columns in the diagram put back (module `columns`), and only the others are
-//! refitted. A pole whose half-power band overlaps another's
-//! (|f₁ − f₂| < ζ₁f₁ + ζ₂f₂) keeps its joint estimate: a close pair refitted on its own lines
-//! came out worse than jointly (docs/ema.md). A pole alone is refitted on the fit's lines within
+//! refitted. A pole nearer another than the larger of their half-power half-widths
+//! (|f₁ − f₂| < max(ζ₁f₁, ζ₂f₂)) keeps its joint estimate: a close pair refitted on its own
+//! lines came out worse than jointly (docs/ema.md). Damped neighbours further apart, whose
+//! half-power bands may still overlap, are refitted: the joint fit does not trade them, and its
+//! estimate of them carries the far lines' noise as a lone pole's does (docs/ema.md). A pole
+//! alone is refitted on the fit's lines within
 //! 5 ζ f + 20 Δf of it (the refinement's window, [`crate::lsfd::RefineLines`]), and at least
 //! [`MIN_HALF_WINDOW_LINES`] line spacings: the two new residual terms per curve need lines
 //! beside the peak. A pole whose refit fails, or moves further than its half-power half-width
@@ -37,7 +40,7 @@
 //! neighbour reaches (lightly damped modes apart) are refitted once.
 
 use crate::band::pseudo_modes_above;
-use crate::lscf::{half_power_bands_overlap, pole_freq_hz};
+use crate::lscf::pole_freq_hz;
 use crate::lsfd::window_reach_hz;
 use crate::pole_fit::levenberg_marquardt;
 use crate::projection::LineSamples;
@@ -161,12 +164,15 @@ fn is_a_correction(start: Complex64, refit: Complex64) -> bool {
     refit.is_finite() && (refit - start).norm() <= -start.re
 }
 
-/// Whether the half-power band of pole `r` overlaps no other pole's.
+/// Whether pole `r` lies further from every other pole than the larger of the two's half-power
+/// half-widths: |f_r − f_q| > max(ζ_r f_r, ζ_q f_q), with f = |λ|/2π and ζf = −Re λ/2π (module
+/// docs, "Which poles, which lines").
 fn stands_alone(poles: &[Complex64], r: usize) -> bool {
+    let own = poles[r];
     poles
         .iter()
         .enumerate()
-        .all(|(q, &p)| q == r || !half_power_bands_overlap(p, poles[r]))
+        .all(|(q, &p)| q == r || (p.norm() - own.norm()).abs() > (-p.re).max(-own.re))
 }
 
 /// The indices of the lines of `freqs` (Hz) within 5 ζ f + 20 Δf of `pole`, and at least
@@ -253,10 +259,13 @@ mod tests {
         assert!(sharing_lines_with_a_refit(&start, &start, &all, 0.1).is_empty());
     }
 
+    /// 100 / 101.5 Hz at 2 % lie within a half-power half-width (1.5 < 2.03), 103 / 100 Hz
+    /// do not (3 > 2.06) though their half-power bands overlap (3 < 2 + 2.06); 130 Hz is far.
     #[test]
-    fn a_pole_stands_alone_unless_a_half_power_band_overlaps_its_own() {
-        // 100 / 103 Hz at 2 % overlap (3 < 2 + 2.06), 130 Hz stands alone.
+    fn a_pole_stands_alone_unless_another_lies_within_a_half_power_half_width() {
         let poles = [pole(130.0, 0.02), pole(103.0, 0.02), pole(100.0, 0.02)];
+        assert!((0..3).all(|r| stands_alone(&poles, r)));
+        let poles = [pole(130.0, 0.02), pole(101.5, 0.02), pole(100.0, 0.02)];
         assert!(stands_alone(&poles, 0));
         assert!(!stands_alone(&poles, 1));
         assert!(!stands_alone(&poles, 2));
