@@ -32,6 +32,19 @@ def rms(e):
     return np.sqrt(np.where(found > 0, np.nansum(e ** 2, axis=0) / np.maximum(found, 1), np.nan))
 
 
+def one_mode_rms(bench, zeta, references, mode_hz, seeds=8):
+    """RMS relative errors [f, zeta] of the diagram's, the checked and sdypy-EMA's pole at the
+    true mode `mode_hz` over the first `seeds` seeds of damped_bias.py's plate (1 % noise),
+    printed in %."""
+    targets, errors = bench.run(zeta, references, 0.01, seeds, with_sdypy=True)
+    k = int(np.argmin(np.abs(np.array(targets) - mode_hz)))
+    assert targets[k] == pytest.approx(mode_hz)
+    d, c, s = (rms(errors[e])[k] for e in ("diagram", "checked", "sdypy"))
+    print(f"{mode_hz:.1f} Hz, RMS f / zeta %: diagram {100 * d[0]:.4f} / {100 * d[1]:.3f}, "
+          f"checked {100 * c[0]:.4f} / {100 * c[1]:.3f}, sdypy {100 * s[0]:.4f} / {100 * s[1]:.3f}")
+    return d, c, s
+
+
 @pytest.mark.parametrize("zeta", [0.001, 0.02, 0.08, 0.15])
 @pytest.mark.parametrize("references", [[0], [0, 5, 10]])
 def test_noise_free_poles_stay_where_the_diagram_has_them(bench, zeta, references):
@@ -85,11 +98,7 @@ def test_an_isolated_damped_mode_loses_the_far_lines_bias(bench):
     lines with the rest of the band's model held (`local_refit.rs`, 2026-12-03): 0.019 % against
     sdypy's 0.024 %, zeta 0.20 against 1.86 %. Over these eight seeds: f 0.018 against sdypy's
     0.027 and the diagram's 0.028 %, zeta 0.19 against 2.0 and 2.1 %."""
-    targets, errors = bench.run(0.08, [0], 0.01, 8, with_sdypy=True)
-    assert targets[0] == pytest.approx(25.625)
-    d, c, s = (rms(errors[k])[0] for k in ("diagram", "checked", "sdypy"))
-    print(f"25.6 Hz, RMS f / zeta %: diagram {100 * d[0]:.4f} / {100 * d[1]:.2f}, "
-          f"checked {100 * c[0]:.4f} / {100 * c[1]:.2f}, sdypy {100 * s[0]:.4f} / {100 * s[1]:.2f}")
+    d, c, s = one_mode_rms(bench, 0.08, [0], 25.625)
     assert c[0] <= s[0] and c[0] <= d[0]
     assert c[1] < 0.25 * min(s[1], d[1])
 
@@ -102,13 +111,22 @@ def test_a_damped_mode_the_check_cannot_tell_takes_its_local_refit(bench):
     unless the context model finds it significantly worse (`context.rs`, "Poles refitted
     alone"): 0.0050 % (2026-12-03). Over these eight seeds: f 0.0044 against sdypy's 0.0050 and
     the diagram's 0.0084 %, zeta 0.051 against 0.26 and 0.10 %."""
-    targets, errors = bench.run(0.08, [0, 5, 10], 0.01, 8, with_sdypy=True)
-    assert targets[0] == pytest.approx(25.625)
-    d, c, s = (rms(errors[k])[0] for k in ("diagram", "checked", "sdypy"))
-    print(f"25.6 Hz, RMS f / zeta %: diagram {100 * d[0]:.4f} / {100 * d[1]:.3f}, "
-          f"checked {100 * c[0]:.4f} / {100 * c[1]:.3f}, sdypy {100 * s[0]:.4f} / {100 * s[1]:.3f}")
+    d, c, s = one_mode_rms(bench, 0.08, [0, 5, 10], 25.625)
     assert c[0] <= s[0] and c[0] < 0.7 * d[0]
     assert c[1] < 0.7 * min(s[1], d[1])
+
+
+def test_a_damped_neighbour_apart_from_its_pair_takes_its_local_refit(bench):
+    """15 % damping, three references, 1 % noise, 55.6 Hz: its half-power band overlaps that of
+    72.5 Hz (17 Hz apart, half-widths 8.3 and 10.9 Hz), so the local step left it at its joint
+    estimate, which the check found no better than the diagram's pole (over 20 seeds f 0.035 %
+    RMS, 1.5 times sdypy-EMA's 0.024 %). The local step now leaves out only a pole within the
+    larger of two half-power half-widths of another (`local_refit.rs`, 2026-12-03): 0.017 %,
+    zeta 0.16 against sdypy's 2.3 %. Over these eight seeds: f 0.014 against sdypy's 0.025 and
+    the diagram's 0.035 %, zeta 0.21 against 2.3 and 0.55 % (the build before: 0.034 / 0.50)."""
+    d, c, s = one_mode_rms(bench, 0.15, [0, 5, 10], 55.625)
+    assert c[0] <= s[0] and c[0] < 0.7 * d[0]
+    assert c[1] < 0.5 * min(s[1], d[1])
 
 
 def test_the_diagram_pole_is_reported_beside_the_final_one(bench):
