@@ -111,9 +111,17 @@ impl Drop for FolderLock {
     }
 }
 
-/// Whether process `pid` is running (Linux: its `/proc` entry).
+/// Whether process `pid` is running (Linux: its `/proc` entry, in a state other than zombie or
+/// dead: a run killed before its parent reaped it keeps the entry but writes nothing more).
 fn process_alive(pid: u32) -> bool {
-    Path::new(&format!("/proc/{pid}")).exists()
+    let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+        return Path::new(&format!("/proc/{pid}")).exists();
+    };
+    // "pid (comm) state ...": the command name may hold spaces and parentheses.
+    let state = stat
+        .rfind(')')
+        .and_then(|i| stat[i + 1..].trim_start().chars().next());
+    !matches!(state, Some('Z' | 'X' | 'x'))
 }
 
 impl FolderLock {
@@ -908,6 +916,28 @@ mod tests {
         drop(out);
         assert!(!dir.join(LOCK).exists());
         assert_eq!(std::fs::read_to_string(dir.join("a.txt")).unwrap(), "1");
+    }
+
+    /// A process that has exited but is not yet reaped (a zombie: a run killed whose parent has
+    /// not waited for it) holds no lock; running, it does.
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn a_zombie_holds_no_lock() {
+        let mut child = std::process::Command::new("sleep")
+            .arg("0.2")
+            .spawn()
+            .unwrap();
+        let pid = child.id();
+        assert!(process_alive(pid));
+        let stat = format!("/proc/{pid}/stat");
+        let zombie = (0..500).any(|_| {
+            std::thread::sleep(std::time::Duration::from_millis(10));
+            std::fs::read_to_string(&stat).is_ok_and(|s| s.contains(") Z"))
+        });
+        assert!(zombie, "sleep did not exit within 5 s");
+        assert!(!process_alive(pid));
+        child.wait().unwrap();
+        assert!(!process_alive(pid));
     }
 
     /// Names that leave the folder are refused; a file given as --out is refused.
