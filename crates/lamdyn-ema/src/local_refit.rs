@@ -40,7 +40,7 @@
 //! neighbour reaches (lightly damped modes apart) are refitted once.
 
 use crate::band::pseudo_modes_above;
-use crate::lscf::pole_freq_hz;
+use crate::lscf::{pole_freq_hz, within_a_half_width};
 use crate::lsfd::window_reach_hz;
 use crate::pole_fit::levenberg_marquardt;
 use crate::projection::LineSamples;
@@ -165,14 +165,12 @@ fn is_a_correction(start: Complex64, refit: Complex64) -> bool {
 }
 
 /// Whether pole `r` lies further from every other pole than the larger of the two's half-power
-/// half-widths: |f_r − f_q| > max(ζ_r f_r, ζ_q f_q), with f = |λ|/2π and ζf = −Re λ/2π (module
-/// docs, "Which poles, which lines").
+/// half-widths ([`within_a_half_width`]; module docs, "Which poles, which lines").
 fn stands_alone(poles: &[Complex64], r: usize) -> bool {
-    let own = poles[r];
     poles
         .iter()
         .enumerate()
-        .all(|(q, &p)| q == r || (p.norm() - own.norm()).abs() > (-p.re).max(-own.re))
+        .all(|(q, &p)| q == r || !within_a_half_width(p, poles[r]))
 }
 
 /// The indices of the lines of `freqs` (Hz) within 5 ζ f + 20 Δf of `pole`, and at least

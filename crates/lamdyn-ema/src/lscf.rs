@@ -83,6 +83,13 @@ pub fn half_power_bands_overlap(a: Complex64, b: Complex64) -> bool {
     (b.norm() - a.norm()).abs() / (2.0 * PI) < half_width(a) + half_width(b)
 }
 
+/// Whether two poles lie within the larger of their half-power half-widths of each other:
+/// |f₁ − f₂| ≤ max(ζ₁f₁, ζ₂f₂), with f = |λ|/2π and ζf = −Re λ/2π. A close pair, nearer than
+/// [`half_power_bands_overlap`] asks.
+pub(crate) fn within_a_half_width(a: Complex64, b: Complex64) -> bool {
+    (b.norm() - a.norm()).abs() <= (-a.re).max(-b.re)
+}
+
 /// The lag sums of the block Toeplitz matrices for orders up to `n_max` (module docs); `t` and
 /// `s` hold lags m = −n_max..=n_max at index m + n_max.
 struct Sums {
