@@ -349,7 +349,9 @@ def ema(
     ``near_hz``), then LSFD residues and a Levenberg-Marquardt refinement of the poles,
     each refined pole kept where it fits significantly better than the diagram's in the
     diagram's highest-order LSCF model (``poles="checked"``; ``"refined"``: every refined pole;
-    ``"diagram"`` or ``refine=False``: the diagram's poles).
+    ``"rank-one"``: with several references, the poles and participation factors fitted jointly
+    with rank-one residues, unchecked, docs/ema.md, "What the free residues cost at a close
+    pair"; ``"diagram"`` or ``refine=False``: the diagram's poles).
 
     Returns an :class:`EmaResult` (its attributes also read as ``r["freq_hz"]``):
     ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,

@@ -112,6 +112,11 @@ pub enum PoleEstimator {
     /// better than the diagram's, the diagram's pole elsewhere ([`crate::context`]).
     #[default]
     Checked,
+    /// With several references and responses: the joint fit of the poles and each mode's
+    /// participation factors with rank-one residues (shape times participation, module
+    /// `rank_one`), unchecked; with one reference or one response, as [`Self::Refined`] (the
+    /// two models are then the same).
+    RankOne,
 }
 
 /// One identified mode.
@@ -526,6 +531,8 @@ struct BandCurves<'a> {
     band_hz: [f64; 2],
     /// Each curve's noise level over the band's positive lines.
     noise: &'a CurveNoise,
+    /// References per response (the curves response-major).
+    references: usize,
 }
 
 impl<'a> BandCurves<'a> {
@@ -542,6 +549,7 @@ impl<'a> BandCurves<'a> {
             quantity: set.quantity(),
             band_hz,
             noise,
+            references: set.references().len(),
         }
     }
 
@@ -625,6 +633,14 @@ fn fit_selected(
             timings.check += lap(&mut clock);
             SelectedFit::refined(fit, refined.poles, held)
         }
+        (PoleEstimator::RankOne, _) if data.references > 1 && curves.len() > data.references => {
+            let joint = rank_one_refined(data, &poles, s)?;
+            let held = in_their_columns(&joint, selected, &s.criteria);
+            timings.refinement += lap(&mut clock);
+            let fit = lsfd(freqs, curves, quantity, &held.poles, band)?;
+            timings.residues += lap(&mut clock);
+            SelectedFit::refined(fit, joint, held)
+        }
         _ => {
             let refined = refine()?;
             let held = in_their_columns(&refined.poles, selected, &s.criteria);
@@ -635,6 +651,46 @@ fn fit_selected(
         }
     };
     Ok(fitted)
+}
+
+/// The rank-one joint fit's poles from `poles` (module `rank_one`) on the refinement's lines,
+/// with four times the refinement's iterations (it fits the participation factors too, and
+/// a damped pair moves further from the diagram's biased start than one pole does); `poles`
+/// themselves where the residue problem fails.
+///
+/// # Errors
+/// [`EmaError::Invalid`] for a value that is not finite.
+fn rank_one_refined(
+    data: BandCurves<'_>,
+    poles: &[Complex64],
+    s: &EmaSettings,
+) -> Result<Vec<Complex64>, EmaError> {
+    let band_lines = crate::band::positive_lines(data.freqs_hz, data.band_hz);
+    let lines = refinement_lines(data.freqs_hz, &band_lines, poles, s.refine_lines);
+    let (refs, quantity) = (data.references, data.quantity);
+    let start = crate::rank_one::start_participation(
+        data.freqs_hz,
+        data.curves,
+        refs,
+        quantity,
+        &lines,
+        poles,
+    )?;
+    let Some(participation) = start else {
+        return Ok(poles.to_vec());
+    };
+    let samples = crate::rank_one::StackedCurves::new(
+        data.freqs_hz,
+        data.curves,
+        refs,
+        quantity,
+        &lines,
+        data.band_hz[1],
+    )?;
+    Ok(
+        crate::rank_one::rank_one_poles(&samples, poles, participation, 4 * s.refine_iterations)
+            .unwrap_or_else(|| poles.to_vec()),
+    )
 }
 
 /// The joint refinement's poles `joint` (index-aligned with `selected`) with each pole that

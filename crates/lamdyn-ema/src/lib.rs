@@ -12,6 +12,7 @@
 //! | `local_refit` | the refinement's last step: each pole standing alone refitted on its own lines |
 //! | `pole_fit` | Levenberg–Marquardt on the poles, the residues eliminated |
 //! | `projection` | the residue problem of given poles solved and differentiated (variable projection) |
+//! | `rank_one` | the joint pole fit with rank-one residues (shape times participation) |
 //! | `denominator` | the LSCF model's roots and their partial-fraction columns |
 //! | [`context`] | the refined poles checked in the LSCF model's context (its other roots fixed) |
 //! | [`noise`] | each curve's noise level from its line-to-line second differences |
@@ -40,6 +41,7 @@ pub mod noise;
 mod pole_fit;
 mod projection;
 pub mod quality;
+mod rank_one;
 pub mod second_shape;
 pub mod shapes;
 pub mod spectra;

@@ -33,16 +33,7 @@ pub(crate) fn levenberg_marquardt(
         let (jtj, jtr) = (normal.weighted(|_| 1.0), normal.gradient);
         let mut improved = false;
         for _ in 0..8 {
-            let m = Mat::from_fn(p, p, |a, b| {
-                jtj[(a, b)]
-                    + if a == b {
-                        lambda * jtj[(a, a)].max(1e-300)
-                    } else {
-                        0.0
-                    }
-            });
-            let rhs = Mat::from_fn(p, 1, |a, _| -jtr[(a, 0)]);
-            let step = m.full_piv_lu().solve(&rhs);
+            let step = marquardt_step(&jtj, |a| jtr[(a, 0)], lambda);
             // The Gauss–Newton model's reduction −δᵀJᵀr (within a factor 2 of its exact
             // value); it only shrinks as λ grows. Below rounding's share of the cost the poles
             // have converged, and every trial would be refused by rounding alone.
@@ -68,6 +59,26 @@ pub(crate) fn levenberg_marquardt(
         }
     }
     Some(to_poles(&u))
+}
+
+/// The Levenberg–Marquardt step δ of (JᵀJ + λ diag JᵀJ) δ = −Jᵀr, Jᵀr's entries given by
+/// `gradient` (one column, JᵀJ's size).
+pub(crate) fn marquardt_step(
+    jtj: &Mat<f64>,
+    gradient: impl Fn(usize) -> f64,
+    lambda: f64,
+) -> Mat<f64> {
+    let p = jtj.nrows();
+    let m = Mat::from_fn(p, p, |a, b| {
+        jtj[(a, b)]
+            + if a == b {
+                lambda * jtj[(a, a)].max(1e-300)
+            } else {
+                0.0
+            }
+    });
+    let rhs = Mat::from_fn(p, 1, |a, _| -gradient(a));
+    m.full_piv_lu().solve(&rhs)
 }
 
 /// The refinement's parameters of each pole: ln(−Re λ), Im λ.

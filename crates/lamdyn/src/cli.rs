@@ -270,6 +270,9 @@ pub enum PolesArg {
     Refined,
     /// Each refined pole where it fits significantly better in the LSCF model's context.
     Checked,
+    /// With several references: the poles and participation factors fitted jointly with
+    /// rank-one residues (shape times participation), unchecked; else as `refined`.
+    RankOne,
 }
 
 impl From<PolesArg> for lamdyn_ema::identify::PoleEstimator {
@@ -278,6 +281,7 @@ impl From<PolesArg> for lamdyn_ema::identify::PoleEstimator {
             PolesArg::Diagram => Self::Diagram,
             PolesArg::Refined => Self::Refined,
             PolesArg::Checked => Self::Checked,
+            PolesArg::RankOne => Self::RankOne,
         }
     }
 }

@@ -279,6 +279,10 @@ fn estimator_text(s: &EmaSettings) -> &'static str {
             "poles refined with LSFD residues (variable projection), each refined pole kept only \
              where it fits significantly better than the diagram's in the LSCF model's own context"
         }
+        PoleEstimator::RankOne => {
+            "poles and participation factors fitted jointly with rank-one residues (shape times \
+             participation; with one reference, free residues), then LSFD residues"
+        }
     }
 }
 
