@@ -376,35 +376,6 @@ fn auto_mac(modes: &[Mode]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Participation factors of mode r (see [`Mode::participation`]): power iteration on RᴴR with
-/// R the residue matrix (responses × references).
-fn participation(residues: &[Complex64], nr: usize, nf: usize) -> Vec<Complex64> {
-    let res = |i: usize, j: usize| residues[i * nf + j];
-    let mut g = vec![Complex64::new(0.0, 0.0); nf * nf];
-    for a in 0..nf {
-        for b in 0..nf {
-            g[a * nf + b] = (0..nr).map(|i| res(i, a).conj() * res(i, b)).sum();
-        }
-    }
-    let mut v = vec![Complex64::new(1.0, 0.0); nf];
-    for _ in 0..100 {
-        let w: Vec<Complex64> = (0..nf)
-            .map(|a| (0..nf).map(|b| g[a * nf + b] * v[b]).sum())
-            .collect();
-        let norm = w.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
-        if norm == 0.0 {
-            break;
-        }
-        v = w.iter().map(|z| z / norm).collect();
-    }
-    let big = v
-        .iter()
-        .copied()
-        .max_by(|a, b| a.norm().total_cmp(&b.norm()))
-        .unwrap_or(Complex64::new(1.0, 0.0));
-    v.iter().map(|z| z / big).collect()
-}
-
 /// The band lies inside the data's lines: a band beyond the last line (or before the first)
 /// is refused with both ranges, and a hint when the data end far below the band (a time
 /// column in ms read as s gives lines a thousand times too low).
@@ -1117,7 +1088,7 @@ impl ModeSources<'_> {
         let residues = self.local_residues[r]
             .clone()
             .unwrap_or_else(|| fit.residues.iter().map(|res| res[r]).collect());
-        let participation_factors = participation(&residues, nr, nf);
+        let participation_factors = crate::shapes::participation(&residues, nr, nf);
         let for_reference = |all: Vec<Complex64>| -> Vec<Complex64> {
             if nr == 1 && nf > 1 {
                 all[..nf].to_vec()

@@ -117,7 +117,7 @@ impl LineSamples {
     }
 
     /// Writes the complex column value `v` of line `i` into rows 2i, 2i + 1 of column `c`.
-    fn put(a: &mut Mat<f64>, i: usize, c: usize, v: Complex64) {
+    pub(crate) fn put(a: &mut Mat<f64>, i: usize, c: usize, v: Complex64) {
         a[(2 * i, c)] = v.re;
         a[(2 * i + 1, c)] = v.im;
     }
@@ -326,7 +326,7 @@ pub(crate) fn solve_by_blocks(
 
 /// Scales each column of `a` to unit norm (for the QR's conditioning: the span is what
 /// counts); returns the norms.
-fn unit_columns(a: &mut Mat<f64>) -> Vec<f64> {
+pub(crate) fn unit_columns(a: &mut Mat<f64>) -> Vec<f64> {
     let scale: Vec<f64> = (0..a.ncols())
         .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
         .collect();

@@ -32,7 +32,8 @@
 use crate::band::pseudo_modes_above;
 use crate::error::EmaError;
 use crate::pole_fit::{marquardt_step, pole_parameters, to_poles};
-use crate::projection::{LineBasis, solve_by_blocks};
+use crate::projection::{LineBasis, LineSamples, solve_by_blocks, unit_columns};
+use crate::shapes::participation;
 use crate::thin_qr::ThinQr;
 use faer::linalg::triangular_solve::solve_upper_triangular_in_place;
 use faer::{Mat, Par};
@@ -51,8 +52,9 @@ pub(crate) struct StackedCurves {
     quantity: Quantity,
     references: usize,
     data: Mat<f64>,
-    /// The pseudo-modes above the band, held in every reference's block.
-    pseudo: Vec<Complex64>,
+    /// Each reference's block columns (module docs), zero outside its own rows: they do not
+    /// move with the parameters, so they are built once.
+    blocks: Mat<f64>,
 }
 
 impl StackedCurves {
@@ -81,41 +83,39 @@ impl StackedCurves {
                 "a value in the band is not finite".into(),
             ));
         }
+        let omega: Vec<f64> = lines.iter().map(|&k| 2.0 * PI * freqs_hz[k]).collect();
+        let blocks = block_columns(&omega, quantity, references, upper_hz);
         Ok(Self {
-            omega: lines.iter().map(|&k| 2.0 * PI * freqs_hz[k]).collect(),
+            omega,
             quantity,
             references,
             data,
-            pseudo: pseudo_modes_above(upper_hz),
+            blocks,
         })
-    }
-
-    /// Each reference's block columns: two per pseudo-mode, the lower and the upper residual.
-    fn block_columns(&self) -> usize {
-        2 * self.pseudo.len() + 2
     }
 
     /// The basis of `poles` with participation factors `participation` (module docs): two
     /// columns per mode, then each reference's block columns.
     fn basis(&self, poles: &[Complex64], participation: &[Vec<Complex64>]) -> Mat<f64> {
-        let (nl, nb) = (self.omega.len(), self.block_columns());
+        let nl = self.omega.len();
         let n = 2 * poles.len();
-        let mut a = Mat::zeros(self.data.nrows(), n + nb * self.references);
+        let mut a = Mat::zeros(self.data.nrows(), n + self.blocks.ncols());
+        a.subcols_mut(n, self.blocks.ncols())
+            .copy_from(&self.blocks);
         for (k, &w) in self.omega.iter().enumerate() {
             let line = LineBasis::new(poles, self.quantity, w);
-            let pseudo = LineBasis::new(&self.pseudo, self.quantity, w);
             for j in 0..self.references {
-                let row = 2 * (j * nl + k);
                 for (r, &(a1, a2)) in line.fractions.iter().enumerate() {
                     let l = participation[r][j];
-                    put_pair(&mut a, row, 2 * r, line.factor, l * a1, l.conj() * a2);
+                    put_pair(
+                        &mut a,
+                        j * nl + k,
+                        2 * r,
+                        line.factor,
+                        l * a1,
+                        l.conj() * a2,
+                    );
                 }
-                let c = n + nb * j;
-                for (m, &(a1, a2)) in pseudo.fractions.iter().enumerate() {
-                    put_pair(&mut a, row, c + 2 * m, line.factor, a1, a2);
-                }
-                put(&mut a, row, c + nb - 2, line.factor * line.lower);
-                put(&mut a, row, c + nb - 1, line.factor);
             }
         }
         a
@@ -136,7 +136,7 @@ impl StackedCurves {
             let line = LineBasis::new(&[pole], self.quantity, w);
             let (a1, a2) = line.fractions[0];
             for j in 0..self.references {
-                let row = 2 * (j * nl + k);
+                let row = j * nl + k;
                 for (m, c) in dpole.iter().enumerate() {
                     let e = l[j] * c;
                     put_pair(
@@ -163,18 +163,33 @@ impl StackedCurves {
     }
 }
 
-/// Writes the complex value `v` into rows `row`, `row` + 1 of column `c`.
-fn put(a: &mut Mat<f64>, row: usize, c: usize, v: Complex64) {
-    a[(row, c)] = v.re;
-    a[(row + 1, c)] = v.im;
+/// Writes, at row pair `i` (rows 2i, 2i + 1), a complex coefficient's two real columns at `c`,
+/// `c` + 1: f(g₁ + g₂) for its real part and f·i(g₁ − g₂) for its imaginary part, where
+/// g₁ = e/(iω − λ) and g₂ its conjugate pole's term (e* /(iω − λ*)).
+fn put_pair(a: &mut Mat<f64>, i: usize, c: usize, f: Complex64, g1: Complex64, g2: Complex64) {
+    LineSamples::put(a, i, c, f * (g1 + g2));
+    LineSamples::put(a, i, c + 1, f * Complex64::i() * (g1 - g2));
 }
 
-/// Writes a complex coefficient's two real columns at `c`, `c` + 1: f(g₁ + g₂) for its real
-/// part and f·i(g₁ − g₂) for its imaginary part, where g₁ = e/(iω − λ) and g₂ its conjugate
-/// pole's term (e* /(iω − λ*)).
-fn put_pair(a: &mut Mat<f64>, row: usize, c: usize, f: Complex64, g1: Complex64, g2: Complex64) {
-    put(a, row, c, f * (g1 + g2));
-    put(a, row, c + 1, f * Complex64::i() * (g1 - g2));
+/// Each of `references` blocks' columns on the stacked rows of the lines `omega` (module docs):
+/// two per pseudo-mode above `upper_hz` ([`pseudo_modes_above`]), the lower and the upper
+/// residual, each zero outside its own reference's rows.
+fn block_columns(omega: &[f64], quantity: Quantity, references: usize, upper_hz: f64) -> Mat<f64> {
+    let pseudo = pseudo_modes_above(upper_hz);
+    let (nl, nb) = (omega.len(), 2 * pseudo.len() + 2);
+    let mut a = Mat::zeros(2 * nl * references, nb * references);
+    for (k, &w) in omega.iter().enumerate() {
+        let line = LineBasis::new(&pseudo, quantity, w);
+        for j in 0..references {
+            let (i, c) = (j * nl + k, nb * j);
+            for (m, &(a1, a2)) in line.fractions.iter().enumerate() {
+                put_pair(&mut a, i, c + 2 * m, line.factor, a1, a2);
+            }
+            LineSamples::put(&mut a, i, c + nb - 2, line.factor * line.lower);
+            LineSamples::put(&mut a, i, c + nb - 1, line.factor);
+        }
+    }
+    a
 }
 
 /// The fit's unknowns: the poles' parameters ([`pole_parameters`]), then re and im of each
@@ -232,12 +247,7 @@ impl Projected {
         if a.nrows() <= a.ncols() {
             return None;
         }
-        let scale: Vec<f64> = (0..a.ncols())
-            .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
-            .collect();
-        for (c, s) in scale.iter().enumerate() {
-            a.col_mut(c).iter_mut().for_each(|v| *v /= s);
-        }
+        let scale = unit_columns(&mut a);
         let qr = ThinQr::new(&a);
         let n = a.ncols();
         let mut residual_in_q = data.clone();
@@ -412,9 +422,9 @@ fn normal_equations(
     (jtj, jtr)
 }
 
-/// Each mode's participation factors from the free residues at `poles` on the curves (the
-/// dominant right singular vector of its responses × references residue matrix, by power
-/// iteration on its Gram matrix); None where the residue problem fails.
+/// Each mode's participation factors from the free residues at `poles` on the curves
+/// ([`participation`] of its responses × references residue matrix); None where the residue
+/// problem fails.
 ///
 /// # Errors
 /// [`EmaError::Invalid`] for a value that is not finite.
@@ -432,40 +442,13 @@ pub(crate) fn start_participation(
     let responses = curves.len() / references;
     let vectors = (0..poles.len())
         .map(|r| {
-            let residue = |o: usize, j: usize| {
-                let c = o * references + j;
-                Complex64::new(x[(2 * r, c)], x[(2 * r + 1, c)])
-            };
-            let gram = Mat::<Complex64>::from_fn(references, references, |a, b| {
-                (0..responses)
-                    .map(|o| residue(o, a).conj() * residue(o, b))
-                    .sum()
-            });
-            dominant_vector(&gram)
+            let residues: Vec<Complex64> = (0..curves.len())
+                .map(|c| Complex64::new(x[(2 * r, c)], x[(2 * r + 1, c)]))
+                .collect();
+            participation(&residues, responses, references)
         })
         .collect();
     Ok(Some(vectors))
-}
-
-/// The dominant eigenvector of the Hermitian positive semi-definite `g` (power iteration from
-/// its largest column).
-fn dominant_vector(g: &Mat<Complex64>) -> Vec<Complex64> {
-    let n = g.nrows();
-    let start = (0..n)
-        .max_by(|&a, &b| g[(a, a)].re.total_cmp(&g[(b, b)].re))
-        .unwrap_or(0);
-    let mut v: Vec<Complex64> = (0..n).map(|i| g[(i, start)]).collect();
-    for _ in 0..200 {
-        let next: Vec<Complex64> = (0..n)
-            .map(|i| (0..n).map(|k| g[(i, k)] * v[k]).sum())
-            .collect();
-        let norm = next.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
-        if !(norm > 0.0 && norm.is_finite()) {
-            break;
-        }
-        v = next.into_iter().map(|c| c / norm).collect();
-    }
-    v
 }
 
 #[cfg(test)]

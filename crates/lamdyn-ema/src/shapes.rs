@@ -94,6 +94,36 @@ pub(crate) fn transposed_indices(rows: usize, cols: usize) -> impl Iterator<Item
     (0..cols).flat_map(move |j| (0..rows).map(move |i| i * cols + j))
 }
 
+/// Participation factors of a mode ([`crate::identify::Mode::participation`]): the dominant
+/// right singular vector of its residue matrix R (`nr` responses × `nf` references, `residues`
+/// row-major), by power iteration on RᴴR, scaled to 1 at its largest entry.
+pub(crate) fn participation(residues: &[Complex64], nr: usize, nf: usize) -> Vec<Complex64> {
+    let res = |i: usize, j: usize| residues[i * nf + j];
+    let mut g = vec![Complex64::new(0.0, 0.0); nf * nf];
+    for a in 0..nf {
+        for b in 0..nf {
+            g[a * nf + b] = (0..nr).map(|i| res(i, a).conj() * res(i, b)).sum();
+        }
+    }
+    let mut v = vec![Complex64::new(1.0, 0.0); nf];
+    for _ in 0..100 {
+        let w: Vec<Complex64> = (0..nf)
+            .map(|a| (0..nf).map(|b| g[a * nf + b] * v[b]).sum())
+            .collect();
+        let norm = w.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
+        if norm == 0.0 {
+            break;
+        }
+        v = w.iter().map(|z| z / norm).collect();
+    }
+    let big = v
+        .iter()
+        .copied()
+        .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+        .unwrap_or(Complex64::new(1.0, 0.0));
+    v.iter().map(|z| z / big).collect()
+}
+
 /// CMIF values of one line: the min(n_resp, n_ref) singular values of the n_resp × n_ref matrix
 /// `h` (row-major), largest first. The Gram matrix is taken on the smaller side: with one response
 /// and nine references (a roving hammer) there is one singular value, not nine of which eight
