@@ -4,11 +4,10 @@
 //!
 //! **Why.** The refinement of [`crate::lsfd`] gives each curve its own residue per mode. Two
 //! close damped modes then trade residues on every curve, and the curves cannot say where
-//! either pole lies: on the virtual plate of docs/ema.md ("What the free residues cost at a
-//! close pair") the Cramér–Rao bound of a pair 1.2 % apart at 8 % damping is thirty times
-//! wider with free residues than with rank-one ones. The modal model ties them: the pair's
-//! two participation vectors differ, and each reference's curves weigh the two modes
-//! differently.
+//! either pole lies: the Cramér–Rao bound of a damped close pair is far wider with free
+//! residues than with rank-one ones (docs/ema.md, "What the free residues cost at a close
+//! pair", measured there). The modal model ties them: the pair's two participation vectors
+//! differ, and each reference's curves weigh the two modes differently.
 //!
 //! **The model.** On the lines ω_k, curve (o, j) is
 //!
