@@ -337,7 +337,7 @@ def ema(
     refine: bool = True,
     driving: Union[str, int, None] = None,
     cmif_prominence: float = 2.0,
-    poles: str = "checked",
+    poles: str = "rank-one",
 ) -> EmaResult:
     """Modal identification of FRFs, as ``lamdyn ema``.
 
@@ -346,12 +346,13 @@ def ema(
     curve, sdypy-EMA's formulation, better in f at isolated damped modes, worse in damping and
     blind to close pairs PolyMAX resolves: docs/ema.md, "Damped poles"), the stable columns of the
     stabilization diagram selected automatically (or the stable pole nearest each of
-    ``near_hz``), then LSFD residues and a Levenberg-Marquardt refinement of the poles,
-    each refined pole kept where it fits significantly better than the diagram's in the
-    diagram's highest-order LSCF model (``poles="checked"``; ``"refined"``: every refined pole;
-    ``"rank-one"``: with several references, the poles and participation factors fitted jointly
-    with rank-one residues, unchecked, docs/ema.md, "What the free residues cost at a close
-    pair"; ``"diagram"`` or ``refine=False``: the diagram's poles).
+    ``near_hz``), then the poles' final estimate: by default (``poles="rank-one"``) with
+    several references the poles and participation factors fitted jointly with rank-one
+    residues (beside the modes the selection left out that the curves need; docs/ema.md, "What
+    the free residues cost at a close pair"), and with one reference as ``"checked"``: LSFD
+    residues and a Levenberg-Marquardt refinement of the poles, each refined pole kept where it
+    fits significantly better than the diagram's in the diagram's highest-order LSCF model;
+    ``"refined"``: every refined pole; ``"diagram"`` or ``refine=False``: the diagram's poles.
 
     Returns an :class:`EmaResult` (its attributes also read as ``r["freq_hz"]``):
     ``freq_hz`` and ``damping_ratio`` arrays (one per mode), ``loss_factor``,

@@ -18,7 +18,7 @@ PUBLIC = {
     'read_uff': "(path: 'PathLike', lenient: 'bool' = False) -> 'FrfData'",
     'read_uff_functions': "(path: 'PathLike', lenient: 'bool' = False) -> 'list'",
     'write_uff': "(path: 'PathLike', freqs_hz: 'Any', frf: 'Any', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, quantity: 'str' = 'accelerance', binary: 'bool' = False) -> 'None'",
-    'ema': "(freqs_hz: 'Any', frf: 'Any', quantity: 'str' = 'accelerance', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, band_hz: 'Optional[Sequence[float]]' = None, orders: 'Sequence[int]' = (2, 60, 2), near_hz: 'Optional[Sequence[float]]' = None, reject_hz: 'Optional[Sequence[float]]' = None, window_hz: 'float' = 1.0, polymax: 'bool' = True, refine: 'bool' = True, driving: 'Union[str, int, None]' = None, cmif_prominence: 'float' = 2.0, poles: 'str' = 'checked') -> 'EmaResult'",
+    'ema': "(freqs_hz: 'Any', frf: 'Any', quantity: 'str' = 'accelerance', responses: 'Optional[Sequence[Any]]' = None, references: 'Optional[Sequence[Any]]' = None, band_hz: 'Optional[Sequence[float]]' = None, orders: 'Sequence[int]' = (2, 60, 2), near_hz: 'Optional[Sequence[float]]' = None, reject_hz: 'Optional[Sequence[float]]' = None, window_hz: 'float' = 1.0, polymax: 'bool' = True, refine: 'bool' = True, driving: 'Union[str, int, None]' = None, cmif_prominence: 'float' = 2.0, poles: 'str' = 'rank-one') -> 'EmaResult'",
     'EmaResult': None,
     'modes': "(model: 'Union[dict, PathLike]', n_modes: 'Optional[int]' = None) -> 'Modes'",
     'Modes': None,

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Bias and scatter of identified poles on virtual tests with modal damping 0.1 %, 2 %, 8 % and
-15 %: lamdyn's diagram pole (LSFD on the stabilization diagram's pole), lamdyn's final pole (the
-refinement) and sdypy-EMA 0.31 (its LSCF, orders 2-60, select_closest_poles), on the same FRFs.
+15 %: lamdyn's diagram pole (LSFD on the stabilization diagram's pole), its refined and checked
+poles, its default (with several references the rank-one fit, with one the checked pole) and
+sdypy-EMA 0.31 (its LSCF, orders 2-60, select_closest_poles), on the same FRFs.
 With three references lamdyn's default is PolyMAX, while sdypy fits one LSCF over every curve;
 the tables then add lamdyn's final pole from that same formulation ("single",
 `--single-reference`), and compare it with sdypy's like with like.
@@ -19,7 +20,7 @@ Usage: python3 tools/ema/damped_bias.py [--seeds N] [--levels 0.001,0.02,...] [-
   -> markdown tables (docs/ema.md, "Damped poles"): per damping level, reference count and
      noise, per mode: bias and standard deviation of f and zeta relative to the truth over the
      seeds, and how many seeds found the mode; after each noisy table, the modes and quantities
-     where the checked pole's RMS error is larger than the diagram's or sdypy's (and, with
+     where the default pole's RMS error is larger than the diagram's or sdypy's (and, with
      three references, where single's is larger than sdypy's), with the ratio's
      95 % interval by the paired bootstrap over the seeds (a ratio of RMS errors over 20 seeds
      scatters by tens of per cent where the errors are scatter, by little where they are bias).
@@ -140,8 +141,8 @@ def lamdyn_poles(f, h, targets, refine, estimator=None, polymax=True, smears=Non
     references (`lamdyn ema --single-reference`). With a list `smears`, one boolean per target
     is appended to it: whether the pole found there is a smear (kept out of the chain)."""
     try:
-        r = lamdyn_ema(f, h, targets, refine=refine, poles=estimator or "checked",
-                       polymax=polymax)
+        options = {} if estimator is None else {"poles": estimator}
+        r = lamdyn_ema(f, h, targets, refine=refine, polymax=polymax, **options)
     except Exception:  # noqa: BLE001 - a failed identification finds nothing
         r = None
     if smears is not None:
@@ -181,14 +182,15 @@ def sdypy_poles(f, h, targets):
 
 def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False,
         channel_noise=False, smears=None):
-    """Per estimator: relative errors (seeds, modes, [f, zeta]). `with_single` adds, with
-    several references, lamdyn's checked pole from one LSCF over every curve ("single"):
+    """Per estimator: relative errors (seeds, modes, [f, zeta]); "default" is lamdyn's default
+    (the rank-one fit with several references, the checked pole with one). `with_single` adds,
+    with several references, lamdyn's default pole from one LSCF over every curve ("single"):
     sdypy-EMA's formulation, where PolyMAX is lamdyn's default. With a list `smears`, per seed
-    and mode whether the checked pole is a smear (`lamdyn_poles`)."""
+    and mode whether the default pole is a smear (`lamdyn_poles`)."""
     modes = true_modes()
     targets = [t[0] for t in modes]
     truth = np.array([[t, zeta] for t in targets])
-    errors = {"diagram": [], "refined": [], "checked": []}
+    errors = {"diagram": [], "refined": [], "checked": [], "default": []}
     single = with_single and len(references) > 1
     if single:
         errors["single"] = []
@@ -199,8 +201,11 @@ def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False,
         f, h = plate_frf(zeta, references, snr_rel, rng, channel_noise)
         errors["diagram"].append(lamdyn_poles(f, h, targets, refine=False) / truth - 1)
         errors["refined"].append(lamdyn_poles(f, h, targets, True, "refined") / truth - 1)
-        errors["checked"].append(lamdyn_poles(f, h, targets, True, "checked", smears=smears)
-                                 / truth - 1)
+        if len(references) > 1:
+            errors["checked"].append(lamdyn_poles(f, h, targets, True, "checked") / truth - 1)
+        errors["default"].append(lamdyn_poles(f, h, targets, True, smears=smears) / truth - 1)
+        if len(references) == 1:
+            errors["checked"].append(errors["default"][-1])
         if single:
             errors["single"].append(lamdyn_poles(f, h, targets, True, polymax=False) / truth - 1)
         if with_sdypy:
@@ -264,7 +269,7 @@ def loss(a, b, rng):
     return f"{ratio:.2f} (95 % interval {lo:.2f}-{hi:.2f}, {verdict})"
 
 
-def losses(targets, errors, final="checked", others=("diagram", "sdypy"), smears=None):
+def losses(targets, errors, final="default", others=("diagram", "sdypy"), smears=None):
     """The final pole's RMS error against the diagram's and sdypy-EMA's (or `others`), mode by
     mode and quantity by quantity: one line where it is larger (`loss`). With `smears` (seeds x
     modes, booleans: the final pole judged a smear), each line says in how many seeds the pole
@@ -307,7 +312,8 @@ def summary_cell(worst, with_count):
 
 #: The estimators of `summary`, its column headings, and whether the column counts the modes found.
 SUMMARY_COLUMNS = (("diagram", "diagram", False), ("refined", "refined", False),
-                   ("checked", "checked", False), ("single", "single (modes found)", True),
+                   ("checked", "checked", False), ("default", "default", False),
+                   ("single", "single (modes found)", True),
                    ("sdypy", "sdypy-EMA (modes found)", True))
 
 
@@ -343,10 +349,10 @@ def report(zeta, refs, snr, seeds, with_sdypy, channel_noise=False):
     if snr > 0:
         worse = losses(targets, errors, smears=smears)
         if worse:
-            print("\nWhere the checked pole's RMS error is larger (paired bootstrap "
+            print("\nWhere the default pole's RMS error is larger (paired bootstrap "
                   "over the seeds):\n" + "\n".join(worse))
         else:
-            print("\nThe checked pole's RMS error is nowhere larger.")
+            print("\nThe default pole's RMS error is nowhere larger.")
         if "single" in errors and "sdypy" in errors:
             like = losses(targets, errors, "single", ("sdypy",))
             print("\nLike with like, one LSCF over every curve (single) against sdypy: "

@@ -337,7 +337,7 @@ fn overlapping_pairs(poles: &[Complex64]) -> Vec<[usize; 2]> {
 
 /// The 99 % point of χ² with `dof` degrees of freedom (Wilson–Hilferty: within 0.5 % from two
 /// degrees of freedom up; 9.21 for two).
-fn chi_square_99(dof: usize) -> f64 {
+pub(crate) fn chi_square_99(dof: usize) -> f64 {
     let v = dof as f64;
     let a = 2.0 / (9.0 * v);
     v * (1.0 - a + 2.326_348 * a.sqrt()).powi(3)

@@ -139,7 +139,7 @@ impl LscfContext {
 
 /// Whether `q` lies within the reach of pole `p` (both rad/s): three half-power half-widths of
 /// `p`, or 1 % of |p| for a lightly damped one.
-fn within_reach(p: Complex64, q: Complex64) -> bool {
+pub(crate) fn within_reach(p: Complex64, q: Complex64) -> bool {
     (q - p).norm() <= 3.0 * (-p.re).max(0.01 * p.norm())
 }
 

@@ -28,7 +28,7 @@ use crate::shapes::{
 use crate::spectra::correct_exponential_window;
 use crate::stabilization::{
     CmifCurvePeaks, DiagramPole, Pick, SelectedPole, StabilityCriteria, diagram, explains,
-    rescue_cmif_peaks, select_auto, select_near,
+    rescue_cmif_peaks, select_auto, select_near, top_order_stable,
 };
 use lamdyn_frf::FrfSet;
 use num_complex::Complex64;
@@ -110,13 +110,24 @@ pub enum PoleEstimator {
     Refined,
     /// The refined pole where the LSCF model's context says it fits the curves significantly
     /// better than the diagram's, the diagram's pole elsewhere ([`crate::context`]).
-    #[default]
     Checked,
     /// With several references and responses: the joint fit of the poles and each mode's
     /// participation factors with rank-one residues (shape times participation, module
-    /// `rank_one`), unchecked; with one reference or one response, as [`Self::Refined`] (the
-    /// two models are then the same).
+    /// `rank_one`), beside the modes the selection left out that the curves need; with one
+    /// reference or one response, as [`Self::Checked`] (the residues are then free anyway).
+    #[default]
     RankOne,
+}
+
+impl PoleEstimator {
+    /// The estimator that runs on curves of `responses` × `references`: [`Self::RankOne`]
+    /// needs several of each and is [`Self::Checked`] otherwise; the others run as they are.
+    pub fn on(self, responses: usize, references: usize) -> Self {
+        match self {
+            Self::RankOne if responses < 2 || references < 2 => Self::Checked,
+            e => e,
+        }
+    }
 }
 
 /// One identified mode.
@@ -542,6 +553,7 @@ fn fit_selected(
     data: BandCurves<'_>,
     selected: &[SelectedPole],
     context: Option<&LscfContext>,
+    top: &[Complex64],
     s: &EmaSettings,
     on_stage: &dyn Fn(&str),
     timings: &mut EmaTimings,
@@ -561,10 +573,11 @@ fn fit_selected(
             "refining {n} poles: iteration {k} of at most {max}"
         ))
     };
+    let responses = curves.len() / data.references.max(1);
     let estimator = if s.refine_iterations == 0 {
         PoleEstimator::Diagram
     } else {
-        s.estimator
+        s.estimator.on(responses, data.references)
     };
     let refine = || {
         let joint = refined_poles(
@@ -589,6 +602,7 @@ fn fit_selected(
                 fit,
                 warnings: vec![],
                 refined: None,
+                deviations: None,
             }
         }
         (PoleEstimator::Checked, Some(c)) => {
@@ -604,13 +618,21 @@ fn fit_selected(
             timings.check += lap(&mut clock);
             SelectedFit::refined(fit, refined.poles, held)
         }
-        (PoleEstimator::RankOne, _) if data.references > 1 && curves.len() > data.references => {
-            let joint = rank_one_refined(data, &poles, s)?;
-            let held = in_their_columns(&joint, selected, &s.criteria);
+        (PoleEstimator::RankOne, _) => {
+            on_stage(&format!(
+                "fitting {n} poles and their participation factors (rank-one residues)"
+            ));
+            let joint = rank_one_refined(data, &poles, top, s)?;
+            let held = in_their_columns(&joint.poles, selected, &s.criteria);
             timings.refinement += lap(&mut clock);
             let fit = lsfd(freqs, curves, quantity, &held.poles, band)?;
             timings.residues += lap(&mut clock);
-            SelectedFit::refined(fit, joint, held)
+            let mut fitted = SelectedFit::refined(fit, joint.poles, held);
+            fitted
+                .warnings
+                .extend(joint.beside.iter().map(|&p| held_beside(p)));
+            fitted.deviations = joint.deviations;
+            fitted
         }
         _ => {
             let refined = refine()?;
@@ -627,29 +649,42 @@ fn fit_selected(
 /// The rank-one joint fit's poles from `poles` (module `rank_one`) on the refinement's lines,
 /// with four times the refinement's iterations (it fits the participation factors too, and
 /// a damped pair moves further from the diagram's biased start than one pole does); `poles`
-/// themselves where the residue problem fails.
+/// themselves where the residue problem fails. Beside `poles` the fit holds the modes of `top`
+/// (the diagram's highest order, stable) that are none of theirs and that the curves need
+/// ([`crate::rank_one::left_out`], [`crate::rank_one::fitted_with_the_modes_needed`]): a
+/// mode left out of the model would pull its neighbours towards it.
 ///
 /// # Errors
 /// [`EmaError::Invalid`] for a value that is not finite.
 fn rank_one_refined(
     data: BandCurves<'_>,
     poles: &[Complex64],
+    top: &[Complex64],
     s: &EmaSettings,
-) -> Result<Vec<Complex64>, EmaError> {
-    let band_lines = crate::band::positive_lines(data.freqs_hz, data.band_hz);
-    let lines = refinement_lines(data.freqs_hz, &band_lines, poles, s.refine_lines);
-    let (refs, quantity) = (data.references, data.quantity);
-    let start = crate::rank_one::start_participation(
-        data.freqs_hz,
-        data.curves,
-        refs,
-        quantity,
-        &lines,
-        poles,
-    )?;
-    let Some(participation) = start else {
-        return Ok(poles.to_vec());
+) -> Result<JointPoles, EmaError> {
+    let unchanged = || JointPoles {
+        poles: poles.to_vec(),
+        beside: vec![],
+        deviations: None,
     };
+    let candidates = crate::rank_one::left_out(top, poles);
+    let around: Vec<Complex64> = poles.iter().chain(&candidates).copied().collect();
+    let band_lines = crate::band::positive_lines(data.freqs_hz, data.band_hz);
+    let lines = refinement_lines(data.freqs_hz, &band_lines, &around, s.refine_lines);
+    let (refs, quantity) = (data.references, data.quantity);
+    let start = |set: &[Complex64]| {
+        crate::rank_one::start_participation(
+            data.freqs_hz,
+            data.curves,
+            refs,
+            quantity,
+            &lines,
+            set,
+        )
+    };
+    if start(poles)?.is_none() {
+        return Ok(unchanged());
+    }
     let samples = crate::rank_one::StackedCurves::new(
         data.freqs_hz,
         data.curves,
@@ -658,9 +693,43 @@ fn rank_one_refined(
         &lines,
         data.band_hz[1],
     )?;
-    Ok(
-        crate::rank_one::rank_one_poles(&samples, poles, participation, 4 * s.refine_iterations)
-            .unwrap_or_else(|| poles.to_vec()),
+    let fit = crate::rank_one::fitted_with_the_modes_needed(
+        &samples,
+        poles,
+        &candidates,
+        |set| start(set).ok().flatten(),
+        4 * s.refine_iterations,
+    );
+    let Some(mut fit) = fit else {
+        return Ok(unchanged());
+    };
+    let beside = fit.poles.split_off(poles.len());
+    if let Some(sd) = fit.deviations.as_mut() {
+        sd.truncate(poles.len());
+    }
+    Ok(JointPoles {
+        poles: fit.poles,
+        beside,
+        deviations: fit.deviations,
+    })
+}
+
+/// The rank-one fit's poles: those of the selection (index-aligned) with their standard
+/// deviations, and the modes it held beside them.
+struct JointPoles {
+    poles: Vec<Complex64>,
+    beside: Vec<Complex64>,
+    deviations: Option<Vec<PoleSd>>,
+}
+
+/// The warning for a mode `pole` (rad/s) the rank-one fit held beside the selection.
+fn held_beside(pole: Complex64) -> String {
+    format!(
+        "the rank-one fit held a mode at {:.2} Hz (damping ratio {:.2} %) beside the selected \
+         ones: the diagram's highest order has it stable, the selection left it out, and the \
+         curves need it; it is not in the mode list (pick it to have it there)",
+        pole.norm() / (2.0 * std::f64::consts::PI),
+        100.0 * -pole.re / pole.norm()
     )
 }
 
@@ -747,6 +816,9 @@ struct SelectedFit {
     /// With an estimator that refines: the refined poles, index-aligned with the selection,
     /// taken or not.
     refined: Option<Vec<RefinedPole>>,
+    /// The estimator's own standard deviations of the refined poles (the rank-one fit's), in
+    /// place of [`pole_deviations`]; None where it has none.
+    deviations: Option<Vec<PoleSd>>,
 }
 
 impl SelectedFit {
@@ -762,6 +834,7 @@ impl SelectedFit {
             fit,
             warnings: held.warnings,
             refined: Some(refined),
+            deviations: None,
         }
     }
 }
@@ -1244,18 +1317,18 @@ fn without_split_modes(
     Ok((fewer, refitted))
 }
 
-/// The evidence of `fit` (in the data's units) on the `positive` lines of `data` (its curves
+/// The evidence of `fit` (in the data's units) on the positive lines of `data` (its curves
 /// at unit scale, the data's units times `scale`; [`FitEvidence::of`]), and beside it on
-/// another thread the poles' standard deviations ([`deviations_of`]): neither needs the other.
-/// The whole adds to `timings.modes`, the deviations' own time to `timings.deviations`
-/// ([`EmaTimings`]).
+/// another thread the poles' standard deviations ([`deviations_of`]; `own` where the
+/// estimator gave its own): neither needs the other. The whole adds to `timings.modes`, the
+/// deviations' own time to `timings.deviations` ([`EmaTimings`]).
 ///
 /// # Errors
 /// As [`deviations_of`].
 fn evidence_beside_deviations(
     data: BandCurves<'_>,
     fit: &ModalFit,
-    positive: &[usize],
+    own: Option<Vec<PoleSd>>,
     scale: f64,
     s: &EmaSettings,
     on_stage: &dyn Fn(&str),
@@ -1266,10 +1339,16 @@ fn evidence_beside_deviations(
     }
     let clock = Instant::now();
     let (evidence, (deviations, deviations_s)) = rayon::join(
-        || FitEvidence::of(fit, data.on_lines(positive), data.noise, scale),
+        || {
+            let positive = crate::band::positive_lines(data.freqs_hz, data.band_hz);
+            FitEvidence::of(fit, data.on_lines(&positive), data.noise, scale)
+        },
         || {
             let clock = Instant::now();
-            let deviations = deviations_of(data, &fit.poles, s);
+            let deviations = match own {
+                Some(own) => Ok(Some(own)),
+                None => deviations_of(data, &fit.poles, s),
+            };
             (deviations, clock.elapsed().as_secs_f64())
         },
     );
@@ -1334,6 +1413,7 @@ pub fn identify_with(
         None => curves,
     };
     let (diag, context) = stabilization(freqs, &curves, band, nf, s, on_stage)?;
+    let top = top_order_stable(&diag);
     timings.diagram = lap(&mut clock);
     let positive = crate::band::positive_lines(freqs, band);
     let (cmif, noise) = rayon::join(
@@ -1348,7 +1428,7 @@ pub fn identify_with(
     timings.selection = lap(&mut clock);
     let data = BandCurves::of(set, &curves, band, &noise);
     let fit_poles = |selected: &[SelectedPole], timings: &mut EmaTimings| {
-        fit_selected(data, selected, context.as_ref(), s, on_stage, timings)
+        fit_selected(data, selected, context.as_ref(), &top, s, on_stage, timings)
     };
     let first = fit_poles(&selected, &mut timings)?;
     let (selected, mut fitted) = without_split_modes(first, selected, s, &mut warnings, |p| {
@@ -1359,7 +1439,7 @@ pub fn identify_with(
     let (evidence, deviations) = evidence_beside_deviations(
         data,
         &scaled_fit,
-        &positive,
+        fitted.deviations.take(),
         scale,
         s,
         on_stage,
@@ -1411,6 +1491,18 @@ pub fn identify_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The rank-one fit needs several references and several responses; the rest run as
+    /// chosen.
+    #[test]
+    fn the_default_is_the_rank_one_fit_where_there_are_several_of_each() {
+        let default = PoleEstimator::default();
+        assert_eq!(default.on(12, 3), PoleEstimator::RankOne);
+        assert_eq!(default.on(12, 1), PoleEstimator::Checked);
+        assert_eq!(default.on(1, 9), PoleEstimator::Checked);
+        assert_eq!(PoleEstimator::Refined.on(12, 1), PoleEstimator::Refined);
+        assert_eq!(PoleEstimator::Diagram.on(12, 3), PoleEstimator::Diagram);
+    }
 
     fn mode_at(freq_hz: f64, damping_ratio: f64) -> Mode {
         let w = 2.0 * std::f64::consts::PI * freq_hz;

@@ -532,9 +532,15 @@ fn deviations(samples: &LineSamples, poles: &[Complex64]) -> Option<Vec<PoleSd>>
 fn parameter_covariance(normal: &NormalEquations, variance: &[f64]) -> Option<Mat<f64>> {
     let jtj = normal.weighted(|_| 1.0);
     let meat = normal.weighted(|o| variance[o]);
+    sandwich(&jtj, &meat)
+}
+
+/// The sandwich (JᵀJ)⁻¹ `meat` (JᵀJ)⁻¹ from `jtj` = JᵀJ; None when JᵀJ is singular (a variance
+/// not finite or negative).
+pub(crate) fn sandwich(jtj: &Mat<f64>, meat: &Mat<f64>) -> Option<Mat<f64>> {
     let p = jtj.nrows();
     let inverse = jtj.full_piv_lu().solve(Mat::<f64>::identity(p, p));
-    let cov = &inverse * &meat * &inverse;
+    let cov = &inverse * meat * &inverse;
     (0..p)
         .all(|a| cov[(a, a)].is_finite() && cov[(a, a)] >= 0.0)
         .then_some(cov)
@@ -542,8 +548,8 @@ fn parameter_covariance(normal: &NormalEquations, variance: &[f64]) -> Option<Ma
 
 /// f and ζ's standard deviations of pole `p` from the covariance [var a, cov ab, var b] of its
 /// parameters a = ln σ, b = ω_d (σ = −Re λ): ∂f/∂a = σ²/(2π|λ|), ∂f/∂b = ω_d/(2π|λ|),
-/// ∂ζ/∂a = σω_d²/|λ|³, ∂ζ/∂b = −σ²ω_d/|λ|³.
-fn pole_sd(p: Complex64, [vaa, vab, vbb]: [f64; 3]) -> PoleSd {
+/// ∂ζ/∂a = σω_d²/|λ|³, ∂ζ/∂b = −σω_d/|λ|³.
+pub(crate) fn pole_sd(p: Complex64, [vaa, vab, vbb]: [f64; 3]) -> PoleSd {
     let (sigma, wd) = (-p.re, p.im);
     let m = p.norm();
     let spread = |ga: f64, gb: f64| {
@@ -553,13 +559,44 @@ fn pole_sd(p: Complex64, [vaa, vab, vbb]: [f64; 3]) -> PoleSd {
     };
     PoleSd {
         freq_hz: spread(sigma * sigma / (2.0 * PI * m), wd / (2.0 * PI * m)),
-        damping_ratio: spread(sigma * wd * wd / m.powi(3), -sigma * sigma * wd / m.powi(3)),
+        damping_ratio: spread(sigma * wd * wd / m.powi(3), -sigma * wd / m.powi(3)),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The derivatives of f and ζ in `pole_sd` against central differences in a = ln σ and
+    /// b = ω_d, for a light and a damped pole: one parameter's variance at a time gives |∂/∂u|.
+    #[test]
+    fn the_deviations_carry_each_parameter_by_its_own_derivative() {
+        let f_z = |a: f64, b: f64| {
+            let p = Complex64::new(-a.exp(), b);
+            (p.norm() / (2.0 * PI), -p.re / p.norm())
+        };
+        for p in [Complex64::new(-0.16, 161.0), Complex64::new(-90.0, 1130.0)] {
+            let (a, b) = ((-p.re).ln(), p.im);
+            for (k, var) in [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]].into_iter().enumerate() {
+                let h = if k == 0 { 1e-3 } else { 1e-4 * b };
+                let (up, down) = if k == 0 {
+                    (f_z(a + h, b), f_z(a - h, b))
+                } else {
+                    (f_z(a, b + h), f_z(a, b - h))
+                };
+                let sd = pole_sd(p, var);
+                let df = ((up.0 - down.0) / (2.0 * h)).abs();
+                let dz = ((up.1 - down.1) / (2.0 * h)).abs();
+                assert!(
+                    (sd.freq_hz - df).abs() <= 1e-5 * df,
+                    "{p}, {k}: f {} {df}",
+                    sd.freq_hz
+                );
+                let z = sd.damping_ratio;
+                assert!((z - dz).abs() <= 1e-5 * dz, "{p}, {k}: ζ {z} {dz}");
+            }
+        }
+    }
 
     /// On 0.02 Hz lines over 20–1000 Hz: a light pole's window (51.5 Hz, ζ 0.3 %: ±1.17 Hz,
     /// 117 lines) is fitted on every line, a damped one's (960 Hz, ζ 0.8 %: ±38.8 Hz, 3880

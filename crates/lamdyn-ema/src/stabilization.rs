@@ -97,6 +97,22 @@ impl Default for StabilityCriteria {
     }
 }
 
+/// The poles of the diagram's highest order that are stable in frequency and damping (rad/s).
+pub(crate) fn top_order_stable(diagram: &[DiagramPole]) -> Vec<Complex64> {
+    let top = diagram.iter().map(|p| p.order).max().unwrap_or(0);
+    diagram
+        .iter()
+        .filter(|p| p.order == top)
+        .filter(|p| {
+            matches!(
+                p.stability,
+                Stability::FrequencyDamping | Stability::FrequencyDampingVector
+            )
+        })
+        .map(|p| p.pole)
+        .collect()
+}
+
 /// Classifies every pole of `orders` (increasing order).
 pub fn diagram(orders: &[OrderPoles], c: &StabilityCriteria) -> Vec<DiagramPole> {
     let mut out = Vec::new();

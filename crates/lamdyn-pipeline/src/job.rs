@@ -190,7 +190,8 @@ pub struct EmaOptions {
     pub keep_smears: bool,
     /// The poles the chain takes from the EMA: "refined" (default), "checked" (each refined
     /// pole where it fits significantly better than the diagram's in the LSCF model's context,
-    /// the default of `lamdyn ema`) or "diagram". The chain keeps "refined" for now: its FRF
+    /// the default of `lamdyn ema` with one reference), "rank-one" (its default with several)
+    /// or "diagram". The chain keeps "refined" for now: its FRF
     /// fit was verified from those starts, and from checked ones the damped virtual test's η
     /// band at 247 Hz misses the truth by 0.07 % (the FRF fit's band coverage, issue 44).
     #[serde(default = "default_chain_poles")]

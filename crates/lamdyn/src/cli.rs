@@ -247,10 +247,12 @@ pub struct EmaArgs {
     /// Skip the refinement of the poles (LSFD on the diagram's poles only; as --poles diagram).
     #[arg(long)]
     pub no_refine: bool,
-    /// The poles reported: the diagram's, the refined ones, or each refined pole checked in the
+    /// The poles reported: the diagram's, the refined ones, each refined pole checked in the
     /// LSCF model's context (kept where it fits the curves significantly better than the
-    /// diagram's; docs/ema.md, "Damped poles").
-    #[arg(long, value_enum, default_value_t = PolesArg::Checked)]
+    /// diagram's; docs/ema.md, "Damped poles"), or with several references the joint fit with
+    /// rank-one residues (the checked poles with one reference; docs/ema.md, "What the free
+    /// residues cost at a close pair").
+    #[arg(long, value_enum, default_value_t = PolesArg::RankOne)]
     pub poles: PolesArg,
     /// CMIF peaks listed: those standing at least this factor above the lower of their two
     /// bases (topographic prominence within the band; 2 = 6 dB).
@@ -271,7 +273,7 @@ pub enum PolesArg {
     /// Each refined pole where it fits significantly better in the LSCF model's context.
     Checked,
     /// With several references: the poles and participation factors fitted jointly with
-    /// rank-one residues (shape times participation), unchecked; else as `refined`.
+    /// rank-one residues (shape times participation); else as `checked`.
     RankOne,
 }
 

@@ -269,9 +269,12 @@ fn stable_footnote(modes: &[Mode]) -> String {
     format!("stable: {}.", what.join("; "))
 }
 
-/// The method's last step, in words.
-fn estimator_text(s: &EmaSettings) -> &'static str {
-    match s.estimator {
+/// The method's last step, in words, as it runs on `set`'s curves.
+fn estimator_text(s: &EmaSettings, set: &FrfSet) -> &'static str {
+    match s
+        .estimator
+        .on(set.responses().len(), set.references().len())
+    {
         _ if s.refine_iterations == 0 => "LSFD residues on the diagram's poles",
         PoleEstimator::Diagram => "LSFD residues on the diagram's poles",
         PoleEstimator::Refined => "poles refined with LSFD residues (variable projection)",
@@ -281,7 +284,7 @@ fn estimator_text(s: &EmaSettings) -> &'static str {
         }
         PoleEstimator::RankOne => {
             "poles and participation factors fitted jointly with rank-one residues (shape times \
-             participation; with one reference, free residues), then LSFD residues"
+             participation), then LSFD residues"
         }
     }
 }
@@ -444,7 +447,7 @@ fn method_line(set: &FrfSet, s: &EmaSettings, r: &EmaResult) -> String {
         } else {
             "automatic selection (clusters stable over half the orders)"
         },
-        estimator_text(s)
+        estimator_text(s, set)
     )
 }
 
