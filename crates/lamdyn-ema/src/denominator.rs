@@ -37,22 +37,13 @@ impl LscfContext {
     /// roots, less the root nearest each pole (its own root at this order) where one lies
     /// within three half-power half-widths or 1 % of |λ|.
     pub(crate) fn fixed_roots(&self, poles: &[Complex64]) -> Vec<FixedRoot> {
-        let mut pairs: Vec<Complex64> = self
+        let pairs: Vec<Complex64> = self
             .roots
             .iter()
             .copied()
             .filter(|&x| !is_real(x) && x.im < 0.0)
             .collect();
-        for &p in poles {
-            let own = pairs
-                .iter()
-                .enumerate()
-                .map(|(k, &x)| (k, (self.pole(x) - p).norm()))
-                .min_by(|a, b| a.1.total_cmp(&b.1));
-            if let Some((k, _)) = own.filter(|&(k, _)| within_reach(p, self.pole(pairs[k]))) {
-                pairs.swap_remove(k);
-            }
-        }
+        let pairs = without_own(pairs, poles, |x| self.pole(x));
         let reals = self
             .roots
             .iter()
@@ -137,9 +128,29 @@ impl LscfContext {
     }
 }
 
+/// `rest` less each of `poles`' own (rad/s): in turn, each pole takes the one of `rest` whose
+/// pole (`pole_of`) lies nearest it, where that lies within its reach ([`within_reach`]).
+pub(crate) fn without_own<T: Copy>(
+    mut rest: Vec<T>,
+    poles: &[Complex64],
+    pole_of: impl Fn(T) -> Complex64,
+) -> Vec<T> {
+    for &p in poles {
+        let own = rest
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| (k, (pole_of(x) - p).norm()))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((k, _)) = own.filter(|&(k, _)| within_reach(p, pole_of(rest[k]))) {
+            rest.swap_remove(k);
+        }
+    }
+    rest
+}
+
 /// Whether `q` lies within the reach of pole `p` (both rad/s): three half-power half-widths of
 /// `p`, or 1 % of |p| for a lightly damped one.
-pub(crate) fn within_reach(p: Complex64, q: Complex64) -> bool {
+fn within_reach(p: Complex64, q: Complex64) -> bool {
     (q - p).norm() <= 3.0 * (-p.re).max(0.01 * p.norm())
 }
 

@@ -662,29 +662,12 @@ fn rank_one_refined(
     top: &[Complex64],
     s: &EmaSettings,
 ) -> Result<JointPoles, EmaError> {
-    let unchanged = || JointPoles {
-        poles: poles.to_vec(),
-        beside: vec![],
-        deviations: None,
-    };
     let candidates = crate::rank_one::left_out(top, poles);
     let around: Vec<Complex64> = poles.iter().chain(&candidates).copied().collect();
     let band_lines = crate::band::positive_lines(data.freqs_hz, data.band_hz);
     let lines = refinement_lines(data.freqs_hz, &band_lines, &around, s.refine_lines);
     let (refs, quantity) = (data.references, data.quantity);
-    let start = |set: &[Complex64]| {
-        crate::rank_one::start_participation(
-            data.freqs_hz,
-            data.curves,
-            refs,
-            quantity,
-            &lines,
-            set,
-        )
-    };
-    if start(poles)?.is_none() {
-        return Ok(unchanged());
-    }
+    // The one error the start could raise (a value that is not finite) is raised here.
     let samples = crate::rank_one::StackedCurves::new(
         data.freqs_hz,
         data.curves,
@@ -693,15 +676,25 @@ fn rank_one_refined(
         &lines,
         data.band_hz[1],
     )?;
+    let start = |set: &[Complex64]| {
+        let (freqs, curves) = (data.freqs_hz, data.curves);
+        crate::rank_one::start_participation(freqs, curves, refs, quantity, &lines, set)
+            .ok()
+            .flatten()
+    };
     let fit = crate::rank_one::fitted_with_the_modes_needed(
         &samples,
         poles,
         &candidates,
-        |set| start(set).ok().flatten(),
+        start,
         4 * s.refine_iterations,
     );
     let Some(mut fit) = fit else {
-        return Ok(unchanged());
+        return Ok(JointPoles {
+            poles: poles.to_vec(),
+            beside: vec![],
+            deviations: None,
+        });
     };
     let beside = fit.poles.split_off(poles.len());
     if let Some(sd) = fit.deviations.as_mut() {

@@ -40,7 +40,7 @@
 
 use crate::band::pseudo_modes_above;
 use crate::context::chi_square_99;
-use crate::denominator::within_reach;
+use crate::denominator::without_own;
 use crate::error::EmaError;
 use crate::lsfd::{PoleSd, pole_sd, sandwich};
 use crate::pole_fit::{marquardt_step, pole_parameters, to_poles};
@@ -539,24 +539,12 @@ impl ModeUnknowns<'_> {
 }
 
 /// The poles of `top` (the diagram's highest order: its stable poles in the band, rad/s) that
-/// are none of `poles`' own: each of `poles` takes the nearest of `top` within three half-power
-/// half-widths (or 1 % of |λ|) as its own, as the context does its roots
-/// ([`crate::denominator`]). What is left are modes the selection left out (a pick by
-/// frequency that took only some of the band's modes, a column the selection did not keep).
+/// are none of `poles`' own, taken as the context takes its roots ([`without_own`]: each of
+/// `poles` takes the nearest within three half-power half-widths, or 1 % of |λ|). What is left
+/// are modes the selection left out (a pick by frequency that took only some of the band's
+/// modes, a column the selection did not keep).
 pub(crate) fn left_out(top: &[Complex64], poles: &[Complex64]) -> Vec<Complex64> {
-    let mut rest = top.to_vec();
-    for &p in poles {
-        let own = rest
-            .iter()
-            .enumerate()
-            .map(|(k, &q)| (k, (q - p).norm()))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .filter(|&(k, _)| within_reach(p, rest[k]));
-        if let Some((k, _)) = own {
-            rest.swap_remove(k);
-        }
-    }
-    rest
+    without_own(top.to_vec(), poles, |q| q)
 }
 
 /// The rank-one fit from `poles` (module docs, [`rank_one_poles`]) with the modes of
