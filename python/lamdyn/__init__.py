@@ -347,9 +347,10 @@ def ema(
     blind to close pairs PolyMAX resolves: docs/ema.md, "Damped poles"), the stable columns of the
     stabilization diagram selected automatically (or the stable pole nearest each of
     ``near_hz``), then the poles' final estimate: by default (``poles="rank-one"``) with
-    several references the poles and participation factors fitted jointly with rank-one
-    residues (beside the modes the selection left out that the curves need; docs/ema.md, "What
-    the free residues cost at a close pair"), and with one reference as ``"checked"``: LSFD
+    several responses the poles and participation factors fitted jointly with rank-one
+    residues, beside the modes the selection left out that the curves need (docs/ema.md, "What
+    the free residues cost at a close pair"; with one reference each fitted pole is then checked
+    as ``"checked"`` checks the refined ones), and with one response as ``"checked"``: LSFD
     residues and a Levenberg-Marquardt refinement of the poles, each refined pole kept where it
     fits significantly better than the diagram's in the diagram's highest-order LSCF model;
     ``"refined"``: every refined pole; ``"diagram"`` or ``refine=False``: the diagram's poles.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Bias and scatter of identified poles on virtual tests with modal damping 0.1 %, 2 %, 8 % and
 15 %: lamdyn's diagram pole (LSFD on the stabilization diagram's pole), its refined and checked
-poles, its default (with several references the rank-one fit, with one the checked pole) and
+poles, its default (the rank-one fit; with one response the checked pole) and
 sdypy-EMA 0.31 (its LSCF, orders 2-60, select_closest_poles), on the same FRFs.
 With three references lamdyn's default is PolyMAX, while sdypy fits one LSCF over every curve;
 the tables then add lamdyn's final pole from that same formulation ("single",
@@ -183,7 +183,7 @@ def sdypy_poles(f, h, targets):
 def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False,
         channel_noise=False, smears=None):
     """Per estimator: relative errors (seeds, modes, [f, zeta]); "default" is lamdyn's default
-    (the rank-one fit with several references, the checked pole with one). `with_single` adds,
+    (the rank-one fit). `with_single` adds,
     with several references, lamdyn's default pole from one LSCF over every curve ("single"):
     sdypy-EMA's formulation, where PolyMAX is lamdyn's default. With a list `smears`, per seed
     and mode whether the default pole is a smear (`lamdyn_poles`)."""
@@ -201,11 +201,8 @@ def run(zeta, references, snr_rel, seeds, with_sdypy=True, with_single=False,
         f, h = plate_frf(zeta, references, snr_rel, rng, channel_noise)
         errors["diagram"].append(lamdyn_poles(f, h, targets, refine=False) / truth - 1)
         errors["refined"].append(lamdyn_poles(f, h, targets, True, "refined") / truth - 1)
-        if len(references) > 1:
-            errors["checked"].append(lamdyn_poles(f, h, targets, True, "checked") / truth - 1)
+        errors["checked"].append(lamdyn_poles(f, h, targets, True, "checked") / truth - 1)
         errors["default"].append(lamdyn_poles(f, h, targets, True, smears=smears) / truth - 1)
-        if len(references) == 1:
-            errors["checked"].append(errors["default"][-1])
         if single:
             errors["single"].append(lamdyn_poles(f, h, targets, True, polymax=False) / truth - 1)
         if with_sdypy:

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Coverage of lamdyn's per-pole 95 % intervals, f +- 1.96 sd(f) and zeta +- 1.96 sd(zeta), on
 the virtual damped plates of damped_bias.py (modal damping 0.1 %, 2 %, 8 % and 15 %, one and
-three references, 1 % noise, the same seeds), with lamdyn's default poles (with several
-references the rank-one fit, with one the checked pole; `--poles` another) picked near each true
+three references, 1 % noise, the same seeds), with lamdyn's default poles (the rank-one fit, with
+one reference checked in the LSCF model's context; `--poles` another) picked near each true
 mode as the tables there pick them. Issue 45, item 2, asks for 90 % at least.
 
 A pole whose verdict is "smear" is counted apart: the chain leaves it out by default, and its
@@ -36,8 +36,8 @@ CLASS_OF = {"taken": "refined", "not better": "diagram", "none": "diagram",
 
 
 def intervals(zeta, references, seeds, snr_rel=0.01, mass_line=0.0, poles=None):
-    """Per (seed, mode): the pole's (estimator `poles`, None: lamdyn's default) error (f in Hz, zeta), its sd, its verdict and its
-    class (`CLASSES`); NaN, "" where no pole was found near the mode."""
+    """Per (seed, mode): the pole's (estimator `poles`, None: lamdyn's default) error (f in Hz,
+    zeta), its sd, its verdict and its class (`CLASSES`); NaN, "" where no pole was found near the mode."""
     targets = [t[0] for t in db.true_modes()]
     win = db.windows(targets)
     shape = (seeds, len(targets))

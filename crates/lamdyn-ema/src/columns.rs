@@ -95,6 +95,37 @@ fn out_of_column(col: &SelectedPole, p: Complex64) -> String {
     )
 }
 
+/// The order of a joint fit's poles `fitted` (the selection's, index-aligned with `selected`,
+/// then modes held beside them) in which each selected pole that left its column is exchanged
+/// for a held mode that lies in it (the one nearest the diagram's pole, if several). The fit's
+/// modes are a set: which of two it calls the selected one follows their starts, and a mode
+/// held from a start beside a selected pole may end in that pole's column while the selected
+/// one ends elsewhere (in another mode of the pair).
+pub(crate) fn exchanged_into_columns(
+    fitted: &[Complex64],
+    selected: &[SelectedPole],
+    c: &StabilityCriteria,
+) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..fitted.len()).collect();
+    let n = selected.len();
+    for (r, col) in selected.iter().enumerate() {
+        let holds = |k: usize| col.holds(pole_freq_hz(fitted[k]), pole_damping(fitted[k]), c);
+        if holds(order[r]) {
+            continue;
+        }
+        let nearest = (n..fitted.len())
+            .filter(|&j| holds(order[j]))
+            .min_by(|&a, &b| {
+                let d = |j: usize| (fitted[order[j]] - col.pole).norm();
+                d(a).total_cmp(&d(b))
+            });
+        if let Some(j) = nearest {
+            order.swap(r, j);
+        }
+    }
+    order
+}
+
 /// For each refined pole (index-aligned with `selected`), whether it left its column in the
 /// diagram ([`SelectedPole::holds`]).
 pub(crate) fn left_their_columns(
@@ -123,6 +154,7 @@ fn beside_a_lost_pole(diagram: &[Complex64], lost: &[bool]) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stabilization::Pick;
     use std::f64::consts::PI;
 
     /// Only the lost pole and the poles whose half-power bands overlap its own are marked.
@@ -136,5 +168,41 @@ mod tests {
             vec![false, true, true, false]
         );
         assert_eq!(beside_a_lost_pole(&diagram, &[false; 4]), vec![false; 4]);
+    }
+
+    /// A selected pole that left its column trades places with the held mode in it, the
+    /// nearest of two; one that stayed, and a lost one with no held mode in its column, keep
+    /// their places.
+    #[test]
+    fn a_held_mode_in_a_lost_poles_column_takes_its_place() {
+        let pole = |f: f64, z: f64| Complex64::new(-z * 2.0 * PI * f, 2.0 * PI * f);
+        let column = |f: f64, z: f64| SelectedPole {
+            pole: pole(f, z),
+            freq_hz: f,
+            damping: z,
+            count: 10,
+            spread_hz: 0.0,
+            freq_range_hz: [f - 0.2, f + 0.2],
+            damping_range: [0.9 * z, 1.1 * z],
+            pick: Pick::default(),
+        };
+        let selected = [
+            column(100.0, 0.05),
+            column(180.0, 0.05),
+            column(140.0, 0.05),
+        ];
+        let c = StabilityCriteria::default();
+        let fitted = [
+            pole(100.1, 0.05),
+            pole(170.0, 0.10), // left its column, towards a neighbour
+            pole(150.0, 0.05), // left too; no held mode in its column
+            pole(180.3, 0.052),
+            pole(179.95, 0.05),
+            pole(60.0, 0.02),
+        ];
+        assert_eq!(
+            exchanged_into_columns(&fitted, &selected, &c),
+            vec![0, 4, 2, 3, 1, 5]
+        );
     }
 }

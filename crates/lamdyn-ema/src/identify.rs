@@ -4,7 +4,9 @@
 //! [`crate::local_residues`]) and indicators, the regenerated FRFs' correlation with the
 //! measured ones, and the CMIF.
 
-use crate::columns::{HeldPoles, PutBack, in_their_columns, left_their_columns};
+use crate::columns::{
+    HeldPoles, PutBack, exchanged_into_columns, in_their_columns, left_their_columns,
+};
 use crate::context::{LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
 use crate::local_refit::{RefitBand, refitted_alone};
@@ -111,20 +113,22 @@ pub enum PoleEstimator {
     /// The refined pole where the LSCF model's context says it fits the curves significantly
     /// better than the diagram's, the diagram's pole elsewhere ([`crate::context`]).
     Checked,
-    /// With several references and responses: the joint fit of the poles and each mode's
-    /// participation factors with rank-one residues (shape times participation, module
-    /// `rank_one`), beside the modes the selection left out that the curves need; with one
-    /// reference or one response, as [`Self::Checked`] (the residues are then free anyway).
+    /// With several responses: the joint fit of the poles and each mode's participation
+    /// factors with rank-one residues (shape times participation, module `rank_one`), beside
+    /// the modes the selection left out that the curves need; with one reference each mode's
+    /// residues over the responses are free, and each fitted pole is then checked as
+    /// [`Self::Checked`] checks the refined ones. With one response (a roving hammer's one
+    /// accelerometer), as [`Self::Checked`].
     #[default]
     RankOne,
 }
 
 impl PoleEstimator {
-    /// The estimator that runs on curves of `responses` × `references`: [`Self::RankOne`]
-    /// needs several of each and is [`Self::Checked`] otherwise; the others run as they are.
-    pub fn on(self, responses: usize, references: usize) -> Self {
+    /// The estimator that runs on curves of `responses`: [`Self::RankOne`] needs several and is
+    /// [`Self::Checked`] on one; the others run as they are.
+    pub fn on(self, responses: usize) -> Self {
         match self {
-            Self::RankOne if responses < 2 || references < 2 => Self::Checked,
+            Self::RankOne if responses < 2 => Self::Checked,
             e => e,
         }
     }
@@ -577,7 +581,7 @@ fn fit_selected(
     let estimator = if s.refine_iterations == 0 {
         PoleEstimator::Diagram
     } else {
-        s.estimator.on(responses, data.references)
+        s.estimator.on(responses)
     };
     let refine = || {
         let joint = refined_poles(
@@ -606,33 +610,15 @@ fn fit_selected(
             }
         }
         (PoleEstimator::Checked, Some(c)) => {
-            let (refined, check) =
-                refined_beside_the_check(data, &poles, s.refine_lines, c, refine)?;
-            timings.refinement += lap(&mut clock);
-            let held = in_their_columns(&refined.poles, selected, &s.criteria);
-            // The scope has run the spawned check; without it (never) the diagram's poles.
-            let fit = match &check {
-                Some(check) => check.fit(&held.poles, &refined.alone)?,
-                None => lsfd(freqs, curves, quantity, &poles, band)?,
-            };
-            timings.check += lap(&mut clock);
-            SelectedFit::refined(fit, refined.poles, held)
+            checked_selected(data, selected, c, s, timings, refine)?
         }
         (PoleEstimator::RankOne, _) => {
-            on_stage(&format!(
-                "fitting {n} poles and their participation factors (rank-one residues)"
-            ));
-            let joint = rank_one_refined(data, &poles, top, s)?;
-            let held = in_their_columns(&joint.poles, selected, &s.criteria);
-            timings.refinement += lap(&mut clock);
-            let fit = lsfd(freqs, curves, quantity, &held.poles, band)?;
-            timings.residues += lap(&mut clock);
-            let mut fitted = SelectedFit::refined(fit, joint.poles, held);
-            fitted
-                .warnings
-                .extend(joint.beside.iter().map(|&p| held_beside(p)));
-            fitted.deviations = joint.deviations;
-            fitted
+            on_stage(&if data.references < 2 {
+                format!("fitting {n} poles with their residues (variable projection)")
+            } else {
+                format!("fitting {n} poles and their participation factors (rank-one residues)")
+            });
+            rank_one_selected(data, selected, context, top, s, timings, &progress)?
         }
         _ => {
             let refined = refine()?;
@@ -646,22 +632,120 @@ fn fit_selected(
     Ok(fitted)
 }
 
-/// The rank-one joint fit's poles from `poles` (module `rank_one`) on the refinement's lines,
-/// with four times the refinement's iterations (it fits the participation factors too, and
-/// a damped pair moves further from the diagram's biased start than one pole does); `poles`
-/// themselves where the residue problem fails. Beside `poles` the fit holds the modes of `top`
-/// (the diagram's highest order, stable) that are none of theirs and that the curves need
-/// ([`crate::rank_one::left_out`], [`crate::rank_one::fitted_with_the_modes_needed`]): a
-/// mode left out of the model would pull its neighbours towards it.
+/// The modal model of the `selected` poles by the rank-one fit ([`rank_one_refined`], each
+/// pole put back where it left its column, [`in_their_columns`]), with the fit's own standard
+/// deviations. With one reference each mode's residues over the responses are free, and the
+/// fit leans on the model's outside terms as the refinement does (on exact FRFs of damped modes
+/// near the band's upper edge it moves the diagram's exact poles): there each fitted pole is
+/// checked in the LSCF model's `context` as [`PoleEstimator::Checked`] checks the refined ones
+/// (kept where it fits the curves significantly better than the diagram's; no pole is refitted
+/// alone, module `local_refit`: docs/ema.md, "One reference: the modes left out"), and the
+/// deviations are [`pole_deviations`]' at the poles taken. `on_iteration` counts the fit's
+/// steps.
+///
+/// # Errors
+/// As [`lsfd`].
+fn rank_one_selected(
+    data: BandCurves<'_>,
+    selected: &[SelectedPole],
+    context: Option<&LscfContext>,
+    top: &[Complex64],
+    s: &EmaSettings,
+    timings: &mut EmaTimings,
+    on_iteration: &dyn Fn(usize, usize),
+) -> Result<SelectedFit, EmaError> {
+    if let Some(c) = context.filter(|_| data.references < 2) {
+        let mut beside = vec![];
+        let mut fitted = checked_selected(data, selected, c, s, timings, || {
+            let joint = rank_one_refined(data, selected, top, s, on_iteration)?;
+            beside = joint.beside;
+            let alone = vec![false; joint.poles.len()];
+            Ok(RefinedPoles {
+                poles: joint.poles,
+                alone,
+            })
+        })?;
+        fitted
+            .warnings
+            .extend(beside.iter().map(|&p| held_beside(p)));
+        return Ok(fitted);
+    }
+    let mut clock = Instant::now();
+    let joint = rank_one_refined(data, selected, top, s, on_iteration)?;
+    let held = in_their_columns(&joint.poles, selected, &s.criteria);
+    timings.refinement += lap(&mut clock);
+    let fit = lsfd(
+        data.freqs_hz,
+        data.curves,
+        data.quantity,
+        &held.poles,
+        data.band_hz,
+    )?;
+    timings.residues += lap(&mut clock);
+    let mut fitted = SelectedFit::refined(fit, joint.poles, held);
+    fitted
+        .warnings
+        .extend(joint.beside.iter().map(|&p| held_beside(p)));
+    fitted.deviations = joint.deviations;
+    Ok(fitted)
+}
+
+/// The modal model of the `selected` poles, each pole `refine` returns put back where it left
+/// its column ([`in_their_columns`]) and then checked in the LSCF model's `context`
+/// ([`RefinementCheck`], built on another thread while `refine` runs): the refined pole where it
+/// fits the curves significantly better than the diagram's, the diagram's elsewhere.
+///
+/// # Errors
+/// As [`lsfd`], and what `refine` returns.
+fn checked_selected(
+    data: BandCurves<'_>,
+    selected: &[SelectedPole],
+    context: &LscfContext,
+    s: &EmaSettings,
+    timings: &mut EmaTimings,
+    refine: impl FnOnce() -> Result<RefinedPoles, EmaError>,
+) -> Result<SelectedFit, EmaError> {
+    let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
+    let mut clock = Instant::now();
+    let (refined, check) = refined_beside_the_check(data, &poles, s.refine_lines, context, refine)?;
+    timings.refinement += lap(&mut clock);
+    let held = in_their_columns(&refined.poles, selected, &s.criteria);
+    // The scope has run the spawned check; without it (never) the diagram's poles.
+    let fit = match &check {
+        Some(check) => check.fit(&held.poles, &refined.alone)?,
+        None => lsfd(
+            data.freqs_hz,
+            data.curves,
+            data.quantity,
+            &poles,
+            data.band_hz,
+        )?,
+    };
+    timings.check += lap(&mut clock);
+    Ok(SelectedFit::refined(fit, refined.poles, held))
+}
+
+/// The rank-one joint fit's poles from the `selected` poles (module `rank_one`) on the
+/// refinement's lines, with four times the refinement's iterations (it fits the participation
+/// factors too, and a damped pair moves further from the diagram's biased start than one pole
+/// does); the selected poles themselves where the residue problem fails. Beside them the fit
+/// holds the modes of `top` (the diagram's highest order, stable) that are none of theirs and
+/// that the curves need ([`crate::rank_one::left_out`],
+/// [`crate::rank_one::fitted_with_the_modes_needed`]): a mode left out of the model would pull
+/// its neighbours towards it. A selected pole that left its column trades places with a held
+/// mode in that column ([`exchanged_into_columns`]).
 ///
 /// # Errors
 /// [`EmaError::Invalid`] for a value that is not finite.
 fn rank_one_refined(
     data: BandCurves<'_>,
-    poles: &[Complex64],
+    selected: &[SelectedPole],
     top: &[Complex64],
     s: &EmaSettings,
+    on_iteration: &dyn Fn(usize, usize),
 ) -> Result<JointPoles, EmaError> {
+    let diagram: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
+    let poles = diagram.as_slice();
     let candidates = crate::rank_one::left_out(top, poles);
     let around: Vec<Complex64> = poles.iter().chain(&candidates).copied().collect();
     let band_lines = crate::band::positive_lines(data.freqs_hz, data.band_hz);
@@ -688,6 +772,7 @@ fn rank_one_refined(
         &candidates,
         start,
         4 * s.refine_iterations,
+        on_iteration,
     );
     let Some(mut fit) = fit else {
         return Ok(JointPoles {
@@ -696,9 +781,11 @@ fn rank_one_refined(
             deviations: None,
         });
     };
+    let order = exchanged_into_columns(&fit.poles, selected, &s.criteria);
+    fit.poles = order.iter().map(|&k| fit.poles[k]).collect();
     let beside = fit.poles.split_off(poles.len());
     if let Some(sd) = fit.deviations.as_mut() {
-        sd.truncate(poles.len());
+        *sd = order.iter().take(poles.len()).map(|&k| sd[k]).collect();
     }
     Ok(JointPoles {
         poles: fit.poles,
@@ -1485,16 +1572,14 @@ pub fn identify_with(
 mod tests {
     use super::*;
 
-    /// The rank-one fit needs several references and several responses; the rest run as
-    /// chosen.
+    /// The rank-one fit needs several responses; the rest run as chosen.
     #[test]
-    fn the_default_is_the_rank_one_fit_where_there_are_several_of_each() {
+    fn the_default_is_the_rank_one_fit_where_there_are_several_responses() {
         let default = PoleEstimator::default();
-        assert_eq!(default.on(12, 3), PoleEstimator::RankOne);
-        assert_eq!(default.on(12, 1), PoleEstimator::Checked);
-        assert_eq!(default.on(1, 9), PoleEstimator::Checked);
-        assert_eq!(PoleEstimator::Refined.on(12, 1), PoleEstimator::Refined);
-        assert_eq!(PoleEstimator::Diagram.on(12, 3), PoleEstimator::Diagram);
+        assert_eq!(default.on(12), PoleEstimator::RankOne);
+        assert_eq!(default.on(1), PoleEstimator::Checked);
+        assert_eq!(PoleEstimator::Refined.on(12), PoleEstimator::Refined);
+        assert_eq!(PoleEstimator::Diagram.on(12), PoleEstimator::Diagram);
     }
 
     fn mode_at(freq_hz: f64, damping_ratio: f64) -> Mode {

@@ -1,6 +1,7 @@
-//! The joint pole fit with rank-one residues: with several references, each mode's residues
-//! over responses o and references j are ψ_o L_j (one shape, one participation vector), not
-//! one free residue per curve.
+//! The joint pole fit with rank-one residues: each mode's residues over responses o and
+//! references j are ψ_o L_j (one shape, one participation vector), not one free residue per
+//! curve. With one reference L is 1 and the shape's residues are free; the fit then differs
+//! from the refinement of [`crate::lsfd`] by the modes it holds beside the selected ones.
 //!
 //! **Why.** The refinement of [`crate::lsfd`] gives each curve its own residue per mode. Two
 //! close damped modes then trade residues on every curve, and the curves cannot say where
@@ -303,14 +304,15 @@ impl RankOneFit {
 }
 
 /// The rank-one joint fit (module docs) from `poles` on `samples`, at most `iterations`
-/// Levenberg–Marquardt steps; the fitted poles matched to their starts ([`matched_order`]: two
-/// close poles may trade places in the fit), or None where the residue problem fails at the
-/// start.
+/// Levenberg–Marquardt steps (`on_iteration(k, iterations)` as step k starts); the fitted
+/// poles matched to their starts ([`matched_order`]: two close poles may trade places in the
+/// fit), or None where the residue problem fails at the start.
 pub(crate) fn rank_one_poles(
     samples: &StackedCurves,
     poles: &[Complex64],
     participation: Vec<Vec<Complex64>>,
     iterations: usize,
+    on_iteration: &dyn Fn(usize, usize),
 ) -> Option<RankOneFit> {
     let params = Parameters {
         pivots: participation.iter().map(|l| pivot(l)).collect(),
@@ -329,7 +331,8 @@ pub(crate) fn rank_one_poles(
     let mut at = project(&u)?;
     let mut cost = at.cost();
     let mut lambda = 1e-3;
-    'steps: for _ in 0..iterations {
+    'steps: for k in 0..iterations {
+        on_iteration(k + 1, iterations);
         let (jtj, jtr) = normal_equations(samples, &params, &u, &at);
         let p = u.len();
         let mut improved = false;
@@ -551,22 +554,25 @@ pub(crate) fn left_out(top: &[Complex64], poles: &[Complex64]) -> Vec<Complex64>
 /// `candidates` the curves need beside them: after each fit the candidate [`next_needed`]
 /// names joins the fitted poles and the fit runs again from there, until none is needed. The
 /// fit's poles past `poles.len()` are those modes. None where the residue problem fails at the
-/// start; where it fails once a candidate has joined, the fit without it.
+/// start; where it fails once a candidate has joined, the fit without it. Each fit counts its
+/// own steps to `on_iteration` ([`rank_one_poles`]).
 pub(crate) fn fitted_with_the_modes_needed(
     samples: &StackedCurves,
     poles: &[Complex64],
     candidates: &[Complex64],
     participation_of: impl Fn(&[Complex64]) -> Option<Participation>,
     iterations: usize,
+    on_iteration: &dyn Fn(usize, usize),
 ) -> Option<RankOneFit> {
-    let mut fit = rank_one_poles(samples, poles, participation_of(poles)?, iterations)?;
+    let fit_from =
+        |starts: &[Complex64], l| rank_one_poles(samples, starts, l, iterations, on_iteration);
+    let mut fit = fit_from(poles, participation_of(poles)?)?;
     let mut origins = poles.to_vec();
     let mut rest = candidates.to_vec();
     while let Some(k) = next_needed(samples, &fit.poles, &rest, &participation_of) {
         let joining = rest.swap_remove(k);
         let starts: Vec<Complex64> = fit.poles.iter().copied().chain([joining]).collect();
-        let next =
-            participation_of(&starts).and_then(|l| rank_one_poles(samples, &starts, l, iterations));
+        let next = participation_of(&starts).and_then(|l| fit_from(&starts, l));
         let Some(next) = next else { break };
         origins.push(joining);
         // A pole the previous fit pulled towards the missing mode may trade places with it
@@ -686,7 +692,7 @@ mod tests {
         let l0 = start_participation(&freqs, &refs, 3, Quantity::Accelerance, &lines, &start)
             .unwrap()
             .unwrap();
-        let fitted = rank_one_poles(&samples(&freqs, &curves), &start, l0, 60)
+        let fitted = rank_one_poles(&samples(&freqs, &curves), &start, l0, 60, &|_, _| {})
             .unwrap()
             .poles;
         for (p, &(f, z)) in fitted.iter().zip(&MODES) {
@@ -749,6 +755,7 @@ mod tests {
             &candidates,
             |set| Some(start_of(&freqs, &curves, set)),
             60,
+            &|_, _| {},
         )
         .unwrap();
         assert_eq!(fit.poles.len(), 3);
@@ -758,6 +765,7 @@ mod tests {
             &[],
             |set| Some(start_of(&freqs, &curves, set)),
             60,
+            &|_, _| {},
         )
         .unwrap();
         for (p, q) in fit
@@ -782,7 +790,8 @@ mod tests {
         for seed in 0..seeds {
             let curves = noisy(&clean, 0.01, 100 + seed);
             let l0 = start_of(&freqs, &curves, &truth);
-            let fit = rank_one_poles(&samples(&freqs, &curves), &truth, l0, 60).unwrap();
+            let fit =
+                rank_one_poles(&samples(&freqs, &curves), &truth, l0, 60, &|_, _| {}).unwrap();
             let sd = fit.deviations.unwrap();
             for r in 0..3 {
                 let (f, z) = (

@@ -249,9 +249,9 @@ pub struct EmaArgs {
     pub no_refine: bool,
     /// The poles reported: the diagram's, the refined ones, each refined pole checked in the
     /// LSCF model's context (kept where it fits the curves significantly better than the
-    /// diagram's; docs/ema.md, "Damped poles"), or with several references the joint fit with
-    /// rank-one residues (the checked poles with one reference; docs/ema.md, "What the free
-    /// residues cost at a close pair").
+    /// diagram's; docs/ema.md, "Damped poles"), or the joint fit with rank-one residues,
+    /// beside the modes the selection left out that the curves need (the checked poles with one
+    /// response; docs/ema.md, "What the free residues cost at a close pair").
     #[arg(long, value_enum, default_value_t = PolesArg::RankOne)]
     pub poles: PolesArg,
     /// CMIF peaks listed: those standing at least this factor above the lower of their two
@@ -272,8 +272,9 @@ pub enum PolesArg {
     Refined,
     /// Each refined pole where it fits significantly better in the LSCF model's context.
     Checked,
-    /// With several references: the poles and participation factors fitted jointly with
-    /// rank-one residues (shape times participation); else as `checked`.
+    /// With several responses: the poles and participation factors fitted jointly with
+    /// rank-one residues (shape times participation; free over the responses with one
+    /// reference); with one response as `checked`.
     RankOne,
 }
 

@@ -271,16 +271,19 @@ fn stable_footnote(modes: &[Mode]) -> String {
 
 /// The method's last step, in words, as it runs on `set`'s curves.
 fn estimator_text(s: &EmaSettings, set: &FrfSet) -> &'static str {
-    match s
-        .estimator
-        .on(set.responses().len(), set.references().len())
-    {
+    match s.estimator.on(set.responses().len()) {
         _ if s.refine_iterations == 0 => "LSFD residues on the diagram's poles",
         PoleEstimator::Diagram => "LSFD residues on the diagram's poles",
         PoleEstimator::Refined => "poles refined with LSFD residues (variable projection)",
         PoleEstimator::Checked => {
             "poles refined with LSFD residues (variable projection), each refined pole kept only \
              where it fits significantly better than the diagram's in the LSCF model's own context"
+        }
+        PoleEstimator::RankOne if set.references().len() < 2 => {
+            "poles fitted jointly with each mode's residues over the responses (variable \
+             projection), beside the modes the selection left out that the curves need, each \
+             fitted pole kept only where it fits significantly better than the diagram's in the \
+             LSCF model's own context, then LSFD residues"
         }
         PoleEstimator::RankOne => {
             "poles and participation factors fitted jointly with rank-one residues (shape times \
