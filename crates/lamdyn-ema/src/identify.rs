@@ -655,19 +655,17 @@ fn rank_one_selected(
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<SelectedFit, EmaError> {
     if let Some(c) = context.filter(|_| data.references < 2) {
-        let mut beside = vec![];
+        let mut warnings = vec![];
         let mut fitted = checked_selected(data, selected, c, s, timings, || {
             let joint = rank_one_refined(data, selected, top, s, on_iteration)?;
-            beside = joint.beside;
+            warnings = joint.warnings;
             let alone = vec![false; joint.poles.len()];
             Ok(RefinedPoles {
                 poles: joint.poles,
                 alone,
             })
         })?;
-        fitted
-            .warnings
-            .extend(beside.iter().map(|&p| held_beside(p)));
+        fitted.warnings.extend(warnings);
         return Ok(fitted);
     }
     let mut clock = Instant::now();
@@ -683,9 +681,7 @@ fn rank_one_selected(
     )?;
     timings.residues += lap(&mut clock);
     let mut fitted = SelectedFit::refined(fit, joint.poles, held);
-    fitted
-        .warnings
-        .extend(joint.beside.iter().map(|&p| held_beside(p)));
+    fitted.warnings.extend(joint.warnings);
     fitted.deviations = joint.deviations;
     Ok(fitted)
 }
@@ -774,32 +770,56 @@ fn rank_one_refined(
         4 * s.refine_iterations,
         on_iteration,
     );
-    let Some(mut fit) = fit else {
+    let Some(fit) = fit else {
         return Ok(JointPoles {
             poles: poles.to_vec(),
-            beside: vec![],
+            warnings: vec![],
             deviations: None,
         });
     };
+    let n = poles.len();
     let order = exchanged_into_columns(&fit.poles, selected, &s.criteria);
-    fit.poles = order.iter().map(|&k| fit.poles[k]).collect();
-    let beside = fit.poles.split_off(poles.len());
-    if let Some(sd) = fit.deviations.as_mut() {
-        *sd = order.iter().take(poles.len()).map(|&k| sd[k]).collect();
-    }
+    // The fitted poles in their original order: a selected pole's fit is at its own index.
+    let fitted = &fit.poles;
+    let traded = (0..n)
+        .filter(|&r| order[r] >= n)
+        .map(|r| traded_places(selected[r].freq_hz, fitted[r], fitted[order[r]]));
+    let held = order[n..]
+        .iter()
+        .filter(|&&k| k >= n)
+        .map(|&k| held_beside(fitted[k]));
+    let warnings = traded.chain(held).collect();
     Ok(JointPoles {
-        poles: fit.poles,
-        beside,
-        deviations: fit.deviations,
+        poles: order[..n].iter().map(|&k| fitted[k]).collect(),
+        warnings,
+        deviations: fit
+            .deviations
+            .map(|sd| order[..n].iter().map(|&k| sd[k]).collect()),
     })
 }
 
 /// The rank-one fit's poles: those of the selection (index-aligned) with their standard
-/// deviations, and the modes it held beside them.
+/// deviations, and one warning per mode it held beside them and per place a held mode took.
 struct JointPoles {
     poles: Vec<Complex64>,
-    beside: Vec<Complex64>,
+    warnings: Vec<String>,
     deviations: Option<Vec<PoleSd>>,
+}
+
+/// The warning for the pole selected at `selected_hz` whose fit `ended` (rad/s) outside its
+/// column while the mode the fit held at `taken_by` lies in it ([`exchanged_into_columns`]).
+fn traded_places(selected_hz: f64, ended: Complex64, taken_by: Complex64) -> String {
+    let hz = |p: Complex64| p.norm() / (2.0 * std::f64::consts::PI);
+    let zeta = |p: Complex64| 100.0 * -p.re / p.norm();
+    format!(
+        "the rank-one fit moved the pole selected at {selected_hz:.2} Hz to {:.2} Hz (damping \
+         ratio {:.2} %), out of its column, and the mode it held at {:.2} Hz ({:.2} %) lies in \
+         that column: the two trade places, the first held beside the selected ones",
+        hz(ended),
+        zeta(ended),
+        hz(taken_by),
+        zeta(taken_by)
+    )
 }
 
 /// The warning for a mode `pole` (rad/s) the rank-one fit held beside the selection.
