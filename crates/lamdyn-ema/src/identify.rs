@@ -789,12 +789,11 @@ fn rank_one_refined(
         .filter(|&&k| k >= n)
         .map(|&k| held_beside(fitted[k]));
     let warnings = traded.chain(held).collect();
+    let fit = fit.in_order(&order[..n]);
     Ok(JointPoles {
-        poles: order[..n].iter().map(|&k| fitted[k]).collect(),
+        poles: fit.poles,
         warnings,
-        deviations: fit
-            .deviations
-            .map(|sd| order[..n].iter().map(|&k| sd[k]).collect()),
+        deviations: fit.deviations,
     })
 }
 
@@ -809,16 +808,14 @@ struct JointPoles {
 /// The warning for the pole selected at `selected_hz` whose fit `ended` (rad/s) outside its
 /// column while the mode the fit held at `taken_by` lies in it ([`exchanged_into_columns`]).
 fn traded_places(selected_hz: f64, ended: Complex64, taken_by: Complex64) -> String {
-    let hz = |p: Complex64| p.norm() / (2.0 * std::f64::consts::PI);
-    let zeta = |p: Complex64| 100.0 * -p.re / p.norm();
     format!(
         "the rank-one fit moved the pole selected at {selected_hz:.2} Hz to {:.2} Hz (damping \
          ratio {:.2} %), out of its column, and the mode it held at {:.2} Hz ({:.2} %) lies in \
          that column: the two trade places, the first held beside the selected ones",
-        hz(ended),
-        zeta(ended),
-        hz(taken_by),
-        zeta(taken_by)
+        pole_freq_hz(ended),
+        100.0 * pole_damping(ended),
+        pole_freq_hz(taken_by),
+        100.0 * pole_damping(taken_by)
     )
 }
 
@@ -828,8 +825,8 @@ fn held_beside(pole: Complex64) -> String {
         "the rank-one fit held a mode at {:.2} Hz (damping ratio {:.2} %) beside the selected \
          ones: the diagram's highest order has it stable, the selection left it out, and the \
          curves need it; it is not in the mode list (pick it to have it there)",
-        pole.norm() / (2.0 * std::f64::consts::PI),
-        100.0 * -pole.re / pole.norm()
+        pole_freq_hz(pole),
+        100.0 * pole_damping(pole)
     )
 }
 

@@ -294,6 +294,12 @@ impl RankOneFit {
     /// The fit in the order of `starts` ([`matched_order`]).
     fn matched_to(self, starts: &[Complex64]) -> Self {
         let order = matched_order(starts, &self.poles);
+        self.in_order(&order)
+    }
+
+    /// The poles `order` names (indices into this fit's), in that order, with their
+    /// deviations.
+    pub(crate) fn in_order(self, order: &[usize]) -> Self {
         Self {
             poles: order.iter().map(|&k| self.poles[k]).collect(),
             deviations: self
