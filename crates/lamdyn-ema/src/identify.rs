@@ -728,8 +728,9 @@ fn checked_selected(
 /// holds the modes of `top` (the diagram's highest order, stable) that are none of theirs and
 /// that the curves need ([`crate::rank_one::left_out`],
 /// [`crate::rank_one::fitted_with_the_modes_needed`]): a mode left out of the model would pull
-/// its neighbours towards it. A selected pole that left its column trades places with a held
-/// mode in that column ([`exchanged_into_columns`]).
+/// its neighbours towards it; with one reference, a second mode under each selected pole that
+/// holds a second shape ([`with_a_second_shape`]) is tried too. A selected pole that left its
+/// column trades places with a held mode in that column ([`exchanged_into_columns`]).
 ///
 /// # Errors
 /// [`EmaError::Invalid`] for a value that is not finite.
@@ -762,15 +763,21 @@ fn rank_one_refined(
             .ok()
             .flatten()
     };
+    let splittable = if refs == 1 {
+        with_a_second_shape(data, poles, &band_lines)
+    } else {
+        vec![]
+    };
     let fit = crate::rank_one::fitted_with_the_modes_needed(
         &samples,
         poles,
         &candidates,
+        &splittable,
         start,
         4 * s.refine_iterations,
         on_iteration,
     );
-    let Some(fit) = fit else {
+    let Some(crate::rank_one::HeldFit { fit, found_beside }) = fit else {
         return Ok(JointPoles {
             poles: poles.to_vec(),
             warnings: vec![],
@@ -787,7 +794,10 @@ fn rank_one_refined(
     let held = order[n..]
         .iter()
         .filter(|&&k| k >= n)
-        .map(|&k| held_beside(fitted[k]));
+        .map(|&k| match found_beside[k - n] {
+            Some(r) => held_found_beside(selected[r].freq_hz, fitted[k]),
+            None => held_beside(fitted[k]),
+        });
     let warnings = traded.chain(held).collect();
     let fit = fit.in_order(&order[..n]);
     Ok(JointPoles {
@@ -795,6 +805,21 @@ fn rank_one_refined(
         warnings,
         deviations: fit.deviations,
     })
+}
+
+/// The indices of `poles` under which the curves of `data` hold a second shape on the band's
+/// positive `lines` ([`second_shapes`], [`crate::quality::shows_a_second_shape`]), where the
+/// data calibrate that test ([`second_shape_calibrated`]: the modal model holds to the noise at
+/// the other poles); none elsewhere. On measured curves whose misfit is not noise every pole
+/// shows one, and a mode tried under each would fit the misfit.
+fn with_a_second_shape(data: BandCurves<'_>, poles: &[Complex64], lines: &[usize]) -> Vec<usize> {
+    let tests = second_shapes(poles, data.on_lines(lines), data.noise);
+    if !second_shape_calibrated(&tests) {
+        return vec![];
+    }
+    (0..poles.len())
+        .filter(|&r| tests[r].is_some_and(|t| crate::quality::shows_a_second_shape(&t)))
+        .collect()
 }
 
 /// The rank-one fit's poles: those of the selection (index-aligned) with their standard
@@ -825,6 +850,22 @@ fn held_beside(pole: Complex64) -> String {
         "the rank-one fit held a mode at {:.2} Hz (damping ratio {:.2} %) beside the selected \
          ones: the diagram's highest order has it stable, the selection left it out, and the \
          curves need it; it is not in the mode list (pick it to have it there)",
+        pole_freq_hz(pole),
+        100.0 * pole_damping(pole)
+    )
+}
+
+/// The warning for a mode `pole` (rad/s) the rank-one fit held beside the selection that it
+/// found beside the pole selected at `selected_hz` (one reference: a second mode under it,
+/// [`crate::rank_one::fitted_with_the_modes_needed`]); it may have ended elsewhere, at a mode
+/// the diagram lacks.
+fn held_found_beside(selected_hz: f64, pole: Complex64) -> String {
+    format!(
+        "the rank-one fit held a mode at {:.2} Hz (damping ratio {:.2} %) beside the selected \
+         ones: no pole of the diagram stands for it, the curves need it, and it was found \
+         beside the pole selected at {selected_hz:.2} Hz (with one reference the diagram has one \
+         pole over two close damped modes); it is not in the mode list, and the verdicts are \
+         made without it",
         pole_freq_hz(pole),
         100.0 * pole_damping(pole)
     )

@@ -372,6 +372,16 @@ fn shape_flag(mode: &ModeEvidence) -> Option<QualityFlag> {
     })
 }
 
+/// Whether the test `t` finds a second shape under its pole worth naming (module docs): Z of
+/// at least [`SECOND_SHAPE_STATISTIC`], a chance of at most [`SECOND_SHAPE_CHANCE`] and a
+/// relative amplitude of at least [`SECOND_SHAPE_AMPLITUDE`]. Meaningful only where the data
+/// calibrate the test ([`second_shape_calibrated`]).
+pub fn shows_a_second_shape(t: &SecondShape) -> bool {
+    t.statistic >= SECOND_SHAPE_STATISTIC
+        && t.chance <= SECOND_SHAPE_CHANCE
+        && t.relative_amplitude >= SECOND_SHAPE_AMPLITUDE
+}
+
 /// The verdict on a mode from its evidence (module docs).
 pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
     let frac_drop = mode.frac_drop;
@@ -396,12 +406,10 @@ pub fn assess(mode: &ModeEvidence, cmif_peaks: &[CmifPeak]) -> ModeQuality {
             count: mode.stable_count,
         });
     }
-    if let Some(t) = mode.second_shape.filter(|t| {
-        mode.second_shape_calibrated
-            && t.statistic >= SECOND_SHAPE_STATISTIC
-            && t.chance <= SECOND_SHAPE_CHANCE
-            && t.relative_amplitude >= SECOND_SHAPE_AMPLITUDE
-    }) {
+    if let Some(t) = mode
+        .second_shape
+        .filter(|t| mode.second_shape_calibrated && shows_a_second_shape(t))
+    {
         flags.push(QualityFlag::SecondShape {
             statistic: t.statistic,
             relative_amplitude: t.relative_amplitude,

@@ -33,7 +33,10 @@
 //! towards it. The stable poles of the diagram's highest order that are none of the given
 //! poles' own ([`left_out`]) are candidates; after each fit the one the curves need most joins
 //! it, where the drop of the sum of squares it brings exceeds what noise alone gives
-//! ([`fitted_with_the_modes_needed`]).
+//! ([`fitted_with_the_modes_needed`]). With one reference the diagram has one pole over two
+//! close damped modes, and no column for the second; a second mode under each pole the caller
+//! names (where the curves hold a second shape under it, [`crate::second_shape`]) is then a
+//! candidate too ([`split_candidates`]).
 //!
 //! **The standard deviations.** The sandwich covariance of Kaufman's Jacobian at the fit's end,
 //! each curve's residual variance in the middle ([`deviations`]): the noise's part of the
@@ -556,36 +559,116 @@ pub(crate) fn left_out(top: &[Complex64], poles: &[Complex64]) -> Vec<Complex64>
     without_own(top.to_vec(), poles, |q| q)
 }
 
-/// The rank-one fit from `poles` (module docs, [`rank_one_poles`]) with the modes of
-/// `candidates` the curves need beside them: after each fit the candidate [`next_needed`]
-/// names joins the fitted poles and the fit runs again from there, until none is needed. The
-/// fit's poles past `poles.len()` are those modes. None where the residue problem fails at the
-/// start; where it fails once a candidate has joined, the fit without it. Each fit counts its
-/// own steps to `on_iteration` ([`rank_one_poles`]).
+/// The rank-one fit with the modes it holds beside the poles it started from.
+pub(crate) struct HeldFit {
+    /// The poles, those of the starts first (index-aligned), then the held modes in the order
+    /// they joined.
+    pub fit: RankOneFit,
+    /// Per held mode: the start it was found beside (a second mode under it, or that start's
+    /// own pole where a held mode took its place, [`nearest_to_their_starts`]), None for a mode
+    /// of the candidates.
+    pub found_beside: Vec<Option<usize>>,
+}
+
+/// The rank-one fit from `poles` (module docs, [`rank_one_poles`]) with the modes the curves
+/// need beside them: after each fit the mode [`next_needed`] names joins the fitted poles and
+/// the fit runs again from there, until none is needed. The modes tried are those of
+/// `candidates` and a second mode under each of the poles `splittable` names (indices into
+/// `poles`), once each ([`split_candidates`]): one reference cannot tell two close damped modes
+/// apart in the diagram (one pole over the pair), but their shapes over the responses differ,
+/// and a missing mode under a pole leaves far more in the residual than noise. Each mode keeps
+/// to its own
+/// start ([`RankOneFit::matched_to`]). None where the residue problem fails at the start;
+/// where it fails once a mode has joined, the fit without it. Each fit counts its own steps to
+/// `on_iteration` ([`rank_one_poles`]).
 pub(crate) fn fitted_with_the_modes_needed(
     samples: &StackedCurves,
     poles: &[Complex64],
     candidates: &[Complex64],
+    splittable: &[usize],
     participation_of: impl Fn(&[Complex64]) -> Option<Participation>,
     iterations: usize,
     on_iteration: &dyn Fn(usize, usize),
-) -> Option<RankOneFit> {
+) -> Option<HeldFit> {
     let fit_from =
         |starts: &[Complex64], l| rank_one_poles(samples, starts, l, iterations, on_iteration);
     let mut fit = fit_from(poles, participation_of(poles)?)?;
     let mut origins = poles.to_vec();
-    let mut rest = candidates.to_vec();
-    while let Some(k) = next_needed(samples, &fit.poles, &rest, &participation_of) {
-        let joining = rest.swap_remove(k);
+    let mut split_from = vec![];
+    let mut rest: Vec<(Complex64, Option<usize>)> = candidates.iter().map(|&c| (c, None)).collect();
+    rest.extend(splittable.iter().map(|&r| (poles[r], Some(r))));
+    loop {
+        // (entry of `rest`, start): a candidate tries one start, a split two.
+        let tried: Vec<(usize, Complex64)> = rest
+            .iter()
+            .enumerate()
+            .flat_map(|(i, &(c, split))| match split {
+                None => vec![(i, c)],
+                Some(r) => split_candidates(fit.poles[r]).map(|c| (i, c)).to_vec(),
+            })
+            .collect();
+        let tried_starts: Vec<Complex64> = tried.iter().map(|t| t.1).collect();
+        let Some(k) = next_needed(samples, &fit.poles, &tried_starts, &participation_of) else {
+            break;
+        };
+        let (i, joining) = tried[k];
+        let (_, split) = rest.remove(i);
         let starts: Vec<Complex64> = fit.poles.iter().copied().chain([joining]).collect();
         let next = participation_of(&starts).and_then(|l| fit_from(&starts, l));
         let Some(next) = next else { break };
         origins.push(joining);
+        split_from.push(split);
         // A pole the previous fit pulled towards the missing mode may trade places with it
         // now: each mode goes back to its own start.
         fit = next.matched_to(&origins);
     }
-    Some(fit)
+    let held = HeldFit {
+        fit,
+        found_beside: split_from,
+    };
+    Some(nearest_to_their_starts(held, poles))
+}
+
+/// `held` with each of the first `starts.len()` poles (the given ones) traded with a held mode
+/// found beside one of them that lies nearer its start, until none does (the held mode's
+/// origin then that start): the fit's modes are a set, and a split's own
+/// start is one side of its pole taken at random, so which of the modes a given pole ends as
+/// is the one nearest where it was given. Each trade shortens the given poles' summed distance
+/// to their starts, so the trades end.
+fn nearest_to_their_starts(held: HeldFit, starts: &[Complex64]) -> HeldFit {
+    let HeldFit {
+        fit,
+        mut found_beside,
+    } = held;
+    let n = starts.len();
+    let mut order: Vec<usize> = (0..fit.poles.len()).collect();
+    let distance = |k: usize, r: usize| (fit.poles[k] - starts[r]).norm();
+    let mut traded = true;
+    while traded {
+        traded = false;
+        for r in 0..n {
+            for q in n..order.len() {
+                let split = found_beside[q - n].is_some();
+                if split && distance(order[q], r) < distance(order[r], r) {
+                    order.swap(r, q);
+                    found_beside[q - n] = Some(r);
+                    traded = true;
+                }
+            }
+        }
+    }
+    HeldFit {
+        fit: fit.in_order(&order),
+        found_beside,
+    }
+}
+
+/// The two starts of a second mode under `pole` (rad/s): its natural frequency moved by its
+/// half-power half-width ζω_n either way, its damping kept.
+fn split_candidates(pole: Complex64) -> [Complex64; 2] {
+    let (wn, zeta) = (pole.norm(), -pole.re / pole.norm());
+    let at = |w: f64| Complex64::new(-zeta * w, w * (1.0 - zeta * zeta).max(0.0).sqrt());
+    [at(wn * (1.0 - zeta)), at(wn * (1.0 + zeta))]
 }
 
 /// The one of `candidates` the curves need most beside the fitted `poles`: the one whose mode
@@ -656,6 +739,7 @@ pub(crate) fn start_participation(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lscf::{pole_damping, pole_freq_hz};
     use crate::test_frfs::{accelerance, pole};
 
     /// Modes (f Hz, ζ) of shapes `phi[r]` over six responses, the references at responses 0, 2
@@ -759,21 +843,26 @@ mod tests {
             &s,
             &picked,
             &candidates,
-            |set| Some(start_of(&freqs, &curves, set)),
-            60,
-            &|_, _| {},
-        )
-        .unwrap();
-        assert_eq!(fit.poles.len(), 3);
-        let all = fitted_with_the_modes_needed(
-            &s,
-            &[picked[0], candidates[1], picked[1]],
             &[],
             |set| Some(start_of(&freqs, &curves, set)),
             60,
             &|_, _| {},
         )
         .unwrap();
+        assert_eq!(fit.found_beside, [None]);
+        let fit = fit.fit;
+        assert_eq!(fit.poles.len(), 3);
+        let all = fitted_with_the_modes_needed(
+            &s,
+            &[picked[0], candidates[1], picked[1]],
+            &[],
+            &[],
+            |set| Some(start_of(&freqs, &curves, set)),
+            60,
+            &|_, _| {},
+        )
+        .unwrap()
+        .fit;
         for (p, q) in fit
             .poles
             .iter()
@@ -781,6 +870,93 @@ mod tests {
         {
             assert!((p - q).norm() < 1e-6 * q.norm(), "{p} against {q}");
         }
+    }
+
+    /// A given pole whose fit ended at another mode (160 Hz) while the mode split from beside it
+    /// lies by its start takes that mode's place, the held one now found beside it; a mode of
+    /// the candidates (from the diagram, its own start) trades with none.
+    #[test]
+    fn a_given_pole_takes_the_split_mode_nearest_its_start() {
+        let starts = [pole(60.0, 0.08), pole(103.0, 0.03)];
+        let fit = RankOneFit {
+            poles: vec![
+                pole(60.1, 0.08),
+                pole(160.0, 0.08),
+                pole(102.9, 0.03),
+                pole(102.5, 0.08),
+            ],
+            deviations: None,
+        };
+        let held = HeldFit {
+            fit,
+            found_beside: vec![None, Some(0)],
+        };
+        let traded = nearest_to_their_starts(held, &starts);
+        assert_eq!(
+            traded.fit.poles,
+            [
+                pole(60.1, 0.08),
+                pole(102.5, 0.08),
+                pole(102.9, 0.03),
+                pole(160.0, 0.08)
+            ]
+        );
+        assert_eq!(traded.found_beside, [None, Some(1)]);
+    }
+
+    /// Six responses to the one reference at response 0 (curve o is response o), modes of
+    /// `MODES` with `SHAPES`.
+    fn one_reference(freqs: &[f64], modes: &[(f64, f64)]) -> Vec<Vec<Complex64>> {
+        (0..6)
+            .map(|o| accelerance(freqs, modes, |r| SHAPES[r][o] * SHAPES[r][0]))
+            .collect()
+    }
+
+    /// The one-reference fit of `curves` from `picked`, no candidates.
+    fn one_reference_fit(
+        freqs: &[f64],
+        curves: &[Vec<Complex64>],
+        picked: &[Complex64],
+    ) -> HeldFit {
+        let refs: Vec<&[Complex64]> = curves.iter().map(Vec::as_slice).collect();
+        let lines: Vec<usize> = (0..freqs.len()).collect();
+        let s = StackedCurves::new(freqs, &refs, 1, Quantity::Accelerance, &lines, 200.0).unwrap();
+        let l = |set: &[Complex64]| Some(vec![vec![Complex64::ONE]; set.len()]);
+        let all: Vec<usize> = (0..picked.len()).collect();
+        fitted_with_the_modes_needed(&s, picked, &[], &all, l, 60, &|_, _| {}).unwrap()
+    }
+
+    /// With one reference a pole picked over the damped pair 100 / 101.2 Hz (1.2 % apart, a
+    /// seventh of a half-power bandwidth) holds a second mode under it, and the two fitted poles
+    /// are the pair's, each within four of its standard deviations (1 % noise); an isolated
+    /// mode's pole holds none.
+    #[test]
+    fn one_reference_holds_the_second_mode_under_a_pole_over_a_pair() {
+        let freqs: Vec<f64> = (0..=1800).map(|k| 20.0 + 0.1 * f64::from(k)).collect();
+        let curves = noisy(&one_reference(&freqs, &MODES), 0.01, 11);
+        let held = one_reference_fit(&freqs, &curves, &[pole(60.0, 0.08), pole(100.6, 0.06)]);
+        assert_eq!(held.found_beside, [Some(1)]);
+        let sd = held.fit.deviations.unwrap();
+        for (&(f, z), truth_at) in MODES.iter().zip([0, 1, 2]) {
+            let k = (0..3)
+                .min_by(|&a, &b| {
+                    let d = |q: usize| (pole_freq_hz(held.fit.poles[q]) - f).abs();
+                    d(a).total_cmp(&d(b))
+                })
+                .unwrap();
+            let p = held.fit.poles[k];
+            assert!(
+                (pole_freq_hz(p) - f).abs() < 4.0 * sd[k].freq_hz
+                    && (pole_damping(p) - z).abs() < 4.0 * sd[k].damping_ratio,
+                "mode {truth_at}: {} Hz, {} against {f} Hz, {z} (sd {:?})",
+                pole_freq_hz(p),
+                pole_damping(p),
+                sd[k]
+            );
+        }
+        let alone = noisy(&one_reference(&freqs, &MODES[..2]), 0.01, 11);
+        let held = one_reference_fit(&freqs, &alone, &[pole(60.0, 0.08), pole(100.0, 0.08)]);
+        assert!(held.found_beside.is_empty(), "{:?}", held.fit.poles);
     }
 
     /// Over 40 noise seeds (1 % of each curve's RMS) the scatter of the fitted close pair's f
