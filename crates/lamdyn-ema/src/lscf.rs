@@ -76,6 +76,14 @@ pub fn pole_damping(p: Complex64) -> f64 {
     -p.re / p.norm()
 }
 
+/// The pole λ = ω_n(−ζ + i√(1 − ζ²)), ω_n = 2π `freq_hz`, of natural frequency `freq_hz` and
+/// damping ratio `damping` (the inverse of [`pole_freq_hz`] and [`pole_damping`]; at ζ ≥ 1
+/// on the negative real axis).
+pub fn pole_at(freq_hz: f64, damping: f64) -> Complex64 {
+    let w = 2.0 * PI * freq_hz;
+    Complex64::new(-damping * w, w * (1.0 - damping * damping).max(0.0).sqrt())
+}
+
 /// Whether the half-power bands of two poles overlap: |f₁ − f₂| < ζ₁f₁ + ζ₂f₂, with f = |λ|/2π
 /// and ζf = −Re λ/2π (the half-power half-width).
 pub fn half_power_bands_overlap(a: Complex64, b: Complex64) -> bool {

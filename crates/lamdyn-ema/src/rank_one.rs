@@ -46,6 +46,7 @@ use crate::band::pseudo_modes_above;
 use crate::context::chi_square_99;
 use crate::denominator::without_own;
 use crate::error::EmaError;
+use crate::lscf::{pole_at, pole_damping, pole_freq_hz};
 use crate::lsfd::{PoleSd, pole_sd, sandwich};
 use crate::pole_fit::{marquardt_step, pole_parameters, to_poles};
 use crate::projection::{LineBasis, LineSamples, solve_by_blocks, unit_columns};
@@ -577,10 +578,10 @@ pub(crate) struct HeldFit {
 /// `poles`), once each ([`split_candidates`]): one reference cannot tell two close damped modes
 /// apart in the diagram (one pole over the pair), but their shapes over the responses differ,
 /// and a missing mode under a pole leaves far more in the residual than noise. Each mode keeps
-/// to its own
-/// start ([`RankOneFit::matched_to`]). None where the residue problem fails at the start;
-/// where it fails once a mode has joined, the fit without it. Each fit counts its own steps to
-/// `on_iteration` ([`rank_one_poles`]).
+/// to its own start ([`RankOneFit::matched_to`]), and each given pole ends as the split mode
+/// nearest its start where one is nearer ([`nearest_to_their_starts`]). None where the residue
+/// problem fails at the start; where it fails once a mode has joined, the fit without it. Each
+/// fit counts its own steps to `on_iteration` ([`rank_one_poles`]).
 pub(crate) fn fitted_with_the_modes_needed(
     samples: &StackedCurves,
     poles: &[Complex64],
@@ -594,17 +595,17 @@ pub(crate) fn fitted_with_the_modes_needed(
         |starts: &[Complex64], l| rank_one_poles(samples, starts, l, iterations, on_iteration);
     let mut fit = fit_from(poles, participation_of(poles)?)?;
     let mut origins = poles.to_vec();
-    let mut split_from = vec![];
-    let mut rest: Vec<(Complex64, Option<usize>)> = candidates.iter().map(|&c| (c, None)).collect();
-    rest.extend(splittable.iter().map(|&r| (poles[r], Some(r))));
+    let mut found_beside = vec![];
+    let mut rest: Vec<Trial> = candidates.iter().map(|&c| Trial::Candidate(c)).collect();
+    rest.extend(splittable.iter().map(|&r| Trial::SecondUnder(r)));
     loop {
         // (entry of `rest`, start): a candidate tries one start, a split two.
         let tried: Vec<(usize, Complex64)> = rest
             .iter()
             .enumerate()
-            .flat_map(|(i, &(c, split))| match split {
-                None => vec![(i, c)],
-                Some(r) => split_candidates(fit.poles[r]).map(|c| (i, c)).to_vec(),
+            .flat_map(|(i, trial)| match *trial {
+                Trial::Candidate(c) => vec![(i, c)],
+                Trial::SecondUnder(r) => split_candidates(fit.poles[r]).map(|c| (i, c)).to_vec(),
             })
             .collect();
         let tried_starts: Vec<Complex64> = tried.iter().map(|t| t.1).collect();
@@ -612,21 +613,28 @@ pub(crate) fn fitted_with_the_modes_needed(
             break;
         };
         let (i, joining) = tried[k];
-        let (_, split) = rest.remove(i);
+        let trial = rest.remove(i);
         let starts: Vec<Complex64> = fit.poles.iter().copied().chain([joining]).collect();
         let next = participation_of(&starts).and_then(|l| fit_from(&starts, l));
         let Some(next) = next else { break };
         origins.push(joining);
-        split_from.push(split);
+        found_beside.push(match trial {
+            Trial::Candidate(_) => None,
+            Trial::SecondUnder(r) => Some(r),
+        });
         // A pole the previous fit pulled towards the missing mode may trade places with it
         // now: each mode goes back to its own start.
         fit = next.matched_to(&origins);
     }
-    let held = HeldFit {
-        fit,
-        found_beside: split_from,
-    };
+    let held = HeldFit { fit, found_beside };
     Some(nearest_to_their_starts(held, poles))
+}
+
+/// A mode tried beside the fitted poles: a candidate's start, or a second mode under the given
+/// pole of that index ([`split_candidates`] of its current fit).
+enum Trial {
+    Candidate(Complex64),
+    SecondUnder(usize),
 }
 
 /// `held` with each of the first `starts.len()` poles (the given ones) traded with a held mode
@@ -666,9 +674,11 @@ fn nearest_to_their_starts(held: HeldFit, starts: &[Complex64]) -> HeldFit {
 /// The two starts of a second mode under `pole` (rad/s): its natural frequency moved by its
 /// half-power half-width ζω_n either way, its damping kept.
 fn split_candidates(pole: Complex64) -> [Complex64; 2] {
-    let (wn, zeta) = (pole.norm(), -pole.re / pole.norm());
-    let at = |w: f64| Complex64::new(-zeta * w, w * (1.0 - zeta * zeta).max(0.0).sqrt());
-    [at(wn * (1.0 - zeta)), at(wn * (1.0 + zeta))]
+    let (f, zeta) = (pole_freq_hz(pole), pole_damping(pole));
+    [
+        pole_at(f * (1.0 - zeta), zeta),
+        pole_at(f * (1.0 + zeta), zeta),
+    ]
 }
 
 /// The one of `candidates` the curves need most beside the fitted `poles`: the one whose mode
@@ -739,7 +749,6 @@ pub(crate) fn start_participation(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lscf::{pole_damping, pole_freq_hz};
     use crate::test_frfs::{accelerance, pole};
 
     /// Modes (f Hz, ζ) of shapes `phi[r]` over six responses, the references at responses 0, 2
