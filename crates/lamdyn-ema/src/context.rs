@@ -57,6 +57,13 @@
 //! test's decision does not depend on any curve's scale or units. The refinement itself stays
 //! unweighted: weighting it too traded modes for others (docs/ema.md, "Damped poles").
 //!
+//! **Several estimates.** An estimator may move a pole where the context cannot follow: with one
+//! reference the rank-one fit resolves two modes under a pole over a close pair, where the
+//! context has one pole, and the check refuses the pole of the pair. There another estimate of
+//! the same pole (the joint refinement's, one pole as the context's) is tried by the same test,
+//! against the diagram's poles ([`RefinementCheck::taken_first`]; docs/ema.md, "Where the fit
+//! and the context disagree").
+//!
 //! **Moves that change the model.** The refinement corrects the diagram's poles; a refined pole
 //! that ends nearer another diagram pole than its own has merged with or swapped for that
 //! neighbour, and is never taken. A pole the refinement lost (one that left its column in the
@@ -270,16 +277,37 @@ impl<'a> RefinementCheck<'a> {
         taken
     }
 
-    /// The modal model of the poles [`Self::taken`] of `refined` ([`lsfd`] over the band).
+    /// The poles taken of several `estimates` in order of preference: each pole the first
+    /// estimate whose own pole there is [`Self::taken`], each trial judged against the diagram's
+    /// poles (the other poles at the diagram's, as with one estimate); the diagram's pole where
+    /// none is. Each estimate is a test of its own at the 99 % point, so the chance that noise
+    /// alone passes one grows with their number: a later estimate is for the poles an earlier
+    /// one could not fit in this context (module docs).
+    pub fn taken_first(&self, estimates: &[Estimate<'_>]) -> Vec<Complex64> {
+        let diagram = &self.diagram;
+        let mut taken = diagram.clone();
+        for e in estimates {
+            let open = |r: usize| taken[r] == diagram[r];
+            let tried: Vec<Complex64> = (0..diagram.len())
+                .map(|r| if open(r) { e.poles[r] } else { diagram[r] })
+                .collect();
+            let these = self.taken(&tried, e.refitted_alone);
+            for (r, pole) in these.into_iter().enumerate() {
+                if taken[r] == diagram[r] {
+                    taken[r] = pole;
+                }
+            }
+        }
+        taken
+    }
+
+    /// The modal model of the poles [`Self::taken_first`] of `estimates` ([`lsfd`] over the
+    /// band).
     ///
     /// # Errors
     /// As [`lsfd`].
-    pub fn fit(
-        &self,
-        refined: &[Complex64],
-        refitted_alone: &[bool],
-    ) -> Result<ModalFit, EmaError> {
-        let taken = self.taken(refined, refitted_alone);
+    pub fn fit(&self, estimates: &[Estimate<'_>]) -> Result<ModalFit, EmaError> {
+        let taken = self.taken_first(estimates);
         lsfd(
             self.freqs_hz,
             self.curves,
@@ -288,6 +316,17 @@ impl<'a> RefinementCheck<'a> {
             self.band_hz,
         )
     }
+}
+
+/// One estimator's poles for the check: index-aligned with the diagram's poles (those it lost
+/// already put back, module docs), and which of them the local step refitted alone (module
+/// `local_refit`).
+#[derive(Debug, Clone, Copy)]
+pub struct Estimate<'e> {
+    /// The poles, rad/s.
+    pub poles: &'e [Complex64],
+    /// Whether each pole is the local step's.
+    pub refitted_alone: &'e [bool],
 }
 
 /// The local step's resolution as a fraction of a pole's half-power half-width (−Re λ): a
@@ -453,6 +492,20 @@ mod tests {
             }
         }
 
+        /// The mode's curve with complex noise of `level` times its RMS over the band's
+        /// lines (seed `seed`).
+        fn with_noise(&self, level: f64, seed: u64) -> Vec<Complex64> {
+            let lines = &self.lines;
+            let rms = (lines.iter().map(|&k| self.clean[k].norm_sqr()).sum::<f64>()
+                / lines.len() as f64)
+                .sqrt();
+            let mut noise = gaussian_sequence(seed);
+            self.clean
+                .iter()
+                .map(|h| h + level * rms * noise())
+                .collect()
+        }
+
         /// The check of the diagram's pole `diagram` on `curves`.
         fn check<'a>(
             &'a self,
@@ -478,16 +531,7 @@ mod tests {
     #[test]
     fn a_pole_refitted_alone_is_taken_where_the_context_cannot_tell() {
         let mode = OneMode::new();
-        let lines = &mode.lines;
-        let rms = (lines.iter().map(|&k| mode.clean[k].norm_sqr()).sum::<f64>()
-            / lines.len() as f64)
-            .sqrt();
-        let mut noise = gaussian_sequence(11);
-        let curve: Vec<Complex64> = mode
-            .clean
-            .iter()
-            .map(|h| h + 0.05 * rms * noise())
-            .collect();
+        let curve = mode.with_noise(0.05, 11);
         let curves: [&[Complex64]; 1] = [&curve];
         let truth = mode.truth;
         let check = mode.check(&curves, truth * Complex64::new(1.0 + 1e-4, 0.0));
@@ -495,6 +539,36 @@ mod tests {
         assert!(a_local_correction(diagram[0], truth));
         assert_eq!(check.taken(&[truth], &[false]), diagram);
         assert_eq!(check.taken(&[truth], &[true]), vec![truth]);
+    }
+
+    /// One mode with noise, the diagram's pole 0.3 % off in frequency. An estimate the check
+    /// refuses (further off still) gives way to the next one, and of two estimates it would
+    /// take, the first is taken.
+    #[test]
+    fn a_later_estimate_is_tried_where_an_earlier_one_is_refused() {
+        let mode = OneMode::new();
+        let curve = mode.with_noise(0.05, 13);
+        let curves: [&[Complex64]; 1] = [&curve];
+        let truth = mode.truth;
+        let off = |by: f64| truth * Complex64::new(1.0 + by, 0.0);
+        let check = mode.check(&curves, off(3e-3));
+        let diagram = check.diagram.clone();
+        let (worse, near) = ([off(6e-3)], [off(5e-4)]);
+        assert_eq!(check.taken(&worse, &[false]), diagram);
+        assert_eq!(check.taken(&near, &[false]), near.to_vec());
+        assert_eq!(check.taken(&[truth], &[false]), vec![truth]);
+        fn estimate(poles: &[Complex64]) -> Estimate<'_> {
+            Estimate {
+                poles,
+                refitted_alone: &[false],
+            }
+        }
+        let truth = [truth];
+        let refused_first = [estimate(&worse), estimate(&truth)];
+        assert_eq!(check.taken_first(&refused_first), truth.to_vec());
+        let both_pass = [estimate(&near), estimate(&truth)];
+        assert_eq!(check.taken_first(&both_pass), near.to_vec());
+        assert_eq!(check.taken_first(&[estimate(&worse)]), diagram);
     }
 
     /// One mode and a smooth background the context model lacks, with noise a ten-thousandth

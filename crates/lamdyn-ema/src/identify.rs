@@ -7,7 +7,7 @@
 use crate::columns::{
     HeldPoles, PutBack, exchanged_into_columns, in_their_columns, left_their_columns,
 };
-use crate::context::{LscfContext, RefinementCheck};
+use crate::context::{Estimate, LscfContext, RefinementCheck};
 use crate::error::{EmaError, invalid};
 use crate::local_refit::{RefitBand, refitted_alone};
 use crate::local_residues::local_residues;
@@ -583,20 +583,7 @@ fn fit_selected(
     } else {
         s.estimator.on(responses)
     };
-    let refine = || {
-        let joint = refined_poles(
-            freqs,
-            curves,
-            quantity,
-            &poles,
-            band,
-            s.refine_lines,
-            s.refine_iterations,
-            context,
-            &progress,
-        )?;
-        refitted_where_alone(data, joint, selected, s)
-    };
+    let refine = || refined_jointly(data, selected, context, s, &progress);
     let fitted = match (estimator, context) {
         (PoleEstimator::Diagram, _) => {
             on_stage("residues (LSFD)");
@@ -610,7 +597,7 @@ fn fit_selected(
             }
         }
         (PoleEstimator::Checked, Some(c)) => {
-            checked_selected(data, selected, c, s, timings, refine)?
+            checked_selected(data, selected, c, s, timings, refine, None)?
         }
         (PoleEstimator::RankOne, _) => {
             on_stage(&if data.references < 2 {
@@ -638,10 +625,15 @@ fn fit_selected(
 /// fit leans on the model's outside terms as the refinement does (on exact FRFs of damped modes
 /// near the band's upper edge it moves the diagram's exact poles): there each fitted pole is
 /// checked in the LSCF model's `context` as [`PoleEstimator::Checked`] checks the refined ones
-/// (kept where it fits the curves significantly better than the diagram's; no pole is refitted
-/// alone, module `local_refit`: docs/ema.md, "One reference: the modes left out"), and the
-/// deviations are [`pole_deviations`]' at the poles taken. `on_iteration` counts the fit's
-/// steps.
+/// (kept where it fits the curves significantly better than the diagram's; the fit refits no
+/// pole alone, module `local_refit`: docs/ema.md, "One reference: the modes left out"), and
+/// where the check keeps the diagram's pole in its column, the checked estimator's refined pole
+/// ([`refined_jointly`]: the joint refinement, each lone pole refitted on its own lines) is
+/// checked in its place ([`checked_selected`]): the rank-one fit may resolve two modes where the
+/// context has one pole (a second mode under a pole), and one pole over the pair is all the
+/// context can judge (docs/ema.md, "Where the fit and the context disagree"). The deviations
+/// are then [`pole_deviations`]' at the poles taken.
+/// `on_iteration` counts the fit's steps.
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -656,7 +648,7 @@ fn rank_one_selected(
 ) -> Result<SelectedFit, EmaError> {
     if let Some(c) = context.filter(|_| data.references < 2) {
         let mut warnings = vec![];
-        let mut fitted = checked_selected(data, selected, c, s, timings, || {
+        let rank_one = || {
             let joint = rank_one_refined(data, selected, top, s, on_iteration)?;
             warnings = joint.warnings;
             let alone = vec![false; joint.poles.len()];
@@ -664,7 +656,9 @@ fn rank_one_selected(
                 poles: joint.poles,
                 alone,
             })
-        })?;
+        };
+        let jointly = || refined_jointly(data, selected, Some(c), s, &|_, _| {});
+        let mut fitted = checked_selected(data, selected, c, s, timings, rank_one, Some(&jointly))?;
         fitted.warnings.extend(warnings);
         return Ok(fitted);
     }
@@ -689,10 +683,18 @@ fn rank_one_selected(
 /// The modal model of the `selected` poles, each pole `refine` returns put back where it left
 /// its column ([`in_their_columns`]) and then checked in the LSCF model's `context`
 /// ([`RefinementCheck`], built on another thread while `refine` runs): the refined pole where it
-/// fits the curves significantly better than the diagram's, the diagram's elsewhere.
+/// fits the curves significantly better than the diagram's. Where it does not, and the pole
+/// stayed in its column, the `fallback` estimate's pole is checked in its place
+/// ([`RefinementCheck::taken_first`]); the diagram's where neither is taken. The fallback runs
+/// on another thread beside `refine` whether it is needed or not: started after the check, it
+/// made the measured dam's process 40 % slower (docs/ema.md, "Where the fit and the context
+/// disagree"). The refined
+/// pole reported beside each mode is the taken estimate's, `refine`'s elsewhere, and the
+/// warnings are those of `refine`'s poles that left their columns (the diagram's pole stands
+/// there).
 ///
 /// # Errors
-/// As [`lsfd`], and what `refine` returns.
+/// As [`lsfd`], and what `refine` returns (a `fallback` that fails is not tried).
 fn checked_selected(
     data: BandCurves<'_>,
     selected: &[SelectedPole],
@@ -700,25 +702,89 @@ fn checked_selected(
     s: &EmaSettings,
     timings: &mut EmaTimings,
     refine: impl FnOnce() -> Result<RefinedPoles, EmaError>,
+    fallback: Option<&(dyn Fn() -> Result<RefinedPoles, EmaError> + Sync)>,
 ) -> Result<SelectedFit, EmaError> {
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
     let mut clock = Instant::now();
-    let (refined, check) = refined_beside_the_check(data, &poles, s.refine_lines, context, refine)?;
-    timings.refinement += lap(&mut clock);
-    let held = in_their_columns(&refined.poles, selected, &s.criteria);
-    // The scope has run the spawned check; without it (never) the diagram's poles.
-    let fit = match &check {
-        Some(check) => check.fit(&held.poles, &refined.alone)?,
-        None => lsfd(
-            data.freqs_hz,
-            data.curves,
-            data.quantity,
-            &poles,
-            data.band_hz,
-        )?,
+    let both = || {
+        let mut second = None;
+        let first = rayon::in_place_scope(|scope| {
+            if let Some(estimate) = fallback {
+                scope.spawn(|_| second = Some(estimate()));
+            }
+            refine()
+        })?;
+        // The scope has run the spawned fallback, if any; where it failed, the first stands.
+        Ok((first, second.and_then(Result::ok)))
     };
+    let ((first, second), check) =
+        refined_beside_the_check(data, &poles, s.refine_lines, context, both)?;
+    let first_held = in_their_columns(&first.poles, selected, &s.criteria);
+    timings.refinement += lap(&mut clock);
+    // The scope has run the spawned check; without it (never) the diagram's poles.
+    let Some(check) = check else {
+        let fit = lsfd_of(data, &poles)?;
+        return Ok(SelectedFit::refined(fit, first.poles, first_held));
+    };
+    let first_taken = check.taken(&first_held.poles, &first.alone);
+    let refused = |r: usize| first_held.put_back[r].is_none() && first_taken[r] == poles[r];
+    let Some(second) = second.filter(|_| (0..poles.len()).any(refused)) else {
+        let fit = lsfd_of(data, &first_taken)?;
+        timings.check += lap(&mut clock);
+        return Ok(SelectedFit::refined(fit, first.poles, first_held));
+    };
+    // The fallback where the first was refused in its column, the diagram's elsewhere.
+    let second_held = in_their_columns(&second.poles, selected, &s.criteria);
+    let tried: Vec<Complex64> = (0..poles.len())
+        .map(|r| {
+            if refused(r) {
+                second_held.poles[r]
+            } else {
+                poles[r]
+            }
+        })
+        .collect();
+    let taken = check.taken_first(&[
+        Estimate {
+            poles: &first_held.poles,
+            refitted_alone: &first.alone,
+        },
+        Estimate {
+            poles: &tried,
+            refitted_alone: &second.alone,
+        },
+    ]);
+    let fit = lsfd_of(data, &taken)?;
     timings.check += lap(&mut clock);
-    Ok(SelectedFit::refined(fit, refined.poles, held))
+    let from_second = |r: usize| refused(r) && taken[r] != poles[r] && taken[r] == tried[r];
+    let reported = (0..poles.len())
+        .map(|r| {
+            if from_second(r) {
+                second.poles[r]
+            } else {
+                first.poles[r]
+            }
+        })
+        .collect();
+    let held = HeldPoles {
+        poles: taken,
+        ..first_held
+    };
+    Ok(SelectedFit::refined(fit, reported, held))
+}
+
+/// The modal model of `poles` over the band of `data` ([`lsfd`]).
+///
+/// # Errors
+/// As [`lsfd`].
+fn lsfd_of(data: BandCurves<'_>, poles: &[Complex64]) -> Result<ModalFit, EmaError> {
+    lsfd(
+        data.freqs_hz,
+        data.curves,
+        data.quantity,
+        poles,
+        data.band_hz,
+    )
 }
 
 /// The rank-one joint fit's poles from the `selected` poles (module `rank_one`) on the
@@ -871,6 +937,34 @@ fn held_found_beside(selected_hz: f64, pole: Complex64) -> String {
     )
 }
 
+/// The joint refinement's poles ([`refined_poles`], the LSCF model's `context` outside the band
+/// where there is one) from the `selected` poles, each that stands alone refitted on its own
+/// lines ([`refitted_where_alone`]); `on_iteration` counts the refinement's steps.
+///
+/// # Errors
+/// As [`lsfd`].
+fn refined_jointly(
+    data: BandCurves<'_>,
+    selected: &[SelectedPole],
+    context: Option<&LscfContext>,
+    s: &EmaSettings,
+    on_iteration: &dyn Fn(usize, usize),
+) -> Result<RefinedPoles, EmaError> {
+    let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
+    let joint = refined_poles(
+        data.freqs_hz,
+        data.curves,
+        data.quantity,
+        &poles,
+        data.band_hz,
+        s.refine_lines,
+        s.refine_iterations,
+        context,
+        on_iteration,
+    )?;
+    refitted_where_alone(data, joint, selected, s)
+}
+
 /// The joint refinement's poles `joint` (index-aligned with `selected`) with each pole that
 /// stayed in its column and stands alone refitted on its own lines, the rest of the band's model
 /// held at `joint` with the poles that left their columns put back (module `local_refit`); a
@@ -919,13 +1013,13 @@ struct RefinedPoles {
 /// The poles `refine` returns, and the check of the diagram's `poles` built on another thread
 /// while this one refines (the check's model needs the diagram's poles only); None in place of
 /// the check only where the scope did not run it.
-fn refined_beside_the_check<'a>(
+fn refined_beside_the_check<'a, T>(
     data: BandCurves<'a>,
     poles: &[Complex64],
     fit_lines: RefineLines,
     context: &'a LscfContext,
-    refine: impl FnOnce() -> Result<RefinedPoles, EmaError>,
-) -> Result<(RefinedPoles, Option<RefinementCheck<'a>>), EmaError> {
+    refine: impl FnOnce() -> Result<T, EmaError>,
+) -> Result<(T, Option<RefinementCheck<'a>>), EmaError> {
     let mut check = None;
     let refined = rayon::in_place_scope(|scope| {
         scope.spawn(|_| {
