@@ -688,10 +688,12 @@ fn rank_one_selected(
 /// ([`RefinementCheck::taken_first`]); the diagram's where neither is taken. The fallback runs
 /// on another thread beside `refine` whether it is needed or not: started after the check, it
 /// made the measured dam's process 40 % slower (docs/ema.md, "Where the fit and the context
-/// disagree"). The refined
-/// pole reported beside each mode is the taken estimate's, `refine`'s elsewhere, and the
-/// warnings are those of `refine`'s poles that left their columns (the diagram's pole stands
-/// there).
+/// disagree"). The refined pole reported beside each mode is the taken estimate's, `refine`'s
+/// elsewhere; where the fallback's is taken, `refine`'s is kept beside it
+/// ([`RefinedPole::passed_over`]) and widens the mode's deviation as a refined pole not taken
+/// does ([`widened_by_the_refinement`]): the check could not judge it, and the truth may lie by
+/// either. The warnings are those of `refine`'s poles that left their columns (the diagram's
+/// pole stands there).
 ///
 /// # Errors
 /// As [`lsfd`], and what `refine` returns (a `fallback` that fails is not tried).
@@ -757,20 +759,29 @@ fn checked_selected(
     let fit = lsfd_of(data, &taken)?;
     timings.check += lap(&mut clock);
     let from_second = |r: usize| refused(r) && taken[r] != poles[r] && taken[r] == tried[r];
-    let reported = (0..poles.len())
+    let refined = (0..poles.len())
         .map(|r| {
             if from_second(r) {
-                second.poles[r]
+                RefinedPole {
+                    pole: second.poles[r],
+                    put_back: None,
+                    passed_over: Some(first.poles[r]),
+                }
             } else {
-                first.poles[r]
+                RefinedPole {
+                    pole: first.poles[r],
+                    put_back: first_held.put_back[r],
+                    passed_over: None,
+                }
             }
         })
         .collect();
-    let held = HeldPoles {
-        poles: taken,
-        ..first_held
-    };
-    Ok(SelectedFit::refined(fit, reported, held))
+    Ok(SelectedFit {
+        fit,
+        warnings: first_held.warnings,
+        refined: Some(refined),
+        deviations: None,
+    })
 }
 
 /// The modal model of `poles` over the band of `data` ([`lsfd`]).
@@ -1060,7 +1071,11 @@ impl SelectedFit {
         let refined = refined
             .into_iter()
             .zip(held.put_back)
-            .map(|(pole, put_back)| RefinedPole { pole, put_back })
+            .map(|(pole, put_back)| RefinedPole {
+                pole,
+                put_back,
+                passed_over: None,
+            })
             .collect();
         Self {
             fit,
@@ -1076,6 +1091,9 @@ impl SelectedFit {
 struct RefinedPole {
     pole: Complex64,
     put_back: Option<PutBack>,
+    /// Where this pole is a fallback estimate's ([`checked_selected`]): the first estimate's
+    /// pole, which the check refused; the truth may lie by either.
+    passed_over: Option<Complex64>,
 }
 
 /// The standard deviation `sd` of a mode whose reported pole `pole` is the diagram's while the
@@ -1431,13 +1449,15 @@ impl ModeSources<'_> {
             None if q.pole == fit.poles[r] => RefinementOutcome::Taken,
             None => RefinementOutcome::NotBetter,
         });
-        // The refined pole not taken, as far as its column reaches: what widens the sd.
+        // The refined pole not taken (where a fallback's was, the first estimate's), as far as
+        // its column reaches: what widens the sd.
         let not_taken = refined
-            .filter(|_| outcome != Some(RefinementOutcome::Taken))
+            .and_then(|q| match outcome {
+                Some(RefinementOutcome::Taken) => q.passed_over,
+                _ => Some(q.pole),
+            })
             .zip(selected)
-            .map(|(q, col)| {
-                col.widening_point(pole_freq_hz(q.pole), pole_damping(q.pole), &s.criteria)
-            });
+            .map(|(p, col)| col.widening_point(pole_freq_hz(p), pole_damping(p), &s.criteria));
         let sd = self
             .deviations
             .and_then(|d| d.get(r).copied())
