@@ -76,15 +76,13 @@
 
 pub use crate::denominator::LscfContext;
 use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
-use crate::error::EmaError;
 use crate::lscf::half_power_bands_overlap;
-use crate::lsfd::{ModalFit, RefineLines, lsfd, refinement_lines};
+use crate::lsfd::{RefineLines, refinement_lines};
 use crate::noise::CurveNoise;
 use crate::projection::apply_transpose_q;
 use crate::thin_qr::ThinQr;
 use faer::Mat;
 use faer::linalg::solvers::Qr;
-use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -173,10 +171,6 @@ fn projected_out(fixed: &Qr<f64>, mut m: Mat<f64>) -> Mat<f64> {
 /// squares at the diagram's poles. It does not depend on the refinement, so a caller can build it
 /// while the refinement runs.
 pub struct RefinementCheck<'a> {
-    freqs_hz: &'a [f64],
-    curves: &'a [&'a [Complex64]],
-    quantity: Quantity,
-    band_hz: [f64; 2],
     diagram: Vec<Complex64>,
     /// The context problem and J at the diagram's poles; None where that J is not finite (the
     /// diagram's poles are kept then).
@@ -187,14 +181,12 @@ pub struct RefinementCheck<'a> {
 
 impl<'a> RefinementCheck<'a> {
     /// The check of the diagram's poles `diagram` on the lines `fit_lines` chooses in `band_hz`
-    /// (the refinement's), in the LSCF model's `context`; `curves` are values of `quantity` at
-    /// `freqs_hz`, already checked by the refinement's caller, and `noise` their noise levels
-    /// over the band's positive lines ([`crate::band::positive_lines`]).
-    #[allow(clippy::too_many_arguments)]
+    /// (the refinement's), in the LSCF model's `context`; `curves` are the values at `freqs_hz`
+    /// the LSCF model was fitted to, already checked by the refinement's caller, and `noise`
+    /// their noise levels over the band's positive lines ([`crate::band::positive_lines`]).
     pub fn new(
-        freqs_hz: &'a [f64],
-        curves: &'a [&'a [Complex64]],
-        quantity: Quantity,
+        freqs_hz: &[f64],
+        curves: &[&[Complex64]],
         diagram: &[Complex64],
         band_hz: [f64; 2],
         fit_lines: RefineLines,
@@ -207,10 +199,6 @@ impl<'a> RefinementCheck<'a> {
         let problem = ContextProblem::new(freqs_hz, curves, &weights, &lines, context, diagram);
         let model = problem.cost(diagram).map(|base| (problem, base));
         Self {
-            freqs_hz,
-            curves,
-            quantity,
-            band_hz,
             diagram: diagram.to_vec(),
             model,
             noise_variance: noise.weighted_variance(),
@@ -299,22 +287,6 @@ impl<'a> RefinementCheck<'a> {
             }
         }
         taken
-    }
-
-    /// The modal model of the poles [`Self::taken_first`] of `estimates` ([`lsfd`] over the
-    /// band).
-    ///
-    /// # Errors
-    /// As [`lsfd`].
-    pub fn fit(&self, estimates: &[Estimate<'_>]) -> Result<ModalFit, EmaError> {
-        let taken = self.taken_first(estimates);
-        lsfd(
-            self.freqs_hz,
-            self.curves,
-            self.quantity,
-            &taken,
-            self.band_hz,
-        )
     }
 }
 
@@ -444,16 +416,8 @@ mod tests {
         for quiet_curve in [&a, &a_scaled] {
             let curves: [&[Complex64]; 2] = [quiet_curve, &b];
             let noise = CurveNoise::of(&curves, &crate::band::positive_lines(&freqs, band));
-            let check = RefinementCheck::new(
-                &freqs,
-                &curves,
-                Quantity::Receptance,
-                &diagram,
-                band,
-                every,
-                &context,
-                &noise,
-            );
+            let check =
+                RefinementCheck::new(&freqs, &curves, &diagram, band, every, &context, &noise);
             assert_eq!(check.taken(&refined, &[false]), refined.to_vec());
         }
     }
@@ -515,7 +479,6 @@ mod tests {
             RefinementCheck::new(
                 &self.freqs,
                 curves,
-                Quantity::Receptance,
                 &[diagram],
                 Self::BAND,
                 RefineLines::All,

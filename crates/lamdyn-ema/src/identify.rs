@@ -1037,7 +1037,6 @@ fn refined_beside_the_check<'a, T>(
             check = Some(RefinementCheck::new(
                 data.freqs_hz,
                 data.curves,
-                data.quantity,
                 poles,
                 data.band_hz,
                 fit_lines,
