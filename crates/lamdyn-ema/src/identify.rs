@@ -594,6 +594,7 @@ fn fit_selected(
                 warnings: vec![],
                 refined: None,
                 deviations: None,
+                beside: vec![],
             }
         }
         (PoleEstimator::Checked, Some(c)) => {
@@ -647,10 +648,11 @@ fn rank_one_selected(
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<SelectedFit, EmaError> {
     if let Some(c) = context.filter(|_| data.references < 2) {
-        let mut warnings = vec![];
+        let (mut warnings, mut beside) = (vec![], vec![]);
         let rank_one = || {
             let joint = rank_one_refined(data, selected, top, s, on_iteration)?;
             warnings = joint.warnings;
+            beside = joint.beside;
             let alone = vec![false; joint.poles.len()];
             Ok(RefinedPoles {
                 poles: joint.poles,
@@ -660,6 +662,7 @@ fn rank_one_selected(
         let jointly = || refined_jointly(data, selected, Some(c), s, &|_, _| {});
         let mut fitted = checked_selected(data, selected, c, s, timings, rank_one, Some(&jointly))?;
         fitted.warnings.extend(warnings);
+        fitted.beside = beside;
         return Ok(fitted);
     }
     let mut clock = Instant::now();
@@ -677,6 +680,7 @@ fn rank_one_selected(
     let mut fitted = SelectedFit::refined(fit, joint.poles, held);
     fitted.warnings.extend(joint.warnings);
     fitted.deviations = joint.deviations;
+    fitted.beside = joint.beside;
     Ok(fitted)
 }
 
@@ -781,6 +785,7 @@ fn checked_selected(
         warnings: first_held.warnings,
         refined: Some(refined),
         deviations: None,
+        beside: vec![],
     })
 }
 
@@ -859,6 +864,7 @@ fn rank_one_refined(
             poles: poles.to_vec(),
             warnings: vec![],
             deviations: None,
+            beside: vec![],
         });
     };
     let n = poles.len();
@@ -876,11 +882,13 @@ fn rank_one_refined(
             None => held_beside(fitted[k]),
         });
     let warnings = traded.chain(held).collect();
+    let beside = order[n..].iter().map(|&k| fitted[k]).collect();
     let fit = fit.in_order(&order[..n]);
     Ok(JointPoles {
         poles: fit.poles,
         warnings,
         deviations: fit.deviations,
+        beside,
     })
 }
 
@@ -905,6 +913,8 @@ struct JointPoles {
     poles: Vec<Complex64>,
     warnings: Vec<String>,
     deviations: Option<Vec<PoleSd>>,
+    /// The modes the fit held beside the selection, as fitted.
+    beside: Vec<Complex64>,
 }
 
 /// The warning for the pole selected at `selected_hz` whose fit `ended` (rad/s) outside its
@@ -1061,6 +1071,9 @@ struct SelectedFit {
     /// The estimator's own standard deviations of the refined poles (the rank-one fit's), in
     /// place of [`pole_deviations`]; None where it has none.
     deviations: Option<Vec<PoleSd>>,
+    /// The modes the rank-one fit held beside the selection, as fitted; none with another
+    /// estimator.
+    beside: Vec<Complex64>,
 }
 
 impl SelectedFit {
@@ -1081,6 +1094,7 @@ impl SelectedFit {
             warnings: held.warnings,
             refined: Some(refined),
             deviations: None,
+            beside: vec![],
         }
     }
 }
@@ -1107,6 +1121,22 @@ fn widened_by_the_refinement(sd: PoleSd, pole: Complex64, refined: (f64, f64)) -
     PoleSd {
         freq_hz: spread(sd.freq_hz, pole_freq_hz(pole) - refined.0),
         damping_ratio: spread(sd.damping_ratio, pole_damping(pole) - refined.1),
+    }
+}
+
+/// [`widened_by_the_refinement`] by the farthest of `points` in f and, apart, in ζ; `sd` itself
+/// where there is none.
+fn widened_by_the_estimates(sd: PoleSd, pole: Complex64, points: &[(f64, f64)]) -> PoleSd {
+    let far = |q: fn(&(f64, f64)) -> f64, at: f64| {
+        points
+            .iter()
+            .map(q)
+            .max_by(|a, b| (a - at).abs().total_cmp(&(b - at).abs()))
+    };
+    let (f, z) = (pole_freq_hz(pole), pole_damping(pole));
+    match (far(|p| p.0, f), far(|p| p.1, z)) {
+        (Some(pf), Some(pz)) => widened_by_the_refinement(sd, pole, (pf, pz)),
+        _ => sd,
     }
 }
 
@@ -1372,6 +1402,8 @@ struct ModeSources<'a> {
     refined: Option<&'a [RefinedPole]>,
     /// The poles' standard deviations.
     deviations: Option<&'a [PoleSd]>,
+    /// The modes the rank-one fit held beside the selection ([`SelectedFit::beside`]).
+    beside: &'a [Complex64],
     /// Each mode's FRAC drop ([`contributions`]).
     frac_drop: &'a [f64],
     /// Each mode's residues from the lines around its pole ([`local_residues`]), index-aligned
@@ -1387,6 +1419,19 @@ struct ModeSources<'a> {
 }
 
 impl ModeSources<'_> {
+    /// The modes the fit held beside the selection whose frequency the column `col` reaches
+    /// ([`SelectedPole::reaches_frequency`]), as (Hz, damping ratio): other estimates of the
+    /// column's resonance, whatever their damping (as [`SelectedPole::widening_point`] takes a
+    /// refined pole).
+    fn held_at(&self, col: &SelectedPole) -> Vec<(f64, f64)> {
+        let c = &self.settings.criteria;
+        self.beside
+            .iter()
+            .map(|&p| (pole_freq_hz(p), pole_damping(p)))
+            .filter(|&(f, _)| col.reaches_frequency(f, c))
+            .collect()
+    }
+
     /// Every mode of the fit, split into those `--reject-hz` names (within the window) and
     /// the others: (rejected, modes).
     fn modes(&self) -> (Vec<Mode>, Vec<Mode>) {
@@ -1449,18 +1494,26 @@ impl ModeSources<'_> {
             None => RefinementOutcome::NotBetter,
         });
         // The refined pole not taken (where a fallback's was, the first estimate's), as far as
-        // its column reaches: what widens the sd.
-        let not_taken = refined
-            .and_then(|q| match outcome {
-                Some(RefinementOutcome::Taken) => q.passed_over,
-                _ => Some(q.pole),
-            })
+        // its column reaches, and where the diagram's pole stands, each mode the fit held beside
+        // the selection at the column's frequency: what widens the sd.
+        let not_taken = refined.and_then(|q| match outcome {
+            Some(RefinementOutcome::Taken) => q.passed_over,
+            _ => Some(q.pole),
+        });
+        let held_here = selected
+            .filter(|_| !matches!(outcome, None | Some(RefinementOutcome::Taken)))
+            .map(|col| self.held_at(col))
+            .unwrap_or_default();
+        let points: Vec<(f64, f64)> = not_taken
             .zip(selected)
-            .map(|(p, col)| col.widening_point(pole_freq_hz(p), pole_damping(p), &s.criteria));
+            .map(|(p, col)| col.widening_point(pole_freq_hz(p), pole_damping(p), &s.criteria))
+            .into_iter()
+            .chain(held_here)
+            .collect();
         let sd = self
             .deviations
             .and_then(|d| d.get(r).copied())
-            .map(|sd| not_taken.map_or(sd, |q| widened_by_the_refinement(sd, fit.poles[r], q)));
+            .map(|sd| widened_by_the_estimates(sd, fit.poles[r], &points));
         Mode {
             freq_hz: evidence.freq_hz,
             damping_ratio: z,
@@ -1706,6 +1759,7 @@ pub fn identify_with(
         selected: &selected,
         refined: fitted.refined.as_deref(),
         deviations: deviations.as_deref(),
+        beside: &fitted.beside,
         frac_drop: &evidence.contributions.frac_drop,
         local_residues: &evidence.local_residues,
         second_shapes: &evidence.second_shapes,
@@ -1742,6 +1796,23 @@ pub fn identify_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sd is widened by the farthest point in f and, apart, in ζ; with no point it stands.
+    #[test]
+    fn the_deviation_is_widened_by_the_farthest_estimate_in_each_quantity() {
+        let pole = crate::lscf::pole_at(100.0, 0.02);
+        let sd = PoleSd {
+            freq_hz: 0.03,
+            damping_ratio: 0.001,
+        };
+        assert_eq!(widened_by_the_estimates(sd, pole, &[]), sd);
+        let points = [(100.4, 0.021), (99.9, 0.05), (100.1, 0.019)];
+        let wide = widened_by_the_estimates(sd, pole, &points);
+        let f = pole_freq_hz(pole);
+        let z = pole_damping(pole);
+        assert!((wide.freq_hz - 0.03f64.hypot(100.4 - f)).abs() < 1e-12);
+        assert!((wide.damping_ratio - 0.001f64.hypot(0.05 - z)).abs() < 1e-12);
+    }
 
     /// The rank-one fit needs several responses; the rest run as chosen.
     #[test]

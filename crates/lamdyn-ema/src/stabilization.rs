@@ -238,12 +238,17 @@ impl SelectedPole {
     /// truth may lie by either estimate. A refined pole beyond the column's frequency has moved
     /// to another resonance or out of the band, and widens the deviation only to the edge.
     pub fn widening_point(&self, freq_hz: f64, damping: f64, c: &StabilityCriteria) -> (f64, f64) {
-        let [freq, _] = self.bounds(c);
-        if (freq[0]..=freq[1]).contains(&freq_hz) {
+        if self.reaches_frequency(freq_hz, c) {
             (freq_hz, damping)
         } else {
             self.clamp(freq_hz, damping, c)
         }
+    }
+
+    /// Whether `freq_hz` lies in the column's widened frequency range ([`Self::holds`]).
+    pub fn reaches_frequency(&self, freq_hz: f64, c: &StabilityCriteria) -> bool {
+        let [freq, _] = self.bounds(c);
+        (freq[0]..=freq[1]).contains(&freq_hz)
     }
 
     /// The column's widened ranges of frequency (Hz) and damping ratio ([`Self::holds`]).
