@@ -272,18 +272,30 @@ impl<'a> RefinementCheck<'a> {
     /// alone passes one grows with their number: a later estimate is for the poles an earlier
     /// one could not fit in this context (module docs).
     pub fn taken_first(&self, estimates: &[Estimate<'_>]) -> Vec<Complex64> {
+        estimates
+            .iter()
+            .fold(self.diagram.clone(), |taken, e| self.taken_after(taken, *e))
+    }
+
+    /// `taken` (poles already taken, the diagram's where none was) with each pole still the
+    /// diagram's replaced by `estimate`'s where that is [`Self::taken`] ([`Self::taken_first`]'s
+    /// step).
+    pub fn taken_after(&self, mut taken: Vec<Complex64>, estimate: Estimate<'_>) -> Vec<Complex64> {
         let diagram = &self.diagram;
-        let mut taken = diagram.clone();
-        for e in estimates {
-            let open = |r: usize| taken[r] == diagram[r];
-            let tried: Vec<Complex64> = (0..diagram.len())
-                .map(|r| if open(r) { e.poles[r] } else { diagram[r] })
-                .collect();
-            let these = self.taken(&tried, e.refitted_alone);
-            for (r, pole) in these.into_iter().enumerate() {
-                if taken[r] == diagram[r] {
-                    taken[r] = pole;
+        let open: Vec<bool> = (0..diagram.len()).map(|r| taken[r] == diagram[r]).collect();
+        let tried: Vec<Complex64> = (0..diagram.len())
+            .map(|r| {
+                if open[r] {
+                    estimate.poles[r]
+                } else {
+                    diagram[r]
                 }
+            })
+            .collect();
+        let these = self.taken(&tried, estimate.refitted_alone);
+        for (r, pole) in these.into_iter().enumerate() {
+            if open[r] {
+                taken[r] = pole;
             }
         }
         taken

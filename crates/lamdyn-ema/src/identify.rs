@@ -689,7 +689,7 @@ fn rank_one_selected(
 /// ([`RefinementCheck`], built on another thread while `refine` runs): the refined pole where it
 /// fits the curves significantly better than the diagram's. Where it does not, and the pole
 /// stayed in its column, the `fallback` estimate's pole is checked in its place
-/// ([`RefinementCheck::taken_first`]); the diagram's where neither is taken. The fallback runs
+/// ([`RefinementCheck::taken_after`]); the diagram's where neither is taken. The fallback runs
 /// on another thread beside `refine` whether it is needed or not: started after the check, it
 /// made the measured dam's process 40 % slower (docs/ema.md, "Where the fit and the context
 /// disagree"). The refined pole reported beside each mode is the taken estimate's, `refine`'s
@@ -750,16 +750,12 @@ fn checked_selected(
             }
         })
         .collect();
-    let taken = check.taken_first(&[
-        Estimate {
-            poles: &first_held.poles,
-            refitted_alone: &first.alone,
-        },
-        Estimate {
-            poles: &tried,
-            refitted_alone: &second.alone,
-        },
-    ]);
+    // The first estimate's poles are judged once, above.
+    let second_estimate = Estimate {
+        poles: &tried,
+        refitted_alone: &second.alone,
+    };
+    let taken = check.taken_after(first_taken.clone(), second_estimate);
     let fit = lsfd_of(data, &taken)?;
     timings.check += lap(&mut clock);
     let from_second = |r: usize| refused(r) && taken[r] != poles[r] && taken[r] == tried[r];
