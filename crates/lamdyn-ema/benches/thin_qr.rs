@@ -1,8 +1,8 @@
-//! The residue problems' factorisation: `lamdyn_ema::thin_qr::ThinQr` against faer's `Mat::qr`
-//! (both sequential), each factorising and applying Qᵀ to nine curves, on the shapes the EMA
-//! meets: a block of the residues' TSQR (2048 lines, four poles), the refinement's basis (5057
-//! lines, four poles), the check's projected pole columns, and the check's fixed LSCF roots
-//! (53 columns: faer's is kept there).
+//! The EMA's least-squares factorisation: `lamdyn_ema::thin_qr::ThinQr` against faer's
+//! `Mat::qr` (both sequential), each factorising and applying Qᵀ to nine curves, on the shapes
+//! the EMA meets: a block of the residues' TSQR (2048 lines, four poles), the refinement's basis
+//! (5057 lines, four poles), the check's projected pole columns, and the check's fixed LSCF
+//! roots (54 columns, four panels of `ThinQr`).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use faer::dyn_stack::{MemBuffer, MemStack};

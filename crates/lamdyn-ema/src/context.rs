@@ -79,10 +79,8 @@ use crate::denominator::{pair_columns, root_columns, scaled_real_matrix};
 use crate::lscf::half_power_bands_overlap;
 use crate::lsfd::{RefineLines, refinement_lines};
 use crate::noise::CurveNoise;
-use crate::projection::apply_transpose_q;
 use crate::thin_qr::ThinQr;
 use faer::Mat;
-use faer::linalg::solvers::Qr;
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -96,7 +94,7 @@ struct ContextProblem<'a> {
     /// Ω_k of each line.
     omega: Vec<Complex64>,
     /// The QR of the fixed columns (direct term and fixed roots).
-    fixed: Qr<f64>,
+    fixed: ThinQr,
     /// The last rows − k rows of Qᵀ B: the data with the fixed columns projected out, in Q's
     /// coordinates, one column per curve.
     data: Mat<f64>,
@@ -117,7 +115,7 @@ impl<'a> ContextProblem<'a> {
         let mut cols: Vec<Vec<Complex64>> = vec![vec![Complex64::new(1.0, 0.0); omega.len()]];
         cols.extend(root_columns(&omega, &context.fixed_roots(poles)));
         let rows = 2 * lines.len();
-        let fixed = scaled_real_matrix(&cols, rows).qr();
+        let fixed = ThinQr::of(scaled_real_matrix(&cols, rows));
         let b = Mat::from_fn(rows, curves.len(), |row, o| {
             let h = curves[o][lines[row / 2]] * weights[o];
             if row % 2 == 0 { h.re } else { h.im }
@@ -142,7 +140,7 @@ impl<'a> ContextProblem<'a> {
             cols.push(g2);
         }
         let p = projected_out(&self.fixed, scaled_real_matrix(&cols, 2 * self.omega.len()));
-        let qr = ThinQr::new(&p);
+        let qr = ThinQr::of(p);
         let mut qtd = self.data.clone();
         qr.apply_transpose_q(&mut qtd);
         let k = qr.r_rows();
@@ -153,16 +151,16 @@ impl<'a> ContextProblem<'a> {
     /// Degrees of freedom of the residuals with `poles` physical poles.
     fn dof(&self, poles: usize) -> usize {
         let per_curve = 2 * self.omega.len();
-        let unknowns = self.fixed.thin_R().nrows() + 2 * poles;
+        let unknowns = self.fixed.r_rows() + 2 * poles;
         (self.data.ncols() * per_curve.saturating_sub(unknowns)).max(1)
     }
 }
 
 /// The last rows of Qᵀ `m` for the QR `fixed` (rows × k): `m` with the span of the fixed
 /// columns projected out, in Q's coordinates ([`ContextProblem`]).
-fn projected_out(fixed: &Qr<f64>, mut m: Mat<f64>) -> Mat<f64> {
-    apply_transpose_q(fixed, &mut m);
-    let k = fixed.thin_R().nrows();
+fn projected_out(fixed: &ThinQr, mut m: Mat<f64>) -> Mat<f64> {
+    fixed.apply_transpose_q(&mut m);
+    let k = fixed.r_rows();
     m.subrows(k, m.nrows() - k).to_owned()
 }
 

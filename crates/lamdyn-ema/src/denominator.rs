@@ -201,8 +201,14 @@ pub(crate) fn scaled_real_matrix(cols: &[Vec<Complex64>], rows: usize) -> Mat<f6
                 .max(f64::MIN_POSITIVE)
         })
         .collect();
-    Mat::from_fn(rows, cols.len(), |row, c| {
-        let v = cols[c][row / 2] / norms[c];
-        if row % 2 == 0 { v.re } else { v.im }
-    })
+    let mut m = Mat::<f64>::zeros(rows, cols.len());
+    for (c, (col, norm)) in cols.iter().zip(&norms).enumerate() {
+        let scale = 1.0 / norm;
+        let out = m.col_as_slice_mut(c);
+        for (pair, v) in out.chunks_exact_mut(2).zip(col) {
+            pair[0] = v.re * scale;
+            pair[1] = v.im * scale;
+        }
+    }
+    m
 }

@@ -24,16 +24,11 @@
 
 use crate::error::{EmaError, invalid};
 use crate::thin_qr::ThinQr;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::householder::{
-    apply_block_householder_sequence_transpose_on_the_left_in_place_scratch,
-    apply_block_householder_sequence_transpose_on_the_left_in_place_with_conj,
-};
-use faer::linalg::solvers::{Qr, SolveLstsq};
+use faer::linalg::solvers::SolveLstsq;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
-use faer::{Conj, Mat, Par};
+use faer::{Mat, Par};
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -183,7 +178,7 @@ impl LineSamples {
     fn triangle(&self, poles: &[Complex64]) -> (Mat<f64>, Mat<f64>) {
         let mut a = self.basis(poles);
         let scale = unit_columns(&mut a);
-        let qr = ThinQr::new(&a);
+        let qr = ThinQr::of(a);
         let mut r = qr.r();
         for (c, s) in scale.iter().enumerate() {
             r.col_mut(c).iter_mut().for_each(|v| *v *= s);
@@ -199,7 +194,7 @@ impl LineSamples {
     /// where the residue problem fails.
     pub(crate) fn held_model(&self, poles: &[Complex64]) -> Option<HeldModel<'_>> {
         let (basis, scale) = self.scaled_basis(poles)?;
-        let projection = self.project_on(poles, &basis, scale)?;
+        let projection = self.project_on(poles, basis.clone(), scale)?;
         Some(HeldModel {
             samples: self,
             poles: poles.len(),
@@ -215,13 +210,13 @@ impl LineSamples {
     /// never applied.
     pub(crate) fn project(&self, poles: &[Complex64]) -> Option<Projection> {
         let (a, scale) = self.scaled_basis(poles)?;
-        self.project_on(poles, &a, scale)
+        self.project_on(poles, a, scale)
     }
 
     /// [`Self::project`] on the basis `a` of `poles` already scaled by the column norms
     /// `scale` ([`Self::scaled_basis`]).
-    fn project_on(&self, poles: &[Complex64], a: &Mat<f64>, scale: Vec<f64>) -> Option<Projection> {
-        let qr = ThinQr::new(a);
+    fn project_on(&self, poles: &[Complex64], a: Mat<f64>, scale: Vec<f64>) -> Option<Projection> {
+        let qr = ThinQr::of(a);
         let r = qr.r();
         let n = r.nrows();
         let mut residual_in_q = self.data.clone();
@@ -334,24 +329,6 @@ pub(crate) fn unit_columns(a: &mut Mat<f64>) -> Vec<f64> {
         a.col_mut(c).iter_mut().for_each(|v| *v /= s);
     }
     scale
-}
-
-/// Replaces `m` by Qᵀ m for the QR `qr`, Q applied as its Householder reflections.
-pub(crate) fn apply_transpose_q(qr: &Qr<f64>, m: &mut Mat<f64>) {
-    let (basis, factor) = (qr.Q_basis(), qr.Q_coeff());
-    let scratch = apply_block_householder_sequence_transpose_on_the_left_in_place_scratch::<f64>(
-        basis.nrows(),
-        factor.nrows(),
-        m.ncols(),
-    );
-    apply_block_householder_sequence_transpose_on_the_left_in_place_with_conj(
-        basis,
-        factor,
-        Conj::No,
-        m.as_mut(),
-        faer::get_global_parallelism(),
-        MemStack::new(&mut MemBuffer::new(scratch)),
-    );
 }
 
 /// What every curve's synthesis at one line shares ([`crate::lsfd::ModalFit::line_basis`]).

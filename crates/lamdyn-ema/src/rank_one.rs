@@ -265,8 +265,8 @@ impl Projected {
             return None;
         }
         let scale = unit_columns(&mut a);
-        let qr = ThinQr::new(&a);
         let n = a.ncols();
+        let qr = ThinQr::of(a);
         let mut residual_in_q = data.clone();
         qr.apply_transpose_q(&mut residual_in_q);
         let mut unknowns = residual_in_q.subrows(0, n).to_owned();

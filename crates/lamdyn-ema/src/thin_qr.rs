@@ -1,78 +1,98 @@
 //! Householder QR of tall, thin real matrices: the residue problems' bases (thousands of rows,
-//! ten or so columns), factorised once per pole trial.
+//! ten or so columns), factorised once per pole trial, and the check's fixed LSCF roots (a few
+//! dozen columns).
 //!
-//! **Why not faer's.** faer 0.24's `Mat::qr` is slower on such blocks than this
-//! column-by-column kernel (its recursive blocking and generic inner loops do not pay below a
-//! few dozen columns), and faster from a few dozen columns on: benches/thin_qr.rs, results in
-//! bench-results/2026-12-01-vm-2cpu/thin_qr.md. Everything else (products, triangular solves,
-//! the check's wide QR of the LSCF roots) stays faer's.
+//! **Why not faer's.** faer 0.24's `Mat::qr` takes each reflector's norm by a scaled, pairwise
+//! sum (safe from over- and underflow at any scale), which costs more than the rest of the
+//! factorisation on such matrices; its generic blocking does not pay below a few dozen columns
+//! either. The callers here scale their columns to unit norm, so plain sums of squares serve:
+//! benches/thin_qr.rs, results in bench-results/. Everything else (products, triangular
+//! solves, small QRs) stays faer's.
 //!
-//! **Algorithm** [Golub & Van Loan 2013, alg. 5.2.1]: for each column j, the reflector
-//! H_j = I − τ_j v_j v_jᵀ (v_j = 1 at row j, zero above) that maps the column's rows j.. onto
-//! β e_j, |β| = their norm, sign opposite to the diagonal's (no cancellation), applied to the
-//! later columns; A = H_0 ⋯ H_{n−1} [R; 0] = Q [R; 0]. The norms are plain sums of squares:
-//! the callers scale their columns to unit norm, far from over- and underflow.
+//! **Algorithm** [Golub & Van Loan 2013, alg. 5.2.1 and § 5.2.3]: for each column j, the
+//! reflector H_j = I − τ_j v_j v_jᵀ (v_j = 1 at row j, zero above) that maps the column's rows
+//! j.. onto β e_j, |β| = their norm, sign opposite to the diagonal's (no cancellation);
+//! A = H_0 ⋯ H_{n−1} [R; 0] = Q [R; 0]. The columns go in panels of 16: within a panel
+//! each reflector updates the panel's later columns, and the panel's reflectors, in the compact
+//! WY form H_j0 ⋯ H_j1 = I − V T Vᵀ [Schreiber & Van Loan 1989; LAPACK `dlarft`] with T upper
+//! triangular, update the later columns at once by two matrix products (faer's),
+//! C − V (Tᵀ (Vᵀ C)). Q and Qᵀ are applied panel after panel the same way.
 
-use faer::Mat;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, ColMut, Mat, MatMut, MatRef, Par};
+use std::cmp::Ordering;
 
 /// Rows × columns × reflectors from which [`ThinQr::apply_transpose_q`] and [`ThinQr::apply_q`]
-/// share the columns out over threads (each column's work is then a few milliseconds' share).
+/// share their products out over threads (each share is then a few milliseconds' work).
 const PARALLEL_WORK: usize = 1 << 21;
 
+/// Columns per panel of the factorisation (module docs): the residue problems' bases fit in
+/// one.
+const PANEL: usize = 16;
+
 /// The QR factorisation A = Q [R; 0] of a real rows × cols matrix, Q held as its min(rows, cols)
-/// Householder reflectors ([`Self::apply_transpose_q`], [`Self::apply_q`]); R is
-/// min(rows, cols) × cols (a trapezoid where rows < cols).
+/// Householder reflectors in panels of the compact WY form ([`Self::apply_transpose_q`],
+/// [`Self::apply_q`]); R is min(rows, cols) × cols (a trapezoid where rows < cols).
 #[derive(Debug, Clone)]
 pub struct ThinQr {
-    rows: usize,
-    cols: usize,
-    /// Column-major: R on and above the diagonal, the reflectors' v below it (v_j = 1 at row j,
-    /// not stored).
-    packed: Vec<f64>,
-    /// τ_j of each reflector (0 where the column's rows below the diagonal are zero).
-    tau: Vec<f64>,
+    /// R, min(rows, cols) × cols.
+    r: Mat<f64>,
+    /// The reflectors' vectors as columns, rows × min(rows, cols): 1 on the diagonal, 0 above.
+    v: Mat<f64>,
+    /// Each panel's first column and the upper triangular T of its reflectors' product
+    /// I − V T Vᵀ (module docs).
+    panels: Vec<(usize, Mat<f64>)>,
 }
 
 impl ThinQr {
     /// The QR of `a` (columns of moderate scale, module docs).
     pub fn new(a: &Mat<f64>) -> Self {
+        Self::of(a.clone())
+    }
+
+    /// The QR of `a`, factorised in its own storage, which then holds V.
+    pub fn of(mut a: Mat<f64>) -> Self {
         let (rows, cols) = a.shape();
-        let mut packed = Vec::with_capacity(rows * cols);
-        for j in 0..cols {
-            packed.extend_from_slice(a.col_as_slice(j));
-        }
-        let mut tau = vec![0.0; rows.min(cols)];
-        for j in 0..tau.len() {
-            let (done, later) = packed.split_at_mut((j + 1) * rows);
-            let column = &mut done[j * rows + j..];
-            tau[j] = make_reflector(column);
-            let v = &column[1..];
-            for c in later.chunks_exact_mut(rows) {
-                reflect(tau[j], v, &mut c[j..]);
+        let k = rows.min(cols);
+        let mut beta = vec![0.0; k];
+        let mut panels = Vec::with_capacity(k.div_ceil(PANEL));
+        for j0 in (0..k).step_by(PANEL) {
+            let width = PANEL.min(k - j0);
+            let (mut panel, later) = a
+                .as_mut()
+                .submatrix_mut(j0, j0, rows - j0, cols - j0)
+                .split_at_col_mut(width);
+            let tau = factorised_panel(panel.as_mut(), &mut beta[j0..j0 + width]);
+            let r_in_panel = panel.as_ref().subrows(0, width).to_owned();
+            zero_above_diagonal(panel.as_mut());
+            let t = triangular_factor(panel.as_ref(), &tau);
+            if later.ncols() > 0 {
+                apply_block(panel.as_ref(), &t, true, later);
             }
+            for j in 1..width {
+                let above = r_in_panel.col(j).subrows(0, j);
+                panel.as_mut().col_mut(j).subrows_mut(0, j).copy_from(above);
+            }
+            panels.push((j0, t));
         }
-        Self {
-            rows,
-            cols,
-            packed,
-            tau,
-        }
+        let r = Mat::from_fn(k, cols, |i, j| match i.cmp(&j) {
+            Ordering::Less => a[(i, j)],
+            Ordering::Equal => beta[i],
+            Ordering::Greater => 0.0,
+        });
+        a.truncate(rows, k);
+        zero_above_diagonal(a.as_mut());
+        Self { r, v: a, panels }
     }
 
     /// R's rows: min(rows, cols), the number of reflectors.
     pub fn r_rows(&self) -> usize {
-        self.tau.len()
+        self.r.nrows()
     }
 
     /// The triangular factor R (min(rows, cols) × cols).
     pub fn r(&self) -> Mat<f64> {
-        Mat::from_fn(self.tau.len(), self.cols, |i, j| {
-            if i <= j {
-                self.packed[j * self.rows + i]
-            } else {
-                0.0
-            }
-        })
+        self.r.clone()
     }
 
     /// Replaces `b` (rows × any) by Qᵀ b.
@@ -80,7 +100,14 @@ impl ThinQr {
     /// # Panics
     /// When `b` has not the factorised matrix's rows (a caller's bug).
     pub fn apply_transpose_q(&self, b: &mut Mat<f64>) {
-        self.apply(b, 0..self.tau.len());
+        assert_eq!(
+            b.nrows(),
+            self.v.nrows(),
+            "rows of the matrix Q is applied to"
+        );
+        for (j0, t) in &self.panels {
+            self.apply_panel(*j0, t, true, b);
+        }
     }
 
     /// Replaces `b` (rows × any) by Q b.
@@ -88,79 +115,127 @@ impl ThinQr {
     /// # Panics
     /// As [`Self::apply_transpose_q`].
     pub fn apply_q(&self, b: &mut Mat<f64>) {
-        self.apply(b, (0..self.tau.len()).rev());
+        assert_eq!(
+            b.nrows(),
+            self.v.nrows(),
+            "rows of the matrix Q is applied to"
+        );
+        for (j0, t) in self.panels.iter().rev() {
+            self.apply_panel(*j0, t, false, b);
+        }
     }
 
-    /// Applies the reflectors in `order` (each its own transpose) to every column of `b`, the
-    /// columns in parallel where the work is large ([`PARALLEL_WORK`]).
-    fn apply(&self, b: &mut Mat<f64>, order: impl Iterator<Item = usize> + Clone + Send + Sync) {
-        use rayon::prelude::*;
-        assert_eq!(b.nrows(), self.rows, "rows of the matrix Q is applied to");
-        let one = |column: &mut [f64]| {
-            for j in order.clone() {
-                let v = &self.packed[j * self.rows + j + 1..(j + 1) * self.rows];
-                reflect(self.tau[j], v, &mut column[j..]);
-            }
-        };
-        if b.ncols() > 1 && self.rows * b.ncols() * self.tau.len() >= PARALLEL_WORK {
-            b.par_col_iter_mut().for_each(|c| {
-                let column = c
-                    .try_as_col_major_mut()
-                    .expect("a Mat's columns are contiguous");
-                one(column.as_slice_mut());
-            });
-        } else {
-            for c in 0..b.ncols() {
-                one(b.col_as_slice_mut(c));
-            }
-        }
+    /// Applies the panel from column `j0` with T `t` (or its transpose) to `b`'s rows j0...
+    fn apply_panel(&self, j0: usize, t: &Mat<f64>, transposed: bool, b: &mut Mat<f64>) {
+        let rows = self.v.nrows() - j0;
+        let v = self.v.as_ref().submatrix(j0, j0, rows, t.nrows());
+        apply_block(v, t, transposed, b.as_mut().subrows_mut(j0, rows));
     }
 }
 
-/// Turns `x` (a column's rows from the diagonal down) into β (first) and the reflector's v
-/// below it; returns τ = (β − α)/β, 0 where x's rows below the first are zero (the column is
-/// left as it is).
-fn make_reflector(x: &mut [f64]) -> f64 {
+/// Factorises the panel `a` (its columns from the diagonal's row down) column by column, each
+/// reflector applied to the panel's later columns; each column then holds R's entries above the
+/// diagonal and v_j from it down (1 on the diagonal). Writes β_j into `beta`, returns τ_j.
+fn factorised_panel(mut a: MatMut<'_, f64>, beta: &mut [f64]) -> Vec<f64> {
+    let (rows, width) = a.shape();
+    let mut tau = vec![0.0; width];
+    for j in 0..width {
+        (beta[j], tau[j]) = make_reflector(a.as_mut().submatrix_mut(j, j, rows - j, 1).col_mut(0));
+        if tau[j] != 0.0 && j + 1 < width {
+            let (v, later) = a
+                .as_mut()
+                .submatrix_mut(j, j, rows - j, width - j)
+                .split_at_col_mut(1);
+            reflect(tau[j], v.as_ref(), later);
+        }
+    }
+    tau
+}
+
+/// Zeroes the entries above the diagonal.
+fn zero_above_diagonal(mut a: MatMut<'_, f64>) {
+    for j in 1..a.ncols() {
+        let above = j.min(a.nrows());
+        a.as_mut().col_mut(j).subrows_mut(0, above).fill(0.0);
+    }
+}
+
+/// Replaces `b` by Qᵀ b (`transposed`) or Q b for Q = I − V T Vᵀ, `v` unit lower trapezoidal
+/// (module docs), the products in parallel where the work is large ([`PARALLEL_WORK`]).
+fn apply_block(v: MatRef<'_, f64>, t: &Mat<f64>, transposed: bool, mut b: MatMut<'_, f64>) {
+    let (rows, k) = v.shape();
+    let par = if rows * b.ncols() * k >= PARALLEL_WORK {
+        faer::get_global_parallelism()
+    } else {
+        Par::Seq
+    };
+    let mut vtb = Mat::<f64>::zeros(k, b.ncols());
+    matmul(
+        vtb.as_mut(),
+        Accum::Replace,
+        v.transpose(),
+        b.as_ref(),
+        1.0,
+        par,
+    );
+    let w = if transposed {
+        t.transpose() * &vtb
+    } else {
+        t * &vtb
+    };
+    matmul(b.as_mut(), Accum::Add, v, w.as_ref(), -1.0, par);
+}
+
+/// T of H_0 ⋯ H_{k−1} = I − V T Vᵀ for the reflectors' vectors `v` (columns, unit lower
+/// trapezoidal) and their `tau` [LAPACK `dlarft`, forward, column-wise]: T_jj = τ_j and
+/// T[..j, j] = −τ_j T[..j, ..j] V[:, ..j]ᵀ v_j, the products Vᵀv_j taken at once as VᵀV.
+fn triangular_factor(v: MatRef<'_, f64>, tau: &[f64]) -> Mat<f64> {
+    let k = tau.len();
+    let gram = v.transpose() * v;
+    let mut t = Mat::<f64>::zeros(k, k);
+    for j in 0..k {
+        t[(j, j)] = tau[j];
+        for i in 0..j {
+            t[(i, j)] = (i..j).map(|l| t[(i, l)] * gram[(l, j)]).sum::<f64>() * -tau[j];
+        }
+    }
+    t
+}
+
+/// Turns `x` (a column's rows from the diagonal down, α first) into the reflector's vector v
+/// (1 first, in place of α) and returns β (R's diagonal) and τ = (β − α)/β; τ = 0 and β = α
+/// where x's rows below the first are zero (v = e_0, H = I). `x` then holds v.
+fn make_reflector(mut x: ColMut<'_, f64>) -> (f64, f64) {
+    let n = x.nrows();
     let alpha = x[0];
-    let below = dot(&x[1..], &x[1..]);
+    x[0] = 1.0;
+    let below = x.as_ref().subrows(1, n - 1).squared_norm_l2();
     if below == 0.0 {
-        return 0.0;
+        return (alpha, 0.0);
     }
     let norm = (alpha * alpha + below).sqrt();
     let beta = if alpha > 0.0 { -norm } else { norm };
     let scale = 1.0 / (alpha - beta);
-    x[1..].iter_mut().for_each(|v| *v *= scale);
-    x[0] = beta;
-    (beta - alpha) / beta
+    x.as_mut()
+        .subrows_mut(1, n - 1)
+        .iter_mut()
+        .for_each(|v| *v *= scale);
+    (beta, (beta - alpha) / beta)
 }
 
-/// y ← (I − τ v vᵀ) y for the reflector whose v is 1 at y's first row and `v` below it.
-fn reflect(tau: f64, v: &[f64], y: &mut [f64]) {
-    if tau == 0.0 {
-        return;
-    }
-    let (head, tail) = y.split_at_mut(1);
-    let w = tau * (head[0] + dot(v, tail));
-    head[0] -= w;
-    tail.iter_mut().zip(v).for_each(|(t, vi)| *t -= w * vi);
-}
-
-/// xᵀy with eight partial sums (vectorised by the compiler).
-fn dot(x: &[f64], y: &[f64]) -> f64 {
-    let mut acc = [0.0; 8];
-    let (xs, ys) = (x.chunks_exact(8), y.chunks_exact(8));
-    let tail: f64 = xs
-        .remainder()
-        .iter()
-        .zip(ys.remainder())
-        .map(|(a, b)| a * b)
-        .sum();
-    for (a, b) in xs.zip(ys) {
-        for k in 0..8 {
-            acc[k] += a[k] * b[k];
-        }
-    }
-    acc.iter().sum::<f64>() + tail
+/// y ← (I − τ v vᵀ) y for the reflector's vector `v` (one column) and every column of `y`:
+/// w = vᵀy, then y − τ v w.
+fn reflect(tau: f64, v: MatRef<'_, f64>, mut y: MatMut<'_, f64>) {
+    let mut w = Mat::<f64>::zeros(1, y.ncols());
+    matmul(
+        w.as_mut(),
+        Accum::Replace,
+        v.transpose(),
+        y.as_ref(),
+        1.0,
+        Par::Seq,
+    );
+    matmul(y.as_mut(), Accum::Add, v, w.as_ref(), -tau, Par::Seq);
 }
 
 #[cfg(test)]
@@ -178,7 +253,17 @@ mod tests {
     /// Q [R; 0] rebuilds A, QᵀQ = I, and R agrees with faer's QR up to the rows' signs.
     #[test]
     fn factors_rebuild_the_matrix_and_agree_with_faer() {
-        for (rows, cols) in [(37, 5), (300, 12), (1000, 1), (9, 9), (4, 7)] {
+        let shapes = [
+            (37, 5),
+            (300, 12),
+            (1000, 1),
+            (9, 9),
+            (4, 7),
+            (600, 53),
+            (40, 33),
+            (20, 37),
+        ];
+        for (rows, cols) in shapes {
             let a = sample(rows, cols);
             let qr = ThinQr::new(&a);
             let mut rebuilt = Mat::<f64>::zeros(rows, cols);
