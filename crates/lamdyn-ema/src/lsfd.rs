@@ -47,6 +47,7 @@ use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use std::ops::ControlFlow;
 
 /// The identified modal model of a set of curves.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -384,7 +385,10 @@ pub fn refine_with(
         fit_lines,
         iterations,
         None,
-        on_iteration,
+        &|k, max| {
+            on_iteration(k, max);
+            ControlFlow::Continue(())
+        },
     )?;
     lsfd(freqs_hz, curves, quantity, &refined, band_hz)
 }
@@ -395,7 +399,7 @@ pub fn refine_with(
 /// that model's roots below it except for a pole within their reach, which comes from a second
 /// fit without them (every pole free in each fit). `on_iteration(k, max)` counts the
 /// iterations over all the fits, one after the other (k of at most `max` = fits ×
-/// `iterations`).
+/// `iterations`); where it breaks, the fits stop and `poles` are returned.
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -409,11 +413,11 @@ pub(crate) fn refined_poles(
     fit_lines: RefineLines,
     iterations: usize,
     outside: Option<&LscfContext>,
-    on_iteration: &dyn Fn(usize, usize),
+    on_iteration: &dyn Fn(usize, usize) -> ControlFlow<()>,
 ) -> Result<Vec<Complex64>, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
     let mut samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
-    let refine = |samples: &LineSamples, on_iteration: &dyn Fn(usize, usize)| {
+    let refine = |samples: &LineSamples, on_iteration: &dyn Fn(usize, usize) -> ControlFlow<()>| {
         levenberg_marquardt(samples, poles, iterations, on_iteration)
             .unwrap_or_else(|| poles.to_vec())
     };
@@ -436,7 +440,15 @@ pub(crate) fn refined_poles(
         let roots = c.held_root_columns(freqs_hz, &lines, held);
         samples.set_fixed(faer::concat![[roots, pseudo]]);
         // The iterations counted over all the fits, one after the other.
-        let fit = refine(&samples, &|k, max| on_iteration(j * max + k, count * max));
+        let stopped = std::cell::Cell::new(false);
+        let fit = refine(&samples, &|k, max| {
+            let go_on = on_iteration(j * max + k, count * max);
+            stopped.set(go_on.is_break());
+            go_on
+        });
+        if stopped.get() {
+            return Ok(poles.to_vec());
+        }
         for r in members {
             refined[r] = fit[r];
         }

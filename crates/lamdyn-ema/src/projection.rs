@@ -125,8 +125,9 @@ impl LineSamples {
         let mut a = Mat::zeros(self.rows(), self.unknowns(poles.len()));
         a.subcols_mut(n + 2, self.fixed.ncols())
             .copy_from(&self.fixed);
+        let mut line = LineBasis::new(poles, self.quantity, 0.0);
         for (i, &w) in self.omega.iter().enumerate() {
-            let line = LineBasis::new(poles, self.quantity, w);
+            line.set(poles, self.quantity, w);
             for (r, &(a1, a2)) in line.fractions.iter().enumerate() {
                 Self::put(&mut a, i, 2 * r, line.factor * (a1 + a2));
                 Self::put(
@@ -323,7 +324,7 @@ pub(crate) fn solve_by_blocks(
 /// counts); returns the norms.
 pub(crate) fn unit_columns(a: &mut Mat<f64>) -> Vec<f64> {
     let scale: Vec<f64> = (0..a.ncols())
-        .map(|c| a.col(c).norm_l2().max(f64::MIN_POSITIVE))
+        .map(|c| a.col(c).squared_norm_l2().sqrt().max(f64::MIN_POSITIVE))
         .collect();
     for (c, s) in scale.iter().enumerate() {
         a.col_mut(c).iter_mut().for_each(|v| *v /= s);
@@ -346,15 +347,24 @@ impl LineBasis {
     /// The basis of `poles` for curves of `quantity` at ω = `w` rad/s: the model's terms of
     /// the module docs before their coefficients.
     pub(crate) fn new(poles: &[Complex64], quantity: Quantity, w: f64) -> Self {
+        let mut line = Self {
+            factor: Complex64::default(),
+            lower: 0.0,
+            fractions: Vec::with_capacity(poles.len()),
+        };
+        line.set(poles, quantity, w);
+        line
+    }
+
+    /// Makes this the basis of [`Self::new`] at ω = `w`, in its own storage (loops over lines
+    /// reuse one).
+    pub(crate) fn set(&mut self, poles: &[Complex64], quantity: Quantity, w: f64) {
         let s = Complex64::new(0.0, w);
-        Self {
-            factor: quantity_factor(w, quantity),
-            lower: if w > 0.0 { -1.0 / (w * w) } else { 0.0 },
-            fractions: poles
-                .iter()
-                .map(|p| (1.0 / (s - p), 1.0 / (s - p.conj())))
-                .collect(),
-        }
+        self.factor = quantity_factor(w, quantity);
+        self.lower = if w > 0.0 { -1.0 / (w * w) } else { 0.0 };
+        self.fractions.clear();
+        self.fractions
+            .extend(poles.iter().map(|p| (1.0 / (s - p), 1.0 / (s - p.conj()))));
     }
 }
 

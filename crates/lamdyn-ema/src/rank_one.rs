@@ -119,8 +119,9 @@ impl StackedCurves {
         let mut a = Mat::zeros(self.data.nrows(), n + self.blocks.ncols());
         a.subcols_mut(n, self.blocks.ncols())
             .copy_from(&self.blocks);
+        let mut line = LineBasis::new(poles, self.quantity, 0.0);
         for (k, &w) in self.omega.iter().enumerate() {
-            let line = LineBasis::new(poles, self.quantity, w);
+            line.set(poles, self.quantity, w);
             for j in 0..self.references {
                 for (r, &(a1, a2)) in line.fractions.iter().enumerate() {
                     let l = participation[r][j];
@@ -149,8 +150,9 @@ impl StackedCurves {
         let mut out: Vec<Mat<f64>> = (0..2 + 2 * free.len())
             .map(|_| Mat::zeros(rows, 2))
             .collect();
+        let mut line = LineBasis::new(&[pole], self.quantity, 0.0);
         for (k, &w) in self.omega.iter().enumerate() {
-            let line = LineBasis::new(&[pole], self.quantity, w);
+            line.set(&[pole], self.quantity, w);
             let (a1, a2) = line.fractions[0];
             for j in 0..self.references {
                 let row = j * nl + k;
