@@ -131,15 +131,31 @@ impl<'a> ContextProblem<'a> {
 
     /// The residual sum of squares with the physical poles `poles` (their residues fitted): the
     /// last rows of Q_Pᵀ times the data, for the QR of the projected pole columns P = Q_P R_P;
-    /// None where it is not finite.
+    /// None where it is not finite. (The check takes [`Self::cost_of`] with the diagram's
+    /// columns kept.)
+    #[cfg(test)]
     fn cost(&self, poles: &[Complex64]) -> Option<f64> {
-        let mut cols = Vec::with_capacity(2 * poles.len());
-        for p in poles {
-            let (g1, g2) = pair_columns(&self.omega, self.context.root(*p));
-            cols.push(g1);
-            cols.push(g2);
+        let columns: Vec<Mat<f64>> = poles.iter().map(|&p| self.pole_columns(p)).collect();
+        self.cost_of(&columns.iter().collect::<Vec<_>>())
+    }
+
+    /// The two columns of the physical pole `p`, each scaled to unit norm, with the fixed
+    /// columns projected out ([`projected_out`]): the same for every set of poles it is in.
+    fn pole_columns(&self, p: Complex64) -> Mat<f64> {
+        let (g1, g2) = pair_columns(&self.omega, self.context.root(p));
+        projected_out(
+            &self.fixed,
+            scaled_real_matrix(&[g1, g2], 2 * self.omega.len()),
+        )
+    }
+
+    /// [`Self::cost`] of the poles whose columns are `columns` ([`Self::pole_columns`]).
+    fn cost_of(&self, columns: &[&Mat<f64>]) -> Option<f64> {
+        let rows = self.data.nrows();
+        let mut p = Mat::<f64>::zeros(rows, 2 * columns.len());
+        for (r, c) in columns.iter().enumerate() {
+            p.subcols_mut(2 * r, 2).copy_from(*c);
         }
-        let p = projected_out(&self.fixed, scaled_real_matrix(&cols, 2 * self.omega.len()));
         let qr = ThinQr::of(p);
         let mut qtd = self.data.clone();
         qr.apply_transpose_q(&mut qtd);
@@ -164,15 +180,25 @@ fn projected_out(fixed: &ThinQr, mut m: Mat<f64>) -> Mat<f64> {
     m.subrows(k, m.nrows() - k).to_owned()
 }
 
+/// The context problem at the diagram's poles: J there and each pole's projected columns
+/// ([`ContextProblem::pole_columns`]), which a trial that moves other poles reuses.
+struct DiagramModel<'a> {
+    problem: ContextProblem<'a>,
+    /// J at the diagram's poles.
+    base: f64,
+    /// Each diagram pole's columns.
+    columns: Vec<Mat<f64>>,
+}
+
 /// The check of refined poles against their diagram poles (module docs), prepared from the
 /// diagram's poles alone: the context model with the fixed columns projected out and its sum of
 /// squares at the diagram's poles. It does not depend on the refinement, so a caller can build it
 /// while the refinement runs.
 pub struct RefinementCheck<'a> {
     diagram: Vec<Complex64>,
-    /// The context problem and J at the diagram's poles; None where that J is not finite (the
+    /// The context problem at the diagram's poles; None where J is not finite there (the
     /// diagram's poles are kept then).
-    model: Option<(ContextProblem<'a>, f64)>,
+    model: Option<DiagramModel<'a>>,
     /// The weighted curves' noise variance per residual ([`CurveNoise::weighted_variance`]).
     noise_variance: Option<f64>,
 }
@@ -195,7 +221,14 @@ impl<'a> RefinementCheck<'a> {
         let lines = refinement_lines(freqs_hz, &band, diagram, fit_lines);
         let weights = noise.weights();
         let problem = ContextProblem::new(freqs_hz, curves, &weights, &lines, context, diagram);
-        let model = problem.cost(diagram).map(|base| (problem, base));
+        let columns: Vec<Mat<f64>> = diagram.iter().map(|&p| problem.pole_columns(p)).collect();
+        let model = problem
+            .cost_of(&columns.iter().collect::<Vec<_>>())
+            .map(|base| DiagramModel {
+                problem,
+                base,
+                columns,
+            });
         Self {
             diagram: diagram.to_vec(),
             model,
@@ -215,7 +248,12 @@ impl<'a> RefinementCheck<'a> {
     /// alone can fit worse); the diagram's pole elsewhere.
     pub fn taken(&self, refined: &[Complex64], refitted_alone: &[bool]) -> Vec<Complex64> {
         let diagram = &self.diagram;
-        let Some((problem, base)) = &self.model else {
+        let Some(DiagramModel {
+            problem,
+            base,
+            columns,
+        }) = &self.model
+        else {
             return diagram.clone();
         };
         let variance = base / problem.dof(diagram.len()) as f64;
@@ -226,11 +264,17 @@ impl<'a> RefinementCheck<'a> {
             if !members.iter().all(|&r| own[r]) {
                 return None;
             }
-            let mut trial = diagram.clone();
-            for &r in members {
-                trial[r] = refined[r];
-            }
-            problem.cost(&trial).map(|c| base - c)
+            let moved: Vec<Mat<f64>> = members
+                .iter()
+                .map(|&r| problem.pole_columns(refined[r]))
+                .collect();
+            let trial: Vec<&Mat<f64>> = (0..diagram.len())
+                .map(|r| match members.iter().position(|&m| m == r) {
+                    Some(i) => &moved[i],
+                    None => &columns[r],
+                })
+                .collect();
+            problem.cost_of(&trial).map(|c| base - c)
         };
         let significant = |members: &[usize]| {
             drop(members).is_some_and(|d| d > chi_square_99(2 * members.len()) * variance)

@@ -36,9 +36,6 @@ use lamdyn_frf::FrfSet;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::ops::ControlFlow;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Settings of [`identify`].
@@ -662,8 +659,7 @@ fn rank_one_selected(
                 alone,
             })
         };
-        let jointly =
-            |stop: &AtomicBool| refined_jointly_unless_stopped(data, selected, c, s, stop);
+        let jointly = || refined_jointly(data, selected, Some(c), s, &|_, _| {});
         let mut fitted = checked_selected(data, selected, c, s, timings, rank_one, Some(&jointly))?;
         fitted.warnings.extend(warnings);
         fitted.beside = beside;
@@ -694,10 +690,12 @@ fn rank_one_selected(
 /// fits the curves significantly better than the diagram's. Where it does not, and the pole
 /// stayed in its column, the `fallback` estimate's pole is checked in its place
 /// ([`RefinementCheck::taken_after`]); the diagram's where neither is taken. The fallback runs
-/// on another thread beside `refine`, and stops where it is not wanted
-/// ([`estimates_beside_the_check`]). The refined pole reported beside each mode is the taken
-/// estimate's, `refine`'s elsewhere; where the fallback's is taken, `refine`'s is kept beside
-/// it ([`RefinedPole::passed_over`]) and widens the mode's deviation as a refined pole not taken
+/// only there, after the check (run beside `refine` on the other thread whether wanted or not,
+/// it made the long records' process slower, where it is never wanted, by more than it made
+/// the measured dam's faster: docs/ema.md, "Speed"). The refined pole reported beside each
+/// mode is the taken estimate's, `refine`'s
+/// elsewhere; where the fallback's is taken, `refine`'s is kept beside it
+/// ([`RefinedPole::passed_over`]) and widens the mode's deviation as a refined pole not taken
 /// does ([`widened_by_the_refinement`]): the check could not judge it, and the truth may lie by
 /// either. The warnings are those of `refine`'s poles that left their columns (the diagram's
 /// pole stands there).
@@ -711,26 +709,27 @@ fn checked_selected(
     s: &EmaSettings,
     timings: &mut EmaTimings,
     refine: impl FnOnce() -> Result<RefinedPoles, EmaError>,
-    fallback: Option<&Fallback<'_>>,
+    fallback: Option<&dyn Fn() -> Result<RefinedPoles, EmaError>>,
 ) -> Result<SelectedFit, EmaError> {
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
     let mut clock = Instant::now();
-    let (first, meeting, second) =
-        estimates_beside_the_check(data, selected, context, s, refine, fallback);
-    let first = first?;
+    let (first, check) = refined_beside_the_check(data, &poles, s.refine_lines, context, refine)?;
+    let first_held = in_their_columns(&first.poles, selected, &s.criteria);
     timings.refinement += lap(&mut clock);
-    // Both have met: the check ran in the scope; without it (never) the diagram's poles.
-    let (Some(check), Some(judged)) = (meeting.check, meeting.judged) else {
-        let first_held = in_their_columns(&first.poles, selected, &s.criteria);
+    // The scope has run the spawned check; without it (never) the diagram's poles.
+    let Some(check) = check else {
         let fit = lsfd_of(data, &poles)?;
         return Ok(SelectedFit::refined(fit, first.poles, first_held));
     };
-    let Judged {
-        held: first_held,
-        taken: first_taken,
-        refused,
-    } = judged;
-    let Some(second) = second.filter(|_| refused.iter().any(|&r| r)) else {
+    let first_taken = check.taken(&first_held.poles, &first.alone);
+    let refused = |r: usize| first_held.put_back[r].is_none() && first_taken[r] == poles[r];
+    timings.check += lap(&mut clock);
+    // Where the fallback fails, the first stands.
+    let second = fallback
+        .filter(|_| (0..poles.len()).any(refused))
+        .and_then(|estimate| estimate().ok());
+    timings.refinement += lap(&mut clock);
+    let Some(second) = second else {
         let fit = lsfd_of(data, &first_taken)?;
         timings.check += lap(&mut clock);
         return Ok(SelectedFit::refined(fit, first.poles, first_held));
@@ -739,22 +738,22 @@ fn checked_selected(
     let second_held = in_their_columns(&second.poles, selected, &s.criteria);
     let tried: Vec<Complex64> = (0..poles.len())
         .map(|r| {
-            if refused[r] {
+            if refused(r) {
                 second_held.poles[r]
             } else {
                 poles[r]
             }
         })
         .collect();
-    // The first estimate's poles are judged once, where both met.
+    // The first estimate's poles are judged once, above.
     let second_estimate = Estimate {
         poles: &tried,
         refitted_alone: &second.alone,
     };
-    let taken = check.taken_after(first_taken, second_estimate);
+    let taken = check.taken_after(first_taken.clone(), second_estimate);
     let fit = lsfd_of(data, &taken)?;
     timings.check += lap(&mut clock);
-    let from_second = |r: usize| refused[r] && taken[r] != poles[r] && taken[r] == tried[r];
+    let from_second = |r: usize| refused(r) && taken[r] != poles[r] && taken[r] == tried[r];
     let refined = (0..poles.len())
         .map(|r| {
             if from_second(r) {
@@ -779,120 +778,6 @@ fn checked_selected(
         deviations: None,
         beside: vec![],
     })
-}
-
-/// The fallback estimate of [`checked_selected`], stopped (None) once `stop` is set.
-type Fallback<'a> = dyn Fn(&AtomicBool) -> Result<Option<RefinedPoles>, EmaError> + Sync + 'a;
-
-/// What the first estimate and the check leave where they meet ([`estimates_beside_the_check`]).
-struct Meeting<'a> {
-    /// The first estimate, once it has ended (None where it failed).
-    first: Option<RefinedPoles>,
-    /// Whether the first estimate has ended.
-    first_ended: bool,
-    /// The check, once built.
-    check: Option<RefinementCheck<'a>>,
-    /// The check's judgement of the first estimate, once both are there.
-    judged: Option<Judged>,
-}
-
-/// The check's judgement of the first estimate.
-struct Judged {
-    /// Its poles held in their columns.
-    held: HeldPoles,
-    /// The poles the check takes of them (the diagram's where it refuses one).
-    taken: Vec<Complex64>,
-    /// Per pole: refused while it stayed in its column (the fallback's is tried there).
-    refused: Vec<bool>,
-}
-
-impl Meeting<'_> {
-    /// Judges the first estimate once it and the check are both there; true where the fallback
-    /// is not wanted (nothing refused, or the first estimate failed).
-    fn judged_now(&mut self, selected: &[SelectedPole], criteria: &StabilityCriteria) -> bool {
-        let (Some(first), Some(check)) = (&self.first, &self.check) else {
-            return self.first_ended && self.first.is_none();
-        };
-        let held = in_their_columns(&first.poles, selected, criteria);
-        let taken = check.taken(&held.poles, &first.alone);
-        let refused: Vec<bool> = (0..taken.len())
-            .map(|r| held.put_back[r].is_none() && taken[r] == selected[r].pole)
-            .collect();
-        let wanted = refused.iter().any(|&r| r);
-        self.judged = Some(Judged {
-            held,
-            taken,
-            refused,
-        });
-        !wanted
-    }
-}
-
-/// `refine`'s estimate on this thread and, on another, the check of the diagram's poles (its
-/// model needs those alone) and then the `fallback`'s estimate. Whichever of `refine` and the
-/// check ends last judges `refine`'s poles; where none was refused in its column the fallback
-/// is stopped and its work not waited for. Started only after that judgement, the fallback made
-/// the measured dam's process 40 % slower; run to its end regardless, it made the long records'
-/// 10 % slower (docs/ema.md, "Speed").
-fn estimates_beside_the_check<'a>(
-    data: BandCurves<'a>,
-    selected: &[SelectedPole],
-    context: &'a LscfContext,
-    s: &EmaSettings,
-    refine: impl FnOnce() -> Result<RefinedPoles, EmaError>,
-    fallback: Option<&Fallback<'_>>,
-) -> (
-    Result<RefinedPoles, EmaError>,
-    Meeting<'a>,
-    Option<RefinedPoles>,
-) {
-    let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
-    let stop = AtomicBool::new(fallback.is_none());
-    let meeting = Mutex::new(Meeting {
-        first: None,
-        first_ended: false,
-        check: None,
-        judged: None,
-    });
-    // Called once by each side as it ends; the last one judges.
-    let arrive = |add: &mut dyn FnMut(&mut Meeting<'a>)| {
-        let mut m = meeting.lock().unwrap_or_else(|e| e.into_inner());
-        add(&mut m);
-        if m.judged_now(selected, &s.criteria) {
-            stop.store(true, Ordering::Relaxed);
-        }
-    };
-    let mut second = None;
-    let first = rayon::in_place_scope(|scope| {
-        scope.spawn(|_| {
-            let check = RefinementCheck::new(
-                data.freqs_hz,
-                data.curves,
-                &poles,
-                data.band_hz,
-                s.refine_lines,
-                context,
-                data.noise,
-            );
-            let mut check = Some(check);
-            arrive(&mut |m| m.check = check.take());
-            if let Some(estimate) = fallback.filter(|_| !stop.load(Ordering::Relaxed)) {
-                second = estimate(&stop).ok().flatten();
-            }
-        });
-        let first = refine();
-        let mut ended = first.as_ref().ok().cloned();
-        arrive(&mut |m| {
-            m.first = ended.take();
-            m.first_ended = true;
-        });
-        first
-    });
-    (
-        first,
-        meeting.into_inner().unwrap_or_else(|e| e.into_inner()),
-        second,
-    )
 }
 
 /// The modal model of `poles` over the band of `data` ([`lsfd`]).
@@ -1064,8 +949,9 @@ fn held_found_beside(selected_hz: f64, pole: Complex64) -> String {
     )
 }
 
-/// The joint refinement's poles ([`joint_refinement`]), each that stands alone refitted on its
-/// own lines ([`refitted_where_alone`]).
+/// The joint refinement's poles ([`refined_poles`], the LSCF model's `context` outside the band
+/// where there is one) from the `selected` poles, each that stands alone refitted on its own
+/// lines ([`refitted_where_alone`]); `on_iteration` counts the refinement's steps.
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -1076,55 +962,8 @@ fn refined_jointly(
     s: &EmaSettings,
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<RefinedPoles, EmaError> {
-    let joint = joint_refinement(data, selected, context, s, &|k, max| {
-        on_iteration(k, max);
-        ControlFlow::Continue(())
-    })?;
-    refitted_where_alone(data, joint, selected, s)
-}
-
-/// The fallback estimate of [`checked_selected`]: [`refined_jointly`], stopped (None) as soon
-/// as `stop` is set.
-///
-/// # Errors
-/// As [`lsfd`].
-fn refined_jointly_unless_stopped(
-    data: BandCurves<'_>,
-    selected: &[SelectedPole],
-    context: &LscfContext,
-    s: &EmaSettings,
-    stop: &AtomicBool,
-) -> Result<Option<RefinedPoles>, EmaError> {
-    let stopped = || stop.load(Ordering::Relaxed);
-    let go_on = |_, _| {
-        if stopped() {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
-    };
-    let joint = joint_refinement(data, selected, Some(context), s, &go_on)?;
-    if stopped() {
-        return Ok(None);
-    }
-    refitted_where_alone(data, joint, selected, s).map(Some)
-}
-
-/// The joint refinement's poles ([`refined_poles`], the LSCF model's `context` outside the band
-/// where there is one) from the `selected` poles; `on_iteration` counts its steps, and where it
-/// breaks the selected poles are returned.
-///
-/// # Errors
-/// As [`lsfd`].
-fn joint_refinement(
-    data: BandCurves<'_>,
-    selected: &[SelectedPole],
-    context: Option<&LscfContext>,
-    s: &EmaSettings,
-    on_iteration: &dyn Fn(usize, usize) -> ControlFlow<()>,
-) -> Result<Vec<Complex64>, EmaError> {
     let poles: Vec<Complex64> = selected.iter().map(|p| p.pole).collect();
-    refined_poles(
+    let joint = refined_poles(
         data.freqs_hz,
         data.curves,
         data.quantity,
@@ -1134,7 +973,8 @@ fn joint_refinement(
         s.refine_iterations,
         context,
         on_iteration,
-    )
+    )?;
+    refitted_where_alone(data, joint, selected, s)
 }
 
 /// The joint refinement's poles `joint` (index-aligned with `selected`) with each pole that
@@ -1177,10 +1017,37 @@ fn refitted_where_alone(
 
 /// The refinement's poles, index-aligned with the selection, and which of them the local step
 /// refitted alone ([`refitted_where_alone`]).
-#[derive(Clone)]
 struct RefinedPoles {
     poles: Vec<Complex64>,
     alone: Vec<bool>,
+}
+
+/// The poles `refine` returns, and the check of the diagram's `poles` built on another thread
+/// while this one refines (the check's model needs the diagram's poles only); None in place of
+/// the check only where the scope did not run it.
+fn refined_beside_the_check<'a, T>(
+    data: BandCurves<'a>,
+    poles: &[Complex64],
+    fit_lines: RefineLines,
+    context: &'a LscfContext,
+    refine: impl FnOnce() -> Result<T, EmaError>,
+) -> Result<(T, Option<RefinementCheck<'a>>), EmaError> {
+    let mut check = None;
+    let refined = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| {
+            check = Some(RefinementCheck::new(
+                data.freqs_hz,
+                data.curves,
+                poles,
+                data.band_hz,
+                fit_lines,
+                context,
+                data.noise,
+            ));
+        });
+        refine()
+    })?;
+    Ok((refined, check))
 }
 
 /// The modal model of the selected poles ([`fit_selected`]) and what the refinement made of

@@ -47,7 +47,6 @@ use crate::projection::LineSamples;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
-use std::ops::ControlFlow;
 
 /// The fewest line spacings a refitted pole's lines reach on each side (module docs).
 const MIN_HALF_WINDOW_LINES: f64 = 200.0;
@@ -145,10 +144,7 @@ fn refitted_locally(
         .filter_map(|&r| {
             let lines = pole_lines(&freqs, poles[r], spacing);
             let local = held.rest_removed(&[r], &lines);
-            match levenberg_marquardt(&local, &[poles[r]], iterations, &|_, _| {
-                ControlFlow::Continue(())
-            })?[..]
-            {
+            match levenberg_marquardt(&local, &[poles[r]], iterations, &|_, _| {})?[..] {
                 [p] if is_a_correction(poles[r], p) => Some((r, p)),
                 _ => None,
             }

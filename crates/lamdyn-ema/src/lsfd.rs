@@ -47,7 +47,6 @@ use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-use std::ops::ControlFlow;
 
 /// The identified modal model of a set of curves.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -385,10 +384,7 @@ pub fn refine_with(
         fit_lines,
         iterations,
         None,
-        &|k, max| {
-            on_iteration(k, max);
-            ControlFlow::Continue(())
-        },
+        on_iteration,
     )?;
     lsfd(freqs_hz, curves, quantity, &refined, band_hz)
 }
@@ -399,7 +395,7 @@ pub fn refine_with(
 /// that model's roots below it except for a pole within their reach, which comes from a second
 /// fit without them (every pole free in each fit). `on_iteration(k, max)` counts the
 /// iterations over all the fits, one after the other (k of at most `max` = fits ×
-/// `iterations`); where it breaks, the fits stop and `poles` are returned.
+/// `iterations`).
 ///
 /// # Errors
 /// As [`lsfd`].
@@ -413,11 +409,11 @@ pub(crate) fn refined_poles(
     fit_lines: RefineLines,
     iterations: usize,
     outside: Option<&LscfContext>,
-    on_iteration: &dyn Fn(usize, usize) -> ControlFlow<()>,
+    on_iteration: &dyn Fn(usize, usize),
 ) -> Result<Vec<Complex64>, EmaError> {
     let lines = checked_refinement_lines(freqs_hz, curves, poles, band_hz, fit_lines)?;
     let mut samples = LineSamples::new(freqs_hz, curves, quantity, &lines)?;
-    let refine = |samples: &LineSamples, on_iteration: &dyn Fn(usize, usize) -> ControlFlow<()>| {
+    let refine = |samples: &LineSamples, on_iteration: &dyn Fn(usize, usize)| {
         levenberg_marquardt(samples, poles, iterations, on_iteration)
             .unwrap_or_else(|| poles.to_vec())
     };
@@ -440,15 +436,7 @@ pub(crate) fn refined_poles(
         let roots = c.held_root_columns(freqs_hz, &lines, held);
         samples.set_fixed(faer::concat![[roots, pseudo]]);
         // The iterations counted over all the fits, one after the other.
-        let stopped = std::cell::Cell::new(false);
-        let fit = refine(&samples, &|k, max| {
-            let go_on = on_iteration(j * max + k, count * max);
-            stopped.set(go_on.is_break());
-            go_on
-        });
-        if stopped.get() {
-            return Ok(poles.to_vec());
-        }
+        let fit = refine(&samples, &|k, max| on_iteration(j * max + k, count * max));
         for r in members {
             refined[r] = fit[r];
         }

@@ -689,13 +689,16 @@ fn split_candidates(pole: Complex64) -> [Complex64; 2] {
 /// with the mode's 2(responses + references) degrees of freedom times the residual variance
 /// (the sum of squares over its degrees of freedom). At the fit's end the residual is the
 /// noise where no mode is missing, and a pole no mode stands behind lowers it by no more than
-/// noise does; a missing mode leaves far more.
+/// noise does; a missing mode leaves far more. None at once without candidates.
 fn next_needed(
     samples: &StackedCurves,
     poles: &[Complex64],
     candidates: &[Complex64],
     participation_of: impl Fn(&[Complex64]) -> Option<Participation>,
 ) -> Option<usize> {
+    if candidates.is_empty() {
+        return None;
+    }
     let cost_of = |set: &[Complex64]| {
         let l = participation_of(set)?;
         Projected::of(samples.basis(set, &l), &samples.data).map(|p| p.cost())
