@@ -49,6 +49,7 @@
 //! damping is named.
 
 use crate::lsfd::{FracSums, ModalFit};
+use crate::projection::LineBasis;
 use crate::shapes::CmifPeak;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -458,9 +459,9 @@ pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
         .par_chunks(2048)
         .map(|chunk| {
             let mut sums = empty();
-            let mut terms = vec![Complex64::default(); modes];
+            let mut scratch = LineScratch::new(fit);
             for &k in chunk {
-                sums.add_line(fit, data.curves, k, data.freqs_hz[k], &mut terms);
+                sums.add_line(fit, data.curves, k, data.freqs_hz[k], &mut scratch);
             }
             sums
         })
@@ -481,6 +482,26 @@ pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
     Contributions { frac, frac_drop }
 }
 
+/// One thread's work space for [`CurveSums::add_line`], reused from line to line.
+struct LineScratch {
+    basis: LineBasis,
+    /// Per mode the partial fractions times the quantity's (iω)^k.
+    scaled: Vec<(Complex64, Complex64)>,
+    /// Per mode its term in the curve at hand.
+    terms: Vec<Complex64>,
+}
+
+impl LineScratch {
+    fn new(fit: &ModalFit) -> Self {
+        let modes = fit.poles.len();
+        Self {
+            basis: fit.line_basis(0.0),
+            scaled: Vec::with_capacity(modes),
+            terms: vec![Complex64::default(); modes],
+        }
+    }
+}
+
 /// Per curve the FRAC sums of the model, and per curve and mode those without the mode.
 struct CurveSums {
     with: Vec<FracSums>,
@@ -488,22 +509,39 @@ struct CurveSums {
 }
 
 impl CurveSums {
-    /// Adds line `k` (at `freq_hz`) of every curve; `terms` (one per mode) is scratch space.
+    /// Adds line `k` (at `freq_hz`) of every curve.
     fn add_line(
         &mut self,
         fit: &ModalFit,
         curves: &[&[Complex64]],
         k: usize,
         freq_hz: f64,
-        terms: &mut [Complex64],
+        scratch: &mut LineScratch,
     ) {
-        let basis = fit.line_basis(freq_hz);
+        let LineScratch {
+            basis,
+            scaled,
+            terms,
+        } = scratch;
+        basis.set(
+            &fit.poles,
+            fit.quantity,
+            2.0 * std::f64::consts::PI * freq_hz,
+        );
+        // (iω)^k/(iω − λ_r) and (iω)^k/(iω − λ_r*), shared by every curve.
+        scaled.clear();
+        scaled.extend(
+            basis
+                .fractions
+                .iter()
+                .map(|&(t, tc)| (basis.factor * t, basis.factor * tc)),
+        );
         for (o, curve) in curves.iter().enumerate() {
-            for (r, t) in terms.iter_mut().enumerate() {
-                *t = fit.mode_term_on(&basis, o, r);
+            for ((t, &(ft, ftc)), a) in terms.iter_mut().zip(scaled.iter()).zip(&fit.residues[o]) {
+                *t = a * ft + a.conj() * ftc;
             }
             let measured = curve[k];
-            let model = terms.iter().sum::<Complex64>() + fit.residual_term_on(&basis, o);
+            let model = terms.iter().sum::<Complex64>() + fit.residual_term_on(basis, o);
             self.with[o].add(measured, model);
             for (sums, t) in self.without[o].iter_mut().zip(terms.iter()) {
                 sums.add(measured, model - t);
