@@ -149,7 +149,9 @@ impl<'a> ContextProblem<'a> {
         )
     }
 
-    /// [`Self::cost`] of the poles whose columns are `columns` ([`Self::pole_columns`]).
+    /// The residual sum of squares with the physical poles whose columns are `columns`
+    /// ([`Self::pole_columns`]), their residues fitted: the last rows of Q_Pᵀ times the data,
+    /// for the QR of those columns P = Q_P R_P; None where it is not finite.
     fn cost_of(&self, columns: &[&Mat<f64>]) -> Option<f64> {
         let rows = self.data.nrows();
         let mut p = Mat::<f64>::zeros(rows, 2 * columns.len());
