@@ -693,11 +693,10 @@ fn rank_one_selected(
 /// only there, after the check (run beside `refine` on the other thread whether wanted or not,
 /// it made the long records' process slower, where it is never wanted, by more than it made
 /// the measured dam's faster: docs/ema.md, "Speed"). The refined pole reported beside each
-/// mode is the taken estimate's, `refine`'s
-/// elsewhere; where the fallback's is taken, `refine`'s is kept beside it
-/// ([`RefinedPole::passed_over`]) and widens the mode's deviation as a refined pole not taken
-/// does ([`widened_by_the_refinement`]): the check could not judge it, and the truth may lie by
-/// either. The warnings are those of `refine`'s poles that left their columns (the diagram's
+/// mode is the taken estimate's, `refine`'s elsewhere; where the fallback's is taken,
+/// `refine`'s is kept beside it ([`RefinedPole::passed_over`]) and widens the mode's deviation
+/// as a refined pole not taken does ([`widened_by_the_refinement`]): the check could not judge
+/// it, and the truth may lie by either. The warnings are those of `refine`'s poles that left their columns (the diagram's
 /// pole stands there).
 ///
 /// # Errors

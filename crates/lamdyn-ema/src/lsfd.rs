@@ -150,6 +150,11 @@ impl ModalFit {
         LineBasis::new(&self.poles, self.quantity, 2.0 * PI * freq_hz)
     }
 
+    /// [`Self::line_basis`] written into `basis` (loops over lines reuse one).
+    pub(crate) fn set_line_basis(&self, basis: &mut LineBasis, freq_hz: f64) {
+        basis.set(&self.poles, self.quantity, 2.0 * PI * freq_hz);
+    }
+
     /// [`Self::synthesize`] on a line's basis.
     pub fn synthesize_on(&self, basis: &LineBasis, o: usize) -> Complex64 {
         let modes: Complex64 = (0..self.poles.len())

@@ -459,9 +459,17 @@ pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
         .par_chunks(2048)
         .map(|chunk| {
             let mut sums = empty();
-            let mut scratch = LineScratch::new(fit);
+            let mut basis = fit.line_basis(0.0);
+            let mut terms = vec![Complex64::default(); modes];
             for &k in chunk {
-                sums.add_line(fit, data.curves, k, data.freqs_hz[k], &mut scratch);
+                sums.add_line(
+                    fit,
+                    data.curves,
+                    k,
+                    data.freqs_hz[k],
+                    &mut basis,
+                    &mut terms,
+                );
             }
             sums
         })
@@ -482,26 +490,6 @@ pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
     Contributions { frac, frac_drop }
 }
 
-/// One thread's work space for [`CurveSums::add_line`], reused from line to line.
-struct LineScratch {
-    basis: LineBasis,
-    /// Per mode the partial fractions times the quantity's (iω)^k.
-    scaled: Vec<(Complex64, Complex64)>,
-    /// Per mode its term in the curve at hand.
-    terms: Vec<Complex64>,
-}
-
-impl LineScratch {
-    fn new(fit: &ModalFit) -> Self {
-        let modes = fit.poles.len();
-        Self {
-            basis: fit.line_basis(0.0),
-            scaled: Vec::with_capacity(modes),
-            terms: vec![Complex64::default(); modes],
-        }
-    }
-}
-
 /// Per curve the FRAC sums of the model, and per curve and mode those without the mode.
 struct CurveSums {
     with: Vec<FracSums>,
@@ -509,36 +497,21 @@ struct CurveSums {
 }
 
 impl CurveSums {
-    /// Adds line `k` (at `freq_hz`) of every curve.
+    /// Adds line `k` (at `freq_hz`) of every curve; `basis` (the fit's at some line) and
+    /// `terms` (one per mode) are scratch space.
     fn add_line(
         &mut self,
         fit: &ModalFit,
         curves: &[&[Complex64]],
         k: usize,
         freq_hz: f64,
-        scratch: &mut LineScratch,
+        basis: &mut LineBasis,
+        terms: &mut [Complex64],
     ) {
-        let LineScratch {
-            basis,
-            scaled,
-            terms,
-        } = scratch;
-        basis.set(
-            &fit.poles,
-            fit.quantity,
-            2.0 * std::f64::consts::PI * freq_hz,
-        );
-        // (iω)^k/(iω − λ_r) and (iω)^k/(iω − λ_r*), shared by every curve.
-        scaled.clear();
-        scaled.extend(
-            basis
-                .fractions
-                .iter()
-                .map(|&(t, tc)| (basis.factor * t, basis.factor * tc)),
-        );
+        fit.set_line_basis(basis, freq_hz);
         for (o, curve) in curves.iter().enumerate() {
-            for ((t, &(ft, ftc)), a) in terms.iter_mut().zip(scaled.iter()).zip(&fit.residues[o]) {
-                *t = a * ft + a.conj() * ftc;
+            for (r, t) in terms.iter_mut().enumerate() {
+                *t = fit.mode_term_on(basis, o, r);
             }
             let measured = curve[k];
             let model = terms.iter().sum::<Complex64>() + fit.residual_term_on(basis, o);
