@@ -595,6 +595,7 @@ fn fit_selected(
                 refined: None,
                 deviations: None,
                 beside: vec![],
+                spreads: vec![],
             }
         }
         (PoleEstimator::Checked, Some(c)) => {
@@ -648,11 +649,12 @@ fn rank_one_selected(
     on_iteration: &dyn Fn(usize, usize),
 ) -> Result<SelectedFit, EmaError> {
     if let Some(c) = context.filter(|_| data.references < 2) {
-        let (mut warnings, mut beside) = (vec![], vec![]);
+        let (mut warnings, mut beside, mut spreads) = (vec![], vec![], vec![]);
         let rank_one = || {
             let joint = rank_one_refined(data, selected, top, s, on_iteration)?;
             warnings = joint.warnings;
             beside = joint.beside;
+            spreads = joint.spreads;
             let alone = vec![false; joint.poles.len()];
             Ok(RefinedPoles {
                 poles: joint.poles,
@@ -663,6 +665,7 @@ fn rank_one_selected(
         let mut fitted = checked_selected(data, selected, c, s, timings, rank_one, Some(&jointly))?;
         fitted.warnings.extend(warnings);
         fitted.beside = beside;
+        fitted.spreads = spreads;
         return Ok(fitted);
     }
     let mut clock = Instant::now();
@@ -680,6 +683,7 @@ fn rank_one_selected(
     let mut fitted = SelectedFit::refined(fit, joint.poles, held);
     fitted.warnings.extend(joint.warnings);
     fitted.deviations = joint.deviations;
+    fitted.spreads = joint.spreads;
     fitted.beside = joint.beside;
     Ok(fitted)
 }
@@ -776,6 +780,7 @@ fn checked_selected(
         refined: Some(refined),
         deviations: None,
         beside: vec![],
+        spreads: vec![],
     })
 }
 
@@ -854,6 +859,7 @@ fn rank_one_refined(
             poles: poles.to_vec(),
             warnings: vec![],
             deviations: None,
+            spreads: vec![],
             beside: vec![],
         });
     };
@@ -878,6 +884,7 @@ fn rank_one_refined(
         poles: fit.poles,
         warnings,
         deviations: fit.deviations,
+        spreads: fit.spreads,
         beside,
     })
 }
@@ -903,6 +910,9 @@ struct JointPoles {
     poles: Vec<Complex64>,
     warnings: Vec<String>,
     deviations: Option<Vec<PoleSd>>,
+    /// How far each pole may lie beyond the noise's part of its deviation, rad/s; empty where
+    /// the fit failed.
+    spreads: Vec<f64>,
     /// The modes the fit held beside the selection, as fitted.
     beside: Vec<Complex64>,
 }
@@ -1064,6 +1074,10 @@ struct SelectedFit {
     /// The modes the rank-one fit held beside the selection, as fitted; none with another
     /// estimator.
     beside: Vec<Complex64>,
+    /// With the rank-one fit: how far each pole (index-aligned with the selection) may lie
+    /// beyond the noise's part of its deviation, rad/s (module `residual_spread`); empty with
+    /// another estimator.
+    spreads: Vec<f64>,
 }
 
 impl SelectedFit {
@@ -1085,6 +1099,7 @@ impl SelectedFit {
             refined: Some(refined),
             deviations: None,
             beside: vec![],
+            spreads: vec![],
         }
     }
 }
@@ -1112,6 +1127,22 @@ fn widened_by_the_refinement(sd: PoleSd, pole: Complex64, refined: (f64, f64)) -
         freq_hz: spread(sd.freq_hz, pole_freq_hz(pole) - refined.0),
         damping_ratio: spread(sd.damping_ratio, pole_damping(pole) - refined.1),
     }
+}
+
+/// The deviations `sd` of `poles` widened by the spread beyond the noise (`spreads`, rad/s,
+/// index-aligned) that the rank-one fit's residual holds at each ([`SelectedFit::spreads`],
+/// [`PoleSd::widened_by`]): a mode the model lacks under a pole, a weak one beside a strong one
+/// that no column shows, biases the pole by far more than the noise's part says. `sd` as it is
+/// where there are no spreads.
+fn widened_by_the_residual(sd: Vec<PoleSd>, poles: &[Complex64], spreads: &[f64]) -> Vec<PoleSd> {
+    if spreads.len() != sd.len() {
+        return sd;
+    }
+    sd.into_iter()
+        .zip(poles)
+        .zip(spreads)
+        .map(|((sd, &pole), &spread)| sd.widened_by(pole, spread))
+        .collect()
 }
 
 /// [`widened_by_the_refinement`] by the farthest of `points` in f and, apart, in ζ; `sd` itself
@@ -1739,6 +1770,8 @@ pub fn identify_with(
         on_stage,
         &mut timings,
     )?;
+    let deviations =
+        deviations.map(|sd| widened_by_the_residual(sd, &scaled_fit.poles, &fitted.spreads));
     warnings.extend(roving_hammer_note(set));
     clock = Instant::now();
     let sources = ModeSources {

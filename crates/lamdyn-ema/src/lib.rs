@@ -42,6 +42,7 @@ mod pole_fit;
 mod projection;
 pub mod quality;
 mod rank_one;
+mod residual_spread;
 pub mod second_shape;
 pub mod shapes;
 pub mod spectra;

@@ -476,6 +476,17 @@ pub struct PoleSd {
     pub damping_ratio: f64,
 }
 
+impl PoleSd {
+    /// These deviations of `pole` widened by a spread δ (rad/s) of the pole in any direction:
+    /// √(sd² + s²) with s = δ/2π in f (|∂f/∂λ| = 1/2π) and δ/|λ| in ζ (|∂ζ/∂λ| ≤ 1/|λ|).
+    pub(crate) fn widened_by(self, pole: Complex64, delta: f64) -> Self {
+        Self {
+            freq_hz: self.freq_hz.hypot(delta / (2.0 * PI)),
+            damping_ratio: self.damping_ratio.hypot(delta / pole.norm()),
+        }
+    }
+}
+
 /// The standard deviations of `poles` as estimates of the refinement ([`refine`]) on the lines
 /// `fit_lines` chooses in `band_hz`: the covariance of the poles' parameters is the sandwich
 /// (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ with J the Jacobian of the projected residuals (the residues

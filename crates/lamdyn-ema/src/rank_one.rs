@@ -50,6 +50,7 @@ use crate::lscf::{pole_at, pole_damping, pole_freq_hz};
 use crate::lsfd::{PoleSd, pole_sd, sandwich};
 use crate::pole_fit::{marquardt_step, pole_parameters, to_poles};
 use crate::projection::{LineBasis, LineSamples, solve_by_blocks, unit_columns};
+use crate::residual_spread::SecondOrderTerm;
 use crate::shapes::participation;
 use crate::thin_qr::ThinQr;
 use faer::linalg::triangular_solve::solve_upper_triangular_in_place;
@@ -182,6 +183,29 @@ impl StackedCurves {
     }
 }
 
+impl StackedCurves {
+    /// The columns of a second-order term at `pole`: (iω)^q [c_j/(iω − λ)² + c_j*/(iω − λ*)²]
+    /// with one complex coefficient c_j per reference j, at columns 2j, 2j + 1 (its real and
+    /// imaginary part, as [`put_pair`]) on reference j's rows at the lines `window` marks (the
+    /// pole's, [`crate::residual_spread::window_of`]), zero elsewhere.
+    fn second_order_columns(&self, pole: Complex64, window: &[bool]) -> Mat<f64> {
+        let nl = self.omega.len();
+        let mut g = Mat::zeros(self.data.nrows(), 2 * self.references);
+        let mut line = LineBasis::new(&[pole], self.quantity, 0.0);
+        for (k, &w) in self.omega.iter().enumerate() {
+            if !window[k] {
+                continue;
+            }
+            line.set(&[pole], self.quantity, w);
+            let (a1, a2) = line.fractions[0];
+            for j in 0..self.references {
+                put_pair(&mut g, j * nl + k, 2 * j, line.factor, a1 * a1, a2 * a2);
+            }
+        }
+        g
+    }
+}
+
 /// Writes, at row pair `i` (rows 2i, 2i + 1), a complex coefficient's two real columns at `c`,
 /// `c` + 1: f(g₁ + g₂) for its real part and f·i(g₁ − g₂) for its imaginary part, where
 /// g₁ = e/(iω − λ) and g₂ its conjugate pole's term (e* /(iω − λ*)).
@@ -292,8 +316,11 @@ impl Projected {
 /// The rank-one fit's poles, matched to their starts, and their standard deviations.
 pub(crate) struct RankOneFit {
     pub poles: Vec<Complex64>,
-    /// As estimates of the fit ([`deviations`]); None where JᵀJ is singular.
+    /// As estimates of the fit ([`deviations`]), the noise's part; None where JᵀJ is
+    /// singular.
     pub deviations: Option<Vec<PoleSd>>,
+    /// How far each pole may lie beyond the noise's part ([`unmodelled_spreads`]), rad/s.
+    pub spreads: Vec<f64>,
 }
 
 impl RankOneFit {
@@ -311,6 +338,7 @@ impl RankOneFit {
             deviations: self
                 .deviations
                 .map(|sd| order.iter().map(|&k| sd[k]).collect()),
+            spreads: order.iter().map(|&k| self.spreads[k]).collect(),
         }
     }
 }
@@ -370,46 +398,62 @@ pub(crate) fn rank_one_poles(
             break;
         }
     }
+    let mut residual = at.residual_in_q.clone();
+    at.qr.apply_q(&mut residual);
+    let variances = curve_variances(samples, &u, &at, &residual);
     let fit = RankOneFit {
         poles: params.unpack(&u).0,
-        deviations: deviations(samples, &params, &u, &at),
+        deviations: deviations(samples, &params, &u, &at, &variances),
+        spreads: unmodelled_spreads(samples, &params, &u, &at, &residual),
     };
     Some(fit.matched_to(poles))
 }
 
+/// Each curve's residual variance per real row at `u` (the fit's end, `at` its residue
+/// problem, `residual` its residual in the curves' coordinates), responses × references: its
+/// sum of squares over its rows less its share of the unknowns and of the parameters.
+fn curve_variances(
+    samples: &StackedCurves,
+    u: &[f64],
+    at: &Projected,
+    residual: &Mat<f64>,
+) -> Mat<f64> {
+    let (refs, responses) = (samples.references, samples.data.ncols());
+    let rows = samples.data.nrows() / refs;
+    let own = (at.unknowns.nrows() as f64 + u.len() as f64 / responses as f64) / refs as f64;
+    let dof = (rows as f64 - own).max(1.0);
+    Mat::from_fn(responses, refs, |o, j| {
+        residual.col(o).subrows(j * rows, rows).squared_norm_l2() / dof
+    })
+}
+
 /// The standard deviations of the poles at `u` (the fit's end, `at` its residue problem) as
 /// estimates of the fit: the sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of Kaufman's
-/// Jacobian ([`normal_equations`]), Σ each curve's residual variance (its sum of squares over
-/// its rows less its share of the unknowns and of the parameters), carried to f and ζ as
-/// [`crate::lsfd::pole_deviations`] does. The curves of one response share its unknowns but not
-/// their noise (a reference's curves may be noisier), hence Σ curve by curve: the rows of
-/// E = P⊥ D_u are taken back to the curves' own coordinates and their Gram matrix split by
-/// reference. As there, the noise's part of the error only.
+/// Jacobian ([`normal_equations`]), Σ each curve's residual variance `variances`
+/// ([`curve_variances`]), carried to f and ζ as [`crate::lsfd::pole_deviations`] does. The
+/// curves of one response share its unknowns but not their noise (a reference's curves may be
+/// noisier), hence Σ curve by curve: the rows of E = P⊥ D_u are taken back to the curves' own
+/// coordinates and their Gram matrix split by reference. As there, the noise's part of the
+/// error only ([`unmodelled_spreads`] has the rest).
 fn deviations(
     samples: &StackedCurves,
     params: &Parameters,
     u: &[f64],
     at: &Projected,
+    variances: &Mat<f64>,
 ) -> Option<Vec<PoleSd>> {
     let (mut e, mode_of) = projected_derivatives(samples, params, u, at);
     at.qr.apply_q(&mut e);
-    let mut residual = at.residual_in_q.clone();
-    at.qr.apply_q(&mut residual);
-    let (refs, responses) = (samples.references, samples.data.ncols());
-    let rows = samples.data.nrows() / refs;
-    let own = (at.unknowns.nrows() as f64 + u.len() as f64 / responses as f64) / refs as f64;
-    let dof = (rows as f64 - own).max(1.0);
-    let grams: Vec<Mat<f64>> = (0..refs)
+    let rows = samples.data.nrows() / samples.references;
+    let grams: Vec<Mat<f64>> = (0..samples.references)
         .map(|j| {
             let ej = e.subrows(j * rows, rows);
             ej.transpose() * ej
         })
         .collect();
-    let variance =
-        |o: usize, j: usize| residual.col(o).subrows(j * rows, rows).squared_norm_l2() / dof;
     let unknowns = ModeUnknowns { at, mode_of };
     let jtj = unknowns.assembled(&grams, |_, _| 1.0);
-    let meat = unknowns.assembled(&grams, variance);
+    let meat = unknowns.assembled(&grams, |o, j| variances[(o, j)]);
     let cov = sandwich(&jtj, &meat)?;
     let n = params.pivots.len();
     let poles = to_poles(&u[..2 * n]);
@@ -421,6 +465,77 @@ fn deviations(
             })
             .collect(),
     )
+}
+
+/// Each pole's spread beyond the noise at `u` ([`unmodelled_spread`]), rad/s, `residual` the
+/// fit's residual at `at` in the curves' coordinates.
+fn unmodelled_spreads(
+    samples: &StackedCurves,
+    params: &Parameters,
+    u: &[f64],
+    at: &Projected,
+    residual: &Mat<f64>,
+) -> Vec<f64> {
+    let (poles, participation) = params.unpack(u);
+    poles
+        .iter()
+        .zip(&participation)
+        .enumerate()
+        .map(|(index, (&pole, l))| {
+            let mode = ResidualMode { index, pole, l };
+            unmodelled_spread(samples, &mode, at, residual)
+        })
+        .collect()
+}
+
+/// One mode of the fit, as [`unmodelled_spread`] takes it: its index in the basis, its pole
+/// and participation factors.
+struct ResidualMode<'a> {
+    index: usize,
+    pole: Complex64,
+    l: &'a [Complex64],
+}
+
+/// How far the pole of `mode` may lie from the truth beyond the noise's part, δ (rad/s): the
+/// second-order term at the pole that the fit's residual at `at` holds
+/// ([`crate::residual_spread`]), one complex coefficient per curve (per reference of each
+/// response), the residues' energy Σ|ψ_o L_j|², at most the pole's half-power half-width.
+/// `residual` is the residual in the curves' coordinates.
+fn unmodelled_spread(
+    samples: &StackedCurves,
+    mode: &ResidualMode<'_>,
+    at: &Projected,
+    residual: &Mat<f64>,
+) -> f64 {
+    let window = crate::residual_spread::window_of(mode.pole, &samples.omega);
+    let nl = samples.omega.len();
+    let window_lines: Vec<usize> = (0..nl).filter(|&k| window[k]).collect();
+    let window_energy: Vec<f64> = (0..samples.data.ncols())
+        .map(|o| {
+            let col = residual.col(o);
+            (0..samples.references)
+                .flat_map(|j| window_lines.iter().map(move |&k| j * nl + k))
+                .map(|i| col[2 * i].powi(2) + col[2 * i + 1].powi(2))
+                .sum()
+        })
+        .collect();
+    let mut g = samples.second_order_columns(mode.pole, &window);
+    at.qr.apply_transpose_q(&mut g);
+    g.subrows_mut(0, at.qr.r_rows()).fill(0.0);
+    let u = &at.unknowns;
+    let own: f64 = (0..samples.data.ncols())
+        .map(|o| {
+            let psi = Complex64::new(u[(2 * mode.index, o)], u[(2 * mode.index + 1, o)]);
+            mode.l.iter().map(|lj| (psi * lj).norm_sqr()).sum::<f64>()
+        })
+        .sum();
+    let term = SecondOrderTerm {
+        columns: g.as_ref(),
+        residual: at.residual_in_q.as_ref(),
+        window_energy: &window_energy,
+        window_rows: 2 * window_lines.len() * samples.references,
+    };
+    term.spread(own, -mode.pole.re)
 }
 
 /// The order of `fitted` in which each lies by its own start in `starts`: two poles trade
@@ -900,6 +1015,7 @@ mod tests {
                 pole(102.5, 0.08),
             ],
             deviations: None,
+            spreads: vec![0.0; 4],
         };
         let held = HeldFit {
             fit,
@@ -938,6 +1054,85 @@ mod tests {
         let l = |set: &[Complex64]| Some(vec![vec![Complex64::ONE]; set.len()]);
         let all: Vec<usize> = (0..picked.len()).collect();
         fitted_with_the_modes_needed(&s, picked, &[], &all, l, 60, &|_, _| {}).unwrap()
+    }
+
+    /// The curves of one reference over 60, 100 and 103 Hz (ζ 8 %), the 103 Hz mode weak (0.3
+    /// of its shape), its shape `SHAPES[shape]`, 1 % noise.
+    fn weak_neighbour(freqs: &[f64], shape: usize) -> Vec<Vec<Complex64>> {
+        let exact: Vec<Vec<Complex64>> = (0..6)
+            .map(|o| {
+                crate::test_frfs::accelerance(freqs, &WEAK_NEIGHBOUR, |r| {
+                    let of = if r == 2 {
+                        0.3 * SHAPES[shape][o]
+                    } else {
+                        SHAPES[r][o]
+                    };
+                    of * SHAPES[r][0]
+                })
+            })
+            .collect();
+        noisy(&exact, 0.01, 11)
+    }
+
+    /// The one-reference samples of `curves` on every line of `freqs`.
+    fn one_reference_samples(freqs: &[f64], curves: &[Vec<Complex64>]) -> StackedCurves {
+        let refs: Vec<&[Complex64]> = curves.iter().map(Vec::as_slice).collect();
+        let lines: Vec<usize> = (0..freqs.len()).collect();
+        StackedCurves::new(freqs, &refs, 1, Quantity::Accelerance, &lines, 200.0).unwrap()
+    }
+
+    const WEAK_NEIGHBOUR: [(f64, f64); 3] = [(60.0, 0.08), (100.0, 0.08), (103.0, 0.08)];
+
+    /// A pole fitted alone over a mode and a weak neighbour 3 % above it (one reference, the
+    /// neighbour not in the model) lies off the mode by ten times its noise sd, and the
+    /// residual's second-order term says so: the spread reaches the bias and stays within the
+    /// pole's half-power half-width. With the neighbour in the model no pole takes a spread
+    /// beyond its noise sd. A neighbour of the pole's own shape leaves no second shape: its
+    /// bias goes unseen (module `residual_spread`, "What it cannot see").
+    #[test]
+    fn a_pole_over_a_weak_neighbour_is_widened_by_the_residual() {
+        let freqs: Vec<f64> = (0..=1800).map(|k| 20.0 + 0.1 * f64::from(k)).collect();
+        let curves = weak_neighbour(&freqs, 2);
+        let s = one_reference_samples(&freqs, &curves);
+        let starts = [pole(60.0, 0.08), pole(100.6, 0.08)];
+        let one = vec![vec![Complex64::ONE]; 2];
+        let alone = rank_one_poles(&s, &starts, one, 60, &|_, _| {}).unwrap();
+        let fitted = alone.poles[1];
+        let bias = (fitted - pole(100.0, 0.08)).norm();
+        let noise_sd = 2.0 * PI * alone.deviations.as_ref().unwrap()[1].freq_hz;
+        eprintln!(
+            "alone: bias {bias} rad/s, noise sd {noise_sd}, spreads {:?}",
+            alone.spreads
+        );
+        assert!(noise_sd < bias / 5.0, "noise sd {noise_sd}, bias {bias}");
+        assert!(
+            alone.spreads[1] >= bias,
+            "{:?} against {bias}",
+            alone.spreads
+        );
+        assert!(alone.spreads[1] <= -fitted.re, "{:?}", alone.spreads);
+        let all: Vec<Complex64> = WEAK_NEIGHBOUR.iter().map(|&(f, z)| pole(f, z)).collect();
+        let three = vec![vec![Complex64::ONE]; 3];
+        let held = rank_one_poles(&s, &all, three, 60, &|_, _| {}).unwrap();
+        let sd = held.deviations.unwrap();
+        eprintln!("held: spreads {:?}, sd {sd:?}", held.spreads);
+        for (k, spread) in held.spreads.iter().enumerate() {
+            let noise_sd = 2.0 * PI * sd[k].freq_hz;
+            assert!(*spread <= noise_sd, "{k}: {spread} against {noise_sd}");
+        }
+        let same_shape = one_reference_samples(&freqs, &weak_neighbour(&freqs, 1));
+        let one = vec![vec![Complex64::ONE]; 2];
+        let unseen = rank_one_poles(&same_shape, &starts, one, 60, &|_, _| {}).unwrap();
+        let bias = (unseen.poles[1] - pole(100.0, 0.08)).norm();
+        eprintln!(
+            "same shape: bias {bias} rad/s, spreads {:?}",
+            unseen.spreads
+        );
+        assert!(
+            bias > 1.0 && unseen.spreads[1] == 0.0,
+            "{bias}, {:?}",
+            unseen.spreads
+        );
     }
 
     /// With one reference a pole picked over the damped pair 100 / 101.2 Hz (1.2 % apart, a
