@@ -62,6 +62,12 @@ pub(crate) struct PoleWindow {
     pub(crate) lines: Vec<usize>,
 }
 
+/// The half-width of the window of `pole` (Hz) on lines `spacing` Hz apart: [`HALF_WIDTHS`]
+/// half-power half-widths ζf, at least [`MIN_HALF_WINDOW_LINES`] lines.
+pub(crate) fn half_width_hz(pole: Complex64, spacing: f64) -> f64 {
+    (HALF_WIDTHS * pole_damping(pole) * pole_freq_hz(pole)).max(MIN_HALF_WINDOW_LINES * spacing)
+}
+
 impl PoleWindow {
     /// The window of `pole` on `data` (lines `spacing` Hz apart); None for a pole whose damping
     /// is not positive and finite.
@@ -70,7 +76,7 @@ impl PoleWindow {
         if !(z.is_finite() && z > 0.0) {
             return None;
         }
-        let half_hz = (HALF_WIDTHS * z * center_hz).max(MIN_HALF_WINDOW_LINES * spacing);
+        let half_hz = half_width_hz(pole, spacing);
         let lines = data
             .lines
             .iter()

@@ -21,8 +21,8 @@
 //! second shape under the pole, which the mode's verdict and the split of the rank-one fit
 //! answer ([`crate::second_shape`]).
 //!
-//! **The window.** The term's columns are kept on the lines within ±[`HALF_WIDTHS`] half-power
-//! half-widths ζf of the pole (at least [`MIN_HALF_WINDOW_LINES`] lines), as the second-shape
+//! **The window.** The term's columns are kept on the lines within ±[`crate::local_residues::HALF_WIDTHS`] half-power
+//! half-widths ζf of the pole (at least [`crate::local_residues::MIN_HALF_WINDOW_LINES`] lines), as the second-shape
 //! test's window ([`crate::local_residues`]) and zero elsewhere: 1/(s − λ)² falls off only as
 //! 1/ω² away from the pole, and a misfit far from it (a mode the model lacks elsewhere in the
 //! band) would otherwise widen every pole.
@@ -44,8 +44,8 @@
 //! zero (own energy → 0) would take a spread without limit.
 
 use crate::context::chi_square_99;
-use crate::local_residues::{HALF_WIDTHS, MIN_HALF_WINDOW_LINES};
-use crate::lscf::{pole_damping, pole_freq_hz};
+use crate::local_residues::half_width_hz;
+use crate::lscf::pole_freq_hz;
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
 use num_complex::Complex64;
@@ -64,8 +64,7 @@ pub(crate) fn window_of(pole: Complex64, omega: &[f64]) -> Vec<bool> {
     } else {
         0.0
     };
-    let (f, z) = (pole_freq_hz(pole), pole_damping(pole));
-    let half_hz = (HALF_WIDTHS * z.abs() * f).max(MIN_HALF_WINDOW_LINES * spacing_hz);
+    let (f, half_hz) = (pole_freq_hz(pole), half_width_hz(pole, spacing_hz));
     omega
         .iter()
         .map(|w| (w / (2.0 * PI) - f).abs() <= half_hz)
