@@ -143,22 +143,19 @@ impl LineSamples {
         a
     }
 
-    /// The derivatives of pole `p`'s two basis columns with respect to its two parameters, in
-    /// the four columns of `d` (rows × 4): for ln σ (∂λ/∂u = c = Re λ) and then ω_d (c = i),
-    /// with ∂λ*/∂u = c*, (iω)^k [c/(iω − λ)² + c*/(iω − λ*)²] and
-    /// (iω)^k i[c/(iω − λ)² − c*/(iω − λ*)²]. The fractions are computed once for both.
-    fn write_basis_derivatives(&self, p: Complex64, d: &mut Mat<f64>) {
-        let c = [Complex64::new(p.re, 0.0), Complex64::i()];
+    /// The base columns of pole `p`'s two parameters ([`ColumnMap`]) in the two columns of `d`
+    /// (rows × 2): the derivatives of its two basis columns with respect to λ (∂λ/∂u = 1,
+    /// ∂λ*/∂u = 1), (iω)^k [1/(iω − λ)² + 1/(iω − λ*)²] and (iω)^k i[1/(iω − λ)² −
+    /// 1/(iω − λ*)²]. The parameter ln σ (∂λ/∂u = Re λ) has Re λ times them, ω_d (∂λ/∂u = i)
+    /// their [`ColumnMap::TURNED`].
+    fn write_base_derivatives(&self, p: Complex64, d: &mut Mat<f64>) {
         for (i, &w) in self.omega.iter().enumerate() {
             let f = quantity_factor(w, self.quantity);
             let s = Complex64::new(0.0, w);
             let (a1, a2) = (1.0 / (s - p), 1.0 / (s - p.conj()));
-            let (f1, f2) = (f * a1 * a1, f * a2 * a2);
-            for (m, c) in c.iter().enumerate() {
-                let (d1, d2) = (c * f1, c.conj() * f2);
-                Self::put(d, i, 2 * m, d1 + d2);
-                Self::put(d, i, 2 * m + 1, Complex64::i() * (d1 - d2));
-            }
+            let (d1, d2) = (f * a1 * a1, f * a2 * a2);
+            Self::put(d, i, 0, d1 + d2);
+            Self::put(d, i, 1, Complex64::i() * (d1 - d2));
         }
     }
 
@@ -332,6 +329,71 @@ pub(crate) fn unit_columns(a: &mut Mat<f64>) -> Vec<f64> {
     scale
 }
 
+/// How a parameter's two derivative columns follow from its pair's two base columns [A, B]:
+/// D_u = [A, B] T_u, `t[c][d]` the weight of base column c in column d. A complex coefficient
+/// e of a pole's columns enters them as e/(iω − λ) and e*/(iω − λ*) (their real part and i
+/// times their difference, [`LineSamples::put`]); replacing e by i·e turns [A, B] into
+/// [B, −A]. So a pole's ∂/∂ln σ (∂λ = Re λ) is Re λ [A, B] and its ∂/∂ω_d (∂λ = i) is [B, −A],
+/// [A, B] the derivatives with respect to λ; a complex coefficient's real part is [A, B], its
+/// imaginary part [B, −A]. Only the base columns need the projection (P⊥ commutes with T):
+/// half the columns a Jacobian of both parameters would take.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ColumnMap {
+    t: [[f64; 2]; 2],
+}
+
+impl ColumnMap {
+    /// The first parameter of a pair: its base columns times `scale`.
+    pub(crate) fn scaled(scale: f64) -> Self {
+        Self {
+            t: [[scale, 0.0], [0.0, scale]],
+        }
+    }
+
+    /// The second parameter of a pair: [B, −A].
+    pub(crate) const TURNED: Self = Self {
+        t: [[0.0, -1.0], [1.0, 0.0]],
+    };
+
+    /// The maps of the parameters (ln σ, ω_d) of each of `poles` in turn.
+    pub(crate) fn of_poles(poles: &[Complex64]) -> Vec<Self> {
+        poles
+            .iter()
+            .flat_map(|p| [Self::scaled(p.re), Self::TURNED])
+            .collect()
+    }
+}
+
+/// The Gram matrix of the parameters' columns E_u = base · T_u ([`ColumnMap`]; 2 × 2 block
+/// T_uᵀ G_q(u)q(v) T_v at rows 2u, columns 2v) from `base_gram`, that of the base columns
+/// (pair q at 2q, 2q + 1; parameter u's pair at u − u mod 2).
+pub(crate) fn expanded_gram(base_gram: &Mat<f64>, maps: &[ColumnMap]) -> Mat<f64> {
+    Mat::from_fn(2 * maps.len(), 2 * maps.len(), |i, j| {
+        let (a, c) = (i / 2, i % 2);
+        let (b, d) = (j / 2, j % 2);
+        let (pa, pb) = (a - a % 2, b - b % 2);
+        let mut v = 0.0;
+        for x in 0..2 {
+            for y in 0..2 {
+                v += maps[a].t[x][c] * base_gram[(pa + x, pb + y)] * maps[b].t[y][d];
+            }
+        }
+        v
+    })
+}
+
+/// E_uᵀ r (rows 2u, 2u + 1, one column per column of r) from `base_products`, the base
+/// columns' baseᵀ r ([`expanded_gram`]'s layout).
+pub(crate) fn expanded_products(base_products: &Mat<f64>, maps: &[ColumnMap]) -> Mat<f64> {
+    Mat::from_fn(2 * maps.len(), base_products.ncols(), |i, o| {
+        let (a, d) = (i / 2, i % 2);
+        let pair = a - a % 2;
+        (0..2)
+            .map(|c| maps[a].t[c][d] * base_products[(pair + c, o)])
+            .sum()
+    })
+}
+
 /// What every curve's synthesis at one line shares ([`crate::lsfd::ModalFit::line_basis`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LineBasis {
@@ -422,16 +484,17 @@ impl Projection {
     pub(crate) fn normal_equations(&self, samples: &LineSamples) -> NormalEquations {
         let r = self.qr.r();
         let (n, p, curves) = (r.nrows(), 2 * self.poles.len(), self.residual_in_q.ncols());
-        let mut perp = Mat::<f64>::zeros(samples.rows(), 2 * p);
-        let mut d = Mat::<f64>::zeros(samples.rows(), 4);
+        let mut perp = Mat::<f64>::zeros(samples.rows(), p);
+        let mut d = Mat::<f64>::zeros(samples.rows(), 2);
         for (k, pole) in self.poles.iter().enumerate() {
-            samples.write_basis_derivatives(*pole, &mut d);
-            perp.subcols_mut(4 * k, 4).copy_from(&d);
+            samples.write_base_derivatives(*pole, &mut d);
+            perp.subcols_mut(2 * k, 2).copy_from(&d);
         }
         self.qr.apply_transpose_q(&mut perp);
         perp.subrows_mut(0, n).fill(0.0);
-        let etr = perp.transpose() * &self.residual_in_q;
-        let m = perp.transpose() * &perp;
+        let maps = ColumnMap::of_poles(&self.poles);
+        let etr = expanded_products(&(perp.transpose() * &self.residual_in_q), &maps);
+        let m = expanded_gram(&(perp.transpose() * &perp), &maps);
         let mut z = Mat::<f64>::zeros(n, p * curves);
         for j in 0..p {
             for o in 0..curves {
@@ -499,7 +562,7 @@ mod tests {
     impl LineSamples {
         /// The derivatives of pole `p`'s two basis columns with respect to a parameter with
         /// ∂λ/∂u = `c` (∂λ*/∂u = c*), written out apart from
-        /// [`LineSamples::write_basis_derivatives`] to check it: (iω)^k [c/(iω − λ)² +
+        /// [`LineSamples::write_base_derivatives`] and [`ColumnMap`] to check them: (iω)^k [c/(iω − λ)² +
         /// c*/(iω − λ*)²] and (iω)^k i[c/(iω − λ)² − c*/(iω − λ*)²], as an (rows × 2) matrix.
         fn basis_derivative(&self, p: Complex64, c: Complex64) -> Mat<f64> {
             let mut d = Mat::zeros(self.rows(), 2);

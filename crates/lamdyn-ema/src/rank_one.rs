@@ -49,7 +49,10 @@ use crate::error::EmaError;
 use crate::lscf::{pole_at, pole_damping, pole_freq_hz};
 use crate::lsfd::{PoleSd, pole_sd, sandwich};
 use crate::pole_fit::{marquardt_step, pole_parameters, to_poles};
-use crate::projection::{LineBasis, LineSamples, solve_by_blocks, unit_columns};
+use crate::projection::{
+    ColumnMap, LineBasis, LineSamples, expanded_gram, expanded_products, solve_by_blocks,
+    unit_columns,
+};
 use crate::residual_spread::SecondOrderTerm;
 use crate::shapes::participation;
 use crate::thin_qr::ThinQr;
@@ -140,42 +143,32 @@ impl StackedCurves {
         a
     }
 
-    /// ∂(mode columns)/∂u for each parameter u of mode `r` (ln σ, ω_d, then re and im of L_rj
-    /// for every free reference j), each as the complex values at every row pair, pairs of
-    /// columns (module docs): the pole's with e = L_rj c and the squared fractions (c = ∂λ/∂u),
-    /// L's with e = 1 or i on its own reference's rows.
-    fn mode_derivatives(&self, pole: Complex64, l: &[Complex64], free: &[usize]) -> Vec<Mat<f64>> {
+    /// The base columns of each parameter pair of a mode ([`ColumnMap`]): each as the complex
+    /// values at every row pair, pairs of columns (module docs). First the pole's (ln σ, ω_d),
+    /// ∂(mode columns)/∂λ with e = L_rj and the squared fractions (∂/∂ln σ is Re λ times them,
+    /// ∂/∂ω_d their [`ColumnMap::TURNED`]); then, for each reference j of `free`, L_rj's
+    /// (re, im): the mode's columns with e = 1 on reference j's rows (e = i turns them).
+    fn pair_derivatives(&self, pole: Complex64, l: &[Complex64], free: &[usize]) -> Vec<Mat<f64>> {
         let nl = self.omega.len();
         let rows = self.data.nrows();
-        let dpole = [Complex64::new(pole.re, 0.0), Complex64::i()];
-        let mut out: Vec<Mat<f64>> = (0..2 + 2 * free.len())
-            .map(|_| Mat::zeros(rows, 2))
-            .collect();
+        let mut out: Vec<Mat<f64>> = (0..1 + free.len()).map(|_| Mat::zeros(rows, 2)).collect();
         let mut line = LineBasis::new(&[pole], self.quantity, 0.0);
         for (k, &w) in self.omega.iter().enumerate() {
             line.set(&[pole], self.quantity, w);
             let (a1, a2) = line.fractions[0];
             for j in 0..self.references {
                 let row = j * nl + k;
-                for (m, c) in dpole.iter().enumerate() {
-                    let e = l[j] * c;
-                    put_pair(
-                        &mut out[m],
-                        row,
-                        0,
-                        line.factor,
-                        e * a1 * a1,
-                        e.conj() * a2 * a2,
-                    );
-                }
+                let e = l[j];
+                put_pair(
+                    &mut out[0],
+                    row,
+                    0,
+                    line.factor,
+                    e * a1 * a1,
+                    e.conj() * a2 * a2,
+                );
                 if let Some(i) = free.iter().position(|&f| f == j) {
-                    for (m, e) in [Complex64::new(1.0, 0.0), Complex64::i()]
-                        .iter()
-                        .enumerate()
-                    {
-                        let d = &mut out[2 + 2 * i + m];
-                        put_pair(d, row, 0, line.factor, e * a1, e.conj() * a2);
-                    }
+                    put_pair(&mut out[1 + i], row, 0, line.factor, a1, a2);
                 }
             }
         }
@@ -371,9 +364,13 @@ pub(crate) fn rank_one_poles(
     let mut at = project(&u)?;
     let mut cost = at.cost();
     let mut lambda = 1e-3;
+    // The Jacobian at `u`, kept for the deviations where the steps end there.
+    let mut jacobian = None;
     'steps: for k in 0..iterations {
         on_iteration(k + 1, iterations);
-        let (jtj, jtr) = normal_equations(samples, &params, &u, &at);
+        let here = ProjectedJacobian::at(samples, &params, &u, &at);
+        let (jtj, jtr) = normal_equations(samples, &here, &at);
+        jacobian = Some(here);
         let p = u.len();
         let mut improved = false;
         for _ in 0..8 {
@@ -388,6 +385,7 @@ pub(crate) fn rank_one_poles(
                 if ct < cost {
                     improved = (cost - ct) / cost > 1e-10;
                     (u, at, cost) = (trial, next, ct);
+                    jacobian = None;
                     lambda = (lambda / 3.0).max(1e-12);
                     break;
                 }
@@ -398,13 +396,18 @@ pub(crate) fn rank_one_poles(
             break;
         }
     }
+    let jacobian = jacobian.unwrap_or_else(|| ProjectedJacobian::at(samples, &params, &u, &at));
     let mut residual = at.residual_in_q.clone();
     at.qr.apply_q(&mut residual);
     let variances = curve_variances(samples, &u, &at, &residual);
+    let (deviations, spreads) = rayon::join(
+        || deviations(samples, &params, &u, &at, &variances, jacobian),
+        || unmodelled_spreads(samples, &params, &u, &at, &residual),
+    );
     let fit = RankOneFit {
         poles: params.unpack(&u).0,
-        deviations: deviations(samples, &params, &u, &at, &variances),
-        spreads: unmodelled_spreads(samples, &params, &u, &at, &residual),
+        deviations,
+        spreads,
     };
     Some(fit.matched_to(poles))
 }
@@ -427,31 +430,28 @@ fn curve_variances(
     })
 }
 
-/// The standard deviations of the poles at `u` (the fit's end, `at` its residue problem) as
-/// estimates of the fit: the sandwich covariance (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ of Kaufman's
-/// Jacobian ([`normal_equations`]), Σ each curve's residual variance `variances`
+/// The standard deviations of the poles at `u` (the fit's end, `at` its residue problem,
+/// `jacobian` Kaufman's Jacobian there) as estimates of the fit: the sandwich covariance
+/// (JᵀJ)⁻¹ (Jᵀ Σ J) (JᵀJ)⁻¹ ([`normal_equations`]), Σ each curve's residual variance `variances`
 /// ([`curve_variances`]), carried to f and ζ as [`crate::lsfd::pole_deviations`] does. The
 /// curves of one response share its unknowns but not their noise (a reference's curves may be
-/// noisier), hence Σ curve by curve: the rows of E = P⊥ D_u are taken back to the curves' own
-/// coordinates and their Gram matrix split by reference. As there, the noise's part of the
-/// error only ([`unmodelled_spreads`] has the rest).
+/// noisier), hence Σ curve by curve: the Gram matrix of E = P⊥ D_u split by reference
+/// ([`ProjectedJacobian::grams_by_reference`]). As there, the noise's part of the error only
+/// ([`unmodelled_spreads`] has the rest).
 fn deviations(
     samples: &StackedCurves,
     params: &Parameters,
     u: &[f64],
     at: &Projected,
     variances: &Mat<f64>,
+    jacobian: ProjectedJacobian,
 ) -> Option<Vec<PoleSd>> {
-    let (mut e, mode_of) = projected_derivatives(samples, params, u, at);
-    at.qr.apply_q(&mut e);
-    let rows = samples.data.nrows() / samples.references;
-    let grams: Vec<Mat<f64>> = (0..samples.references)
-        .map(|j| {
-            let ej = e.subrows(j * rows, rows);
-            ej.transpose() * ej
-        })
-        .collect();
-    let unknowns = ModeUnknowns { at, mode_of };
+    let mode_of = jacobian.mode_of.clone();
+    let grams = jacobian.grams_by_reference(samples, at);
+    let unknowns = ModeUnknowns {
+        at,
+        mode_of: &mode_of,
+    };
     let jtj = unknowns.assembled(&grams, |_, _| 1.0);
     let meat = unknowns.assembled(&grams, |o, j| variances[(o, j)]);
     let cov = sandwich(&jtj, &meat)?;
@@ -476,9 +476,10 @@ fn unmodelled_spreads(
     at: &Projected,
     residual: &Mat<f64>,
 ) -> Vec<f64> {
+    use rayon::prelude::*;
     let (poles, participation) = params.unpack(u);
     poles
-        .iter()
+        .par_iter()
         .zip(&participation)
         .enumerate()
         .map(|(index, (&pole, l))| {
@@ -571,21 +572,71 @@ fn pivot(l: &[Complex64]) -> usize {
         .unwrap_or(0)
 }
 
-/// JᵀJ and Jᵀr of Kaufman's Jacobian −P⊥ D_u X at `u` (module docs), without forming it: with
-/// E_u = P⊥ D_u ([`projected_derivatives`]) and x_uo the two unknowns of u's mode for response
-/// o, (JᵀJ)_uv = Σ_o x_uoᵀ E_uᵀE_v x_vo and (Jᵀr)_u = −Σ_o x_uoᵀ E_uᵀ r_o.
+/// Kaufman's Jacobian −P⊥ D_u X at one point of the parameters, as the normal equations and
+/// the deviations take it: the base columns of every parameter pair, P⊥ applied, in Q's
+/// coordinates (pair q at columns 2q, 2q + 1, [`projected_derivatives`]); each parameter's
+/// [`ColumnMap`] (E_u = P⊥ D_u = base · T_u: half the columns are projected, P⊥ commuting
+/// with T); the Gram matrix of the E_u (2 × 2 block u, v at rows 2u, columns 2v); and each
+/// parameter's mode.
+struct ProjectedJacobian {
+    base: Mat<f64>,
+    maps: Vec<ColumnMap>,
+    gram: Mat<f64>,
+    mode_of: Vec<usize>,
+}
+
+impl ProjectedJacobian {
+    /// The Jacobian at `u`, `at` its residue problem.
+    fn at(samples: &StackedCurves, params: &Parameters, u: &[f64], at: &Projected) -> Self {
+        let (base, maps, mode_of) = projected_derivatives(samples, params, u, at);
+        let gram = expanded_gram(&(base.transpose() * &base), &maps);
+        Self {
+            base,
+            maps,
+            gram,
+            mode_of,
+        }
+    }
+
+    /// E_uᵀ r for every parameter u (rows 2u, 2u + 1) and column of `r` (in Q's coordinates).
+    fn transposed_times(&self, r: &Mat<f64>) -> Mat<f64> {
+        expanded_products(&(self.base.transpose() * r), &self.maps)
+    }
+
+    /// The Gram matrix of the E_u's rows of each reference in the curves' coordinates: with one
+    /// reference [`Self::gram`] itself (Q is orthogonal), else the base columns taken back by Q
+    /// ([`ThinQr::apply_q`]) and their rows split by reference.
+    fn grams_by_reference(self, samples: &StackedCurves, at: &Projected) -> Vec<Mat<f64>> {
+        if samples.references == 1 {
+            return vec![self.gram];
+        }
+        let mut base = self.base;
+        at.qr.apply_q(&mut base);
+        let rows = samples.data.nrows() / samples.references;
+        (0..samples.references)
+            .map(|j| {
+                let bj = base.subrows(j * rows, rows);
+                expanded_gram(&(bj.transpose() * bj), &self.maps)
+            })
+            .collect()
+    }
+}
+
+/// JᵀJ and Jᵀr of Kaufman's Jacobian −P⊥ D_u X (module docs) from `jacobian`, its E_u = P⊥ D_u,
+/// without forming J: with x_uo the two unknowns of u's mode for response o,
+/// (JᵀJ)_uv = Σ_o x_uoᵀ E_uᵀE_v x_vo and (Jᵀr)_u = −Σ_o x_uoᵀ E_uᵀ r_o.
 fn normal_equations(
     samples: &StackedCurves,
-    params: &Parameters,
-    u: &[f64],
+    jacobian: &ProjectedJacobian,
     at: &Projected,
 ) -> (Mat<f64>, Vec<f64>) {
-    let (e, mode_of) = projected_derivatives(samples, params, u, at);
-    let gram = e.transpose() * &e;
-    let etr = e.transpose() * &at.residual_in_q;
-    let unknowns = ModeUnknowns { at, mode_of };
-    let jtj = unknowns.assembled(&[gram], |_, _| 1.0);
-    let jtr = (0..u.len())
+    let etr = jacobian.transposed_times(&at.residual_in_q);
+    let unknowns = ModeUnknowns {
+        at,
+        mode_of: &jacobian.mode_of,
+    };
+    let jtj = unknowns.assembled(std::slice::from_ref(&jacobian.gram), |_, _| 1.0);
+    let jtr = (0..jacobian.mode_of.len())
         .map(|a| {
             -(0..samples.data.ncols())
                 .map(|o| {
@@ -598,42 +649,48 @@ fn normal_equations(
     (jtj, jtr)
 }
 
-/// E_u = P⊥ D_u for every parameter u at `u`: its two derivative columns at 2u, 2u + 1
-/// ([`StackedCurves::mode_derivatives`]), taken into Q's coordinates with their first rows
-/// zeroed; and each parameter's mode.
+/// The base columns of every parameter pair at `u` ([`StackedCurves::pair_derivatives`]; the
+/// pair of parameters 2q, 2q + 1 at columns 2q, 2q + 1), taken into Q's coordinates with their
+/// first rows zeroed (P⊥ applied); each parameter's [`ColumnMap`] and mode.
 fn projected_derivatives(
     samples: &StackedCurves,
     params: &Parameters,
     u: &[f64],
     at: &Projected,
-) -> (Mat<f64>, Vec<usize>) {
+) -> (Mat<f64>, Vec<ColumnMap>, Vec<usize>) {
     let (poles, participation) = params.unpack(u);
     let mut mode_of = vec![0; u.len()];
-    let mut e = Mat::<f64>::zeros(samples.data.nrows(), 2 * u.len());
+    let mut maps = vec![ColumnMap::TURNED; u.len()];
+    let mut base = Mat::<f64>::zeros(samples.data.nrows(), u.len());
     let mut next_free = 2 * poles.len();
     for (r, &pole) in poles.iter().enumerate() {
         let free = params.free(r);
         for (m, d) in samples
-            .mode_derivatives(pole, &participation[r], &free)
+            .pair_derivatives(pole, &participation[r], &free)
             .into_iter()
             .enumerate()
         {
-            let param = if m < 2 { 2 * r + m } else { next_free + m - 2 };
-            mode_of[param] = r;
-            e.subcols_mut(2 * param, 2).copy_from(&d);
+            let first = if m == 0 {
+                2 * r
+            } else {
+                next_free + 2 * (m - 1)
+            };
+            mode_of[first..first + 2].fill(r);
+            maps[first] = ColumnMap::scaled(if m == 0 { pole.re } else { 1.0 });
+            base.subcols_mut(first, 2).copy_from(&d);
         }
         next_free += 2 * free.len();
     }
-    at.qr.apply_transpose_q(&mut e);
-    e.subrows_mut(0, at.qr.r_rows()).fill(0.0);
-    (e, mode_of)
+    at.qr.apply_transpose_q(&mut base);
+    base.subrows_mut(0, at.qr.r_rows()).fill(0.0);
+    (base, maps, mode_of)
 }
 
 /// The unknowns x_uo that multiply each parameter u's derivative columns for response o: the
 /// two of u's mode ([`normal_equations`]).
 struct ModeUnknowns<'a> {
     at: &'a Projected,
-    mode_of: Vec<usize>,
+    mode_of: &'a [usize],
 }
 
 impl ModeUnknowns<'_> {
@@ -1241,7 +1298,8 @@ mod tests {
             Projected::of(s.basis(&p, &l), &s.data).unwrap().cost()
         };
         let at = Projected::of(s.basis(&poles, &l), &s.data).unwrap();
-        let (_, jtr) = normal_equations(&s, &params, &u, &at);
+        let jacobian = ProjectedJacobian::at(&s, &params, &u, &at);
+        let (_, jtr) = normal_equations(&s, &jacobian, &at);
         for a in 0..u.len() {
             let h = 1e-6 * u[a].abs().max(1.0);
             let (mut up, mut down) = (u.clone(), u.clone());
