@@ -7,9 +7,26 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use num_complex::Complex64;
 
-/// The relative reduction of the sum of squares that the Levenberg–Marquardt steps stop below:
-/// rounding's share of it (a few thousand squared residuals summed in f64).
-const CONVERGED: f64 = 1e-12;
+/// The relative reduction of the sum of squares that the Levenberg–Marquardt steps stop below
+/// where the residual is not noise-like: rounding's share of it (a few thousand squared
+/// residuals summed in f64).
+const ROUNDING: f64 = 1e-12;
+
+/// How far a step may still move the parameters when the steps stop, in their noise standard
+/// deviations ([`converged_share`]).
+const STEP_IN_SD: f64 = 0.01;
+
+/// The share of the sum of squares that a step's promised reduction must exceed for the
+/// Levenberg–Marquardt steps to go on, on a problem of `dof` degrees of freedom (real residuals
+/// less unknowns): rounding's share ([`ROUNDING`]) or, where larger, the reduction of a step of
+/// [`STEP_IN_SD`] noise standard deviations. A Gauss–Newton step δ promises δᵀJᵀJδ, and with the
+/// residual variance σ² = cost/dof the parameters' covariance is σ²(JᵀJ)⁻¹, so the promise is
+/// σ² times the step's squared length in standard deviations: below STEP_IN_SD² cost/dof what
+/// is left to move is a hundredth of the noise's part of the error. On noise-free curves the
+/// cost, and with it the bound, goes to zero and the steps go to rounding.
+pub(crate) fn converged_share(dof: usize) -> f64 {
+    ROUNDING.max(STEP_IN_SD * STEP_IN_SD / dof.max(1) as f64)
+}
 
 /// Levenberg–Marquardt on the poles' parameters ([`pole_parameters`]) from `poles`, minimising
 /// the residual sum of squares of the residue problem on `samples` with the residues eliminated
@@ -27,6 +44,10 @@ pub(crate) fn levenberg_marquardt(
     let mut cost = at.cost();
     let mut lambda = 1e-3;
     let p = u.len();
+    let n = poles.len();
+    let dof =
+        (samples.curves() * samples.rows().saturating_sub(samples.unknowns(n))).saturating_sub(p);
+    let converged = converged_share(dof);
     for k in 0..iterations {
         on_iteration(k + 1, iterations);
         let normal = at.normal_equations(samples);
@@ -35,10 +56,9 @@ pub(crate) fn levenberg_marquardt(
         for _ in 0..8 {
             let step = marquardt_step(&jtj, |a| jtr[(a, 0)], lambda);
             // The Gauss–Newton model's reduction −δᵀJᵀr (within a factor 2 of its exact
-            // value); it only shrinks as λ grows. Below rounding's share of the cost the poles
-            // have converged, and every trial would be refused by rounding alone.
+            // value); it only shrinks as λ grows. Below `converged` the poles have converged.
             let promised: f64 = (0..p).map(|a| -jtr[(a, 0)] * step[(a, 0)]).sum();
-            if promised.is_finite() && promised <= CONVERGED * cost {
+            if promised.is_finite() && promised <= converged * cost {
                 return Some(to_poles(&u));
             }
             let trial: Vec<f64> = (0..p).map(|a| u[a] + step[(a, 0)]).collect();

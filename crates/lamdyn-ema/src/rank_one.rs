@@ -48,7 +48,7 @@ use crate::denominator::without_own;
 use crate::error::EmaError;
 use crate::lscf::{pole_at, pole_damping, pole_freq_hz};
 use crate::lsfd::{PoleSd, pole_sd, sandwich};
-use crate::pole_fit::{marquardt_step, pole_parameters, to_poles};
+use crate::pole_fit::{converged_share, marquardt_step, pole_parameters, to_poles};
 use crate::projection::{
     ColumnMap, LineBasis, LineSamples, expanded_gram, expanded_products, solve_by_blocks,
     unit_columns,
@@ -61,10 +61,6 @@ use faer::{Mat, Par};
 use lamdyn_frf::Quantity;
 use num_complex::Complex64;
 use std::f64::consts::PI;
-
-/// The relative reduction of the sum of squares the steps stop below (as
-/// [`crate::pole_fit`]'s).
-const CONVERGED: f64 = 1e-12;
 
 /// The curves of one band, stacked as the rank-one model's rows: row 2(j·lines + k) + part
 /// holds line k of reference j (part 0 real, 1 imaginary), one column per response.
@@ -364,6 +360,10 @@ pub(crate) fn rank_one_poles(
     let mut at = project(&u)?;
     let mut cost = at.cost();
     let mut lambda = 1e-3;
+    let (rows, responses) = samples.data.shape();
+    let unknowns = rows.min(at.unknowns.nrows());
+    let dof = (responses * (rows - unknowns)).saturating_sub(u.len());
+    let converged = converged_share(dof);
     // The Jacobian at `u`, kept for the deviations where the steps end there.
     let mut jacobian = None;
     'steps: for k in 0..iterations {
@@ -376,7 +376,7 @@ pub(crate) fn rank_one_poles(
         for _ in 0..8 {
             let step = marquardt_step(&jtj, |a| jtr[a], lambda);
             let promised: f64 = (0..p).map(|a| -jtr[a] * step[(a, 0)]).sum();
-            if promised.is_finite() && promised <= CONVERGED * cost {
+            if promised.is_finite() && promised <= converged * cost {
                 break 'steps;
             }
             let trial: Vec<f64> = (0..p).map(|a| u[a] + step[(a, 0)]).collect();
