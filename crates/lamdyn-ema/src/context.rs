@@ -192,12 +192,7 @@ struct DiagramFit {
 impl DiagramFit {
     /// The fit of the diagram's pole columns `columns` to the `problem`'s data.
     fn of(problem: &ContextProblem<'_>, columns: &[Mat<f64>]) -> Self {
-        let rows = problem.data.nrows();
-        let mut p = Mat::<f64>::zeros(rows, 2 * columns.len());
-        for (r, c) in columns.iter().enumerate() {
-            p.subcols_mut(2 * r, 2).copy_from(c);
-        }
-        let qr = ThinQr::of(p);
+        let qr = ThinQr::of(side_by_side(columns, problem.data.nrows()));
         let mut qtd = problem.data.clone();
         qr.apply_transpose_q(&mut qtd);
         Self { qr, qtd }
@@ -220,10 +215,7 @@ impl DiagramFit {
         let kept: Vec<usize> = (0..r.ncols())
             .filter(|c| !members.contains(&(c / 2)))
             .collect();
-        let mut n = Mat::<f64>::zeros(rows, 2 * moved.len());
-        for (i, c) in moved.iter().enumerate() {
-            n.subcols_mut(2 * i, 2).copy_from(c);
-        }
+        let mut n = side_by_side(moved, rows);
         self.qr.apply_transpose_q(&mut n);
         let below = ThinQr::of(n.subrows(k, rows - k).to_owned());
         let mut d2 = self.qtd.subrows(k, rows - k).to_owned();
@@ -251,6 +243,15 @@ impl DiagramFit {
             + d2.subrows(m, d2.nrows() - m).squared_norm_l2();
         j.is_finite().then_some(j)
     }
+}
+
+/// The poles' two columns each (`rows` rows) side by side, in their order.
+fn side_by_side(columns: &[Mat<f64>], rows: usize) -> Mat<f64> {
+    let mut p = Mat::<f64>::zeros(rows, 2 * columns.len());
+    for (r, c) in columns.iter().enumerate() {
+        p.subcols_mut(2 * r, 2).copy_from(c);
+    }
+    p
 }
 
 /// The check of refined poles against their diagram poles (module docs), prepared from the

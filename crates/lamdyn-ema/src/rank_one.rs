@@ -170,9 +170,7 @@ impl StackedCurves {
         }
         out
     }
-}
 
-impl StackedCurves {
     /// The columns of a second-order term at `pole`: (iω)^q [c_j/(iω − λ)² + c_j*/(iω − λ*)²]
     /// with one complex coefficient c_j per reference j, at columns 2j, 2j + 1 (its real and
     /// imaginary part, as [`put_pair`]) on reference j's rows at the lines `window` marks (the
@@ -360,9 +358,9 @@ pub(crate) fn rank_one_poles(
     let mut at = project(&u)?;
     let mut cost = at.cost();
     let mut lambda = 1e-3;
+    // Projected::of has fewer unknowns than rows.
     let (rows, responses) = samples.data.shape();
-    let unknowns = rows.min(at.unknowns.nrows());
-    let dof = (responses * (rows - unknowns)).saturating_sub(u.len());
+    let dof = (responses * (rows - at.unknowns.nrows())).saturating_sub(u.len());
     let converged = converged_share(dof);
     // The Jacobian at `u`, kept for the deviations where the steps end there.
     let mut jacobian = None;
@@ -401,7 +399,7 @@ pub(crate) fn rank_one_poles(
     at.qr.apply_q(&mut residual);
     let variances = curve_variances(samples, &u, &at, &residual);
     let (deviations, spreads) = rayon::join(
-        || deviations(samples, &params, &u, &at, &variances, jacobian),
+        || deviations(samples, &params, &u, &at, &variances, &jacobian),
         || unmodelled_spreads(samples, &params, &u, &at, &residual),
     );
     let fit = RankOneFit {
@@ -444,13 +442,12 @@ fn deviations(
     u: &[f64],
     at: &Projected,
     variances: &Mat<f64>,
-    jacobian: ProjectedJacobian,
+    jacobian: &ProjectedJacobian,
 ) -> Option<Vec<PoleSd>> {
-    let mode_of = jacobian.mode_of.clone();
     let grams = jacobian.grams_by_reference(samples, at);
     let unknowns = ModeUnknowns {
         at,
-        mode_of: &mode_of,
+        mode_of: &jacobian.mode_of,
     };
     let jtj = unknowns.assembled(&grams, |_, _| 1.0);
     let meat = unknowns.assembled(&grams, |o, j| variances[(o, j)]);
@@ -606,11 +603,11 @@ impl ProjectedJacobian {
     /// The Gram matrix of the E_u's rows of each reference in the curves' coordinates: with one
     /// reference [`Self::gram`] itself (Q is orthogonal), else the base columns taken back by Q
     /// ([`ThinQr::apply_q`]) and their rows split by reference.
-    fn grams_by_reference(self, samples: &StackedCurves, at: &Projected) -> Vec<Mat<f64>> {
+    fn grams_by_reference(&self, samples: &StackedCurves, at: &Projected) -> Vec<Mat<f64>> {
         if samples.references == 1 {
-            return vec![self.gram];
+            return vec![self.gram.clone()];
         }
-        let mut base = self.base;
+        let mut base = self.base.clone();
         at.qr.apply_q(&mut base);
         let rows = samples.data.nrows() / samples.references;
         (0..samples.references)
