@@ -249,18 +249,20 @@ pub(crate) struct FracSums {
 }
 
 impl FracSums {
+    /// The sums Σ H Ĥ*, Σ|H|² and Σ|Ĥ|² as computed elsewhere.
+    pub(crate) fn of(cross: Complex64, measured: f64, model: f64) -> Self {
+        Self {
+            cross,
+            measured,
+            model,
+        }
+    }
+
     /// Adds one line's measured and model values.
     pub(crate) fn add(&mut self, measured: Complex64, model: Complex64) {
         self.cross += measured * model.conj();
         self.measured += measured.norm_sqr();
         self.model += model.norm_sqr();
-    }
-
-    /// Adds the sums over other lines.
-    pub(crate) fn merge(&mut self, other: &Self) {
-        self.cross += other.cross;
-        self.measured += other.measured;
-        self.model += other.model;
     }
 
     /// The FRAC of the lines added.

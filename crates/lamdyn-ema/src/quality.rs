@@ -49,8 +49,9 @@
 //! damping is named.
 
 use crate::lsfd::{FracSums, ModalFit};
-use crate::projection::LineBasis;
 use crate::shapes::CmifPeak;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par, c64};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
@@ -445,98 +446,224 @@ pub struct Contributions {
     pub frac_drop: Vec<f64>,
 }
 
-/// The [`Contributions`] of `fit`'s modes on `data`, in one pass over the lines (each line's
-/// partial fractions computed once for every curve and mode).
+/// Lines per block of [`ModelProducts`]' accumulation: each block's columns stay in cache.
+const PRODUCT_BLOCK: usize = 2048;
+
+/// The [`Contributions`] of `fit`'s modes on `data`: every FRAC sum, with and without each mode,
+/// is a quadratic form in a curve's coefficients over the products [`ModelProducts`] of the
+/// model's columns, accumulated in one pass over the lines.
 pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
     use rayon::prelude::*;
-    let modes = fit.poles.len();
-    let empty = || CurveSums {
-        with: vec![FracSums::default(); data.curves.len()],
-        without: vec![vec![FracSums::default(); modes]; data.curves.len()],
-    };
-    let sums = data
+    let (modes, curves) = (fit.poles.len(), data.curves.len());
+    let products = data
         .lines
-        .par_chunks(2048)
-        .map(|chunk| {
-            let mut sums = empty();
-            let mut basis = fit.line_basis(0.0);
-            let mut terms = vec![Complex64::default(); modes];
-            for &k in chunk {
-                sums.add_line(
-                    fit,
-                    data.curves,
-                    k,
-                    data.freqs_hz[k],
-                    &mut basis,
-                    &mut terms,
-                );
-            }
-            sums
-        })
-        .reduce(empty, CurveSums::merged);
-    let (with, without) = (sums.with, sums.without);
-    let frac: Vec<f64> = with.iter().map(FracSums::frac).collect();
-    let curves = data.curves.len().max(1) as f64;
-    let frac_drop = (0..modes)
-        .map(|r| {
-            let lost: f64 = without
-                .iter()
-                .zip(&frac)
-                .map(|(w, f)| f - w[r].frac())
-                .sum();
-            lost / curves
-        })
-        .collect();
+        .par_chunks(PRODUCT_BLOCK)
+        .map(|lines| ModelProducts::on(fit, data, lines))
+        .reduce(
+            || ModelProducts::zeros(modes, curves),
+            ModelProducts::merged,
+        );
+    let mut frac = Vec::with_capacity(curves);
+    let mut lost = vec![0.0; modes];
+    for o in 0..curves {
+        let mut c = model_coefficients(fit, o);
+        let with = products.frac_sums(o, &c).frac();
+        for (r, lost) in lost.iter_mut().enumerate() {
+            let kept = [c[2 * r], c[2 * r + 1]];
+            c[2 * r..2 * r + 2].fill(c64::default());
+            *lost += with - products.frac_sums(o, &c).frac();
+            c[2 * r..2 * r + 2].copy_from_slice(&kept);
+        }
+        frac.push(with);
+    }
+    let curves = curves.max(1) as f64;
+    let frac_drop = lost.into_iter().map(|l| l / curves).collect();
     Contributions { frac, frac_drop }
 }
 
-/// Per curve the FRAC sums of the model, and per curve and mode those without the mode.
-struct CurveSums {
-    with: Vec<FracSums>,
-    without: Vec<Vec<FracSums>>,
+/// The coefficients c of curve `o` on [`ModelProducts`]' columns: each mode's residue A_r and
+/// its conjugate, then the lower and upper residuals.
+fn model_coefficients(fit: &ModalFit, o: usize) -> Vec<c64> {
+    let mut c: Vec<c64> = fit.residues[o]
+        .iter()
+        .flat_map(|a| [*a, a.conj()])
+        .collect();
+    c.extend([c64::new(fit.lower[o], 0.0), c64::new(fit.upper[o], 0.0)]);
+    c
 }
 
-impl CurveSums {
-    /// Adds line `k` (at `freq_hz`) of every curve; `basis` (the fit's at some line) and
-    /// `terms` (one per mode) are scratch space.
-    fn add_line(
-        &mut self,
-        fit: &ModalFit,
-        curves: &[&[Complex64]],
-        k: usize,
-        freq_hz: f64,
-        basis: &mut LineBasis,
-        terms: &mut [Complex64],
-    ) {
-        fit.set_line_basis(basis, freq_hz);
-        for (o, curve) in curves.iter().enumerate() {
-            for (r, t) in terms.iter_mut().enumerate() {
-                *t = fit.mode_term_on(basis, o, r);
-            }
-            let measured = curve[k];
-            let model = terms.iter().sum::<Complex64>() + fit.residual_term_on(basis, o);
-            self.with[o].add(measured, model);
-            for (sums, t) in self.without[o].iter_mut().zip(terms.iter()) {
-                sums.add(measured, model - t);
-            }
+/// Over some lines, the products of the modal model's columns B with themselves and with the
+/// curves H: G = BᴴB and E = BᴴH, side by side in one matrix, and each curve's Σ|H|². B holds
+/// per line the model's terms before their coefficients ([`crate::lsfd`]): per mode
+/// (iω)^k/(iω − λ_r) and (iω)^k/(iω − λ_r*), then (iω)^k·(−1/ω²) and (iω)^k. A curve's model
+/// is Bc ([`model_coefficients`]), so its FRAC sums are Σ H (Bc)* = cᴴE_o and Σ|Bc|² = cᴴGc,
+/// for any c: with a mode's two coefficients zeroed, those without it.
+struct ModelProducts {
+    /// [G | E]: 2m + 2 rows, 2m + 2 + curves columns.
+    products: Mat<c64>,
+    /// Σ|H_o|² per curve.
+    measured: Vec<f64>,
+}
+
+impl ModelProducts {
+    /// No line's products, for `modes` modes and `curves` curves.
+    fn zeros(modes: usize, curves: usize) -> Self {
+        let columns = 2 * modes + 2;
+        Self {
+            products: Mat::zeros(columns, columns + curves),
+            measured: vec![0.0; curves],
         }
     }
 
-    /// The sums over the lines of both.
+    /// The products over `lines` of `data` with `fit`'s columns.
+    fn on(fit: &ModalFit, data: Measured, lines: &[usize]) -> Self {
+        let columns = 2 * fit.poles.len() + 2;
+        let mut side_by_side = Mat::<c64>::zeros(lines.len(), columns + data.curves.len());
+        let mut basis = fit.line_basis(0.0);
+        for (i, &k) in lines.iter().enumerate() {
+            fit.set_line_basis(&mut basis, data.freqs_hz[k]);
+            let f = basis.factor;
+            for (r, &(t, tc)) in basis.fractions.iter().enumerate() {
+                side_by_side[(i, 2 * r)] = f * t;
+                side_by_side[(i, 2 * r + 1)] = f * tc;
+            }
+            side_by_side[(i, columns - 2)] = f * basis.lower;
+            side_by_side[(i, columns - 1)] = f;
+            for (o, curve) in data.curves.iter().enumerate() {
+                side_by_side[(i, columns + o)] = curve[k];
+            }
+        }
+        let mut products = Mat::zeros(columns, side_by_side.ncols());
+        let model = side_by_side.as_ref().subcols(0, columns);
+        matmul(
+            products.as_mut(),
+            Accum::Replace,
+            model.adjoint(),
+            side_by_side.as_ref(),
+            c64::new(1.0, 0.0),
+            Par::Seq,
+        );
+        let measured = (0..data.curves.len())
+            .map(|o| side_by_side.col(columns + o).squared_norm_l2())
+            .collect();
+        Self { products, measured }
+    }
+
+    /// The products over both sets of lines.
     fn merged(mut self, other: Self) -> Self {
-        for (a, b) in self.with.iter_mut().zip(&other.with) {
-            a.merge(b);
-        }
-        for (a, b) in self.without.iter_mut().zip(&other.without) {
-            a.iter_mut().zip(b).for_each(|(x, y)| x.merge(y));
-        }
+        self.products += &other.products;
+        self.measured
+            .iter_mut()
+            .zip(&other.measured)
+            .for_each(|(a, b)| *a += b);
         self
+    }
+
+    /// The FRAC sums of curve `o` against the model Bc.
+    fn frac_sums(&self, o: usize, c: &[c64]) -> FracSums {
+        let columns = c.len();
+        let (gram, cross) = (
+            self.products.subcols(0, columns),
+            self.products.col(columns + o),
+        );
+        let cross: c64 = c
+            .iter()
+            .zip(cross.iter())
+            .map(|(cj, e)| cj.conj() * e)
+            .sum();
+        let model: f64 = (0..columns)
+            .map(|j| {
+                let row: c64 = (0..columns).map(|l| gram[(j, l)] * c[l]).sum();
+                (c[j].conj() * row).re
+            })
+            .sum();
+        FracSums::of(cross, self.measured[o], model)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The FRAC sums from the products of the model's columns are those of the regenerated
+    /// curves line by line ([`crate::lsfd::frac`] of the model with and without each mode's
+    /// term): three modes, lower and upper residuals, accelerance, over every other line of
+    /// 5000 (several blocks), curves that are the model plus a misfit.
+    #[test]
+    fn the_contributions_are_the_fracs_of_the_regenerated_curves() {
+        use crate::lscf::pole_at;
+        use crate::lsfd::frac;
+        use lamdyn_frf::Quantity;
+        let poles = vec![
+            pole_at(40.0, 0.02),
+            pole_at(55.0, 0.08),
+            pole_at(90.0, 0.01),
+        ];
+        let residue = |o: usize, r: usize| {
+            let (o, r) = (o as f64, r as f64);
+            Complex64::new((1.0 + o + r).sin(), 0.3 * (2.0 * o - r).cos()) * 1e3
+        };
+        let fit = ModalFit {
+            residues: (0..4)
+                .map(|o| (0..3).map(|r| residue(o, r)).collect())
+                .collect(),
+            lower: vec![2.0, -1.0, 0.5, 0.0],
+            upper: vec![-1e-3, 2e-3, 0.0, 1e-3],
+            poles,
+            quantity: Quantity::Accelerance,
+        };
+        let freqs: Vec<f64> = (0..5000).map(|k| 10.0 + 0.02 * k as f64).collect();
+        let lines: Vec<usize> = (0..freqs.len()).step_by(2).collect();
+        let model =
+            |o: usize| -> Vec<Complex64> { freqs.iter().map(|&f| fit.synthesize(o, f)).collect() };
+        let curves: Vec<Vec<Complex64>> = (0..4)
+            .map(|o| {
+                let misfit =
+                    |k: usize| Complex64::new((0.37 * k as f64).sin(), (0.11 * k as f64).cos());
+                model(o)
+                    .iter()
+                    .enumerate()
+                    .map(|(k, h)| h + 0.2 * misfit(k + o))
+                    .collect()
+            })
+            .collect();
+        let refs: Vec<&[Complex64]> = curves.iter().map(Vec::as_slice).collect();
+        let data = Measured {
+            freqs_hz: &freqs,
+            curves: &refs,
+            lines: &lines,
+        };
+        let got = contributions(&fit, data);
+        let mut drops = [0.0; 3];
+        for (o, curve) in refs.iter().enumerate() {
+            let full = model(o);
+            let with = frac(curve, &full, &lines);
+            assert!(
+                (got.frac[o] - with).abs() < 1e-12,
+                "curve {o}: {} vs {with}",
+                got.frac[o]
+            );
+            for (r, drop) in drops.iter_mut().enumerate() {
+                let without: Vec<Complex64> = full
+                    .iter()
+                    .zip(&freqs)
+                    .map(|(h, &f)| h - fit.mode_term(o, r, f))
+                    .collect();
+                *drop += (with - frac(curve, &without, &lines)) / 4.0;
+            }
+        }
+        for (r, drop) in drops.iter().enumerate() {
+            assert!(
+                *drop > 1e-3,
+                "mode {r} takes {drop} of FRAC: the test needs each to count"
+            );
+            assert!(
+                (got.frac_drop[r] - drop).abs() < 1e-12,
+                "mode {r}: {} vs {drop}",
+                got.frac_drop[r]
+            );
+        }
+    }
 
     /// A sound mode's evidence, damped `damping_ratio`.
     fn evidence(damping_ratio: f64) -> ModeEvidence {
