@@ -25,7 +25,8 @@
 //! triangular solve plus one Gram product per row serve the reduced matrices of all orders
 //! (see `Reduced`). When the lines sit on a grid f_k = kΔf (the usual case),
 //! Ω_k^m = e^{−2πi mk/(2K)} with K = f_max/Δf and the sums for all lags are one FFT of length 2K
-//! per sequence (as in OpenModal and sdypy-EMA); otherwise they are summed directly.
+//! per sequence (as in OpenModal and sdypy-EMA), or per two sequences, since only their real
+//! parts are needed (`LagSums::sums`); otherwise they are summed directly.
 //!
 //! The poles are the roots x_r of det A (the block companion matrix, `companion`), mapped by
 //! λ_r = −ln(x_r)/Δt; the physical ones (Im λ > 0, Re λ < 0, |λ|/2π in the band) are kept.
@@ -150,45 +151,60 @@ impl LagSums {
         }
     }
 
-    /// L(m) for m = −n_max..=n_max; `buffers` holds the FFT's work between calls.
+    /// L(m) for m = −n_max..=n_max of `first` and, where given, of `second` (each the
+    /// sequence's value at the band's line k); `buffers` holds the FFT's work between calls.
+    ///
+    /// By the FFT one transform serves both. On the grid Ω_k^m = W^{g_k m} (W = e^{−2πi/2K},
+    /// g_k the line's grid index), so L(m) = Re Σ_k y_k W^{g_k m} is the transform of the
+    /// Hermitian sequence z with z_g = y_k/2 and z_{2K−g} = ȳ_k/2 at each line, whose
+    /// transform is real: z₁ + i z₂ transforms to L₁ + i L₂.
     fn sums(
         &self,
-        y: &mut dyn Iterator<Item = Complex64>,
+        first: &dyn Fn(usize) -> Complex64,
+        second: Option<&dyn Fn(usize) -> Complex64>,
         n_max: usize,
         buffers: &mut FftBuffers,
-    ) -> Vec<f64> {
+    ) -> (Vec<f64>, Option<Vec<f64>>) {
         match self {
             Self::Fft { fft, grid } => {
                 let len = fft.len();
                 let x = &mut buffers.data;
                 x.clear();
                 x.resize(len, Complex64::new(0.0, 0.0));
-                for (&k, v) in grid.iter().zip(y) {
-                    x[k] = v;
+                for (k, &g) in grid.iter().enumerate() {
+                    let (a, b) = (first(k), second.map_or(Complex64::default(), |s| s(k)));
+                    // z₁ + i z₂ at g and at 2K − g.
+                    x[g] += 0.5 * Complex64::new(a.re - b.im, a.im + b.re);
+                    x[(len - g) % len] += 0.5 * Complex64::new(a.re + b.im, b.re - a.im);
                 }
                 let scratch = &mut buffers.scratch;
                 scratch.resize(fft.get_inplace_scratch_len(), Complex64::new(0.0, 0.0));
                 fft.process_with_scratch(x, scratch);
-                (0..=2 * n_max)
-                    .map(|i| {
-                        let m = i as isize - n_max as isize;
-                        x[m.rem_euclid(len as isize) as usize].re
-                    })
-                    .collect()
+                let at = |i: usize| {
+                    let m = i as isize - n_max as isize;
+                    x[m.rem_euclid(len as isize) as usize]
+                };
+                let lags = 0..=2 * n_max;
+                let second_sums = second.map(|_| lags.clone().map(|i| at(i).im).collect());
+                (lags.map(|i| at(i).re).collect(), second_sums)
             }
             Self::Direct { powers } => {
-                let mut out = vec![0.0; 2 * n_max + 1];
-                for (k, v) in y.enumerate() {
-                    for m in 0..=n_max {
-                        // y Ω^m and y Ω^{−m} = y conj(Ω^m).
-                        let p = powers[k * (n_max + 1) + m];
-                        out[n_max + m] += (v * p).re;
-                        if m > 0 {
-                            out[n_max - m] += (v * p.conj()).re;
+                let direct = |y: &dyn Fn(usize) -> Complex64| {
+                    let mut out = vec![0.0; 2 * n_max + 1];
+                    for k in 0..powers.len() / (n_max + 1) {
+                        let v = y(k);
+                        for m in 0..=n_max {
+                            // y Ω^m and y Ω^{−m} = y conj(Ω^m).
+                            let p = powers[k * (n_max + 1) + m];
+                            out[n_max + m] += (v * p).re;
+                            if m > 0 {
+                                out[n_max - m] += (v * p.conj()).re;
+                            }
                         }
                     }
-                }
-                out
+                    out
+                };
+                (direct(first), second.map(direct))
             }
         }
     }
@@ -202,26 +218,42 @@ struct FftBuffers {
     scratch: Vec<Complex64>,
 }
 
-/// All lag sums of the curves (band lines only, grouped by output with `refs` curves each).
+/// All lag sums of the curves (band lines only, grouped by output with `refs` curves each):
+/// those of 1 (r), of each curve negated (s) and of each pair of references' products (t), two
+/// sequences per transform ([`LagSums::sums`]).
 ///
 /// t_ab is linear in the products H̄_oa,k H_ob,k, so the outputs are summed line by line before
 /// one transform per pair (a ≤ b): N_i(N_i + 1)/2 transforms for t, not N_o times as many.
 fn lag_sums(curves: &[&[Complex64]], refs: usize, how: &LagSums, n_max: usize) -> Sums {
-    let ones = std::iter::repeat_n(Complex64::new(1.0, 0.0), curves[0].len());
-    let r = how.sums(&mut ones.into_iter(), n_max, &mut FftBuffers::default())[n_max..].to_vec();
-    let (s, pair_sums) = rayon::join(
-        || {
-            curves
-                .par_iter()
-                .map_init(FftBuffers::default, |buffers, h| {
-                    how.sums(&mut h.iter().map(|v| -v), n_max, buffers)
-                })
-                .collect::<Vec<_>>()
-        },
-        || pair_lag_sums(curves, refs, how, n_max),
-    );
+    let rows: Vec<&[&[Complex64]]> = curves.chunks(refs).collect();
+    let pairs: Vec<(usize, usize)> = reference_pairs(refs).collect();
+    let mut series = vec![Series::One];
+    series.extend((0..curves.len()).map(Series::Curve));
+    series.extend(pairs.iter().map(|&(a, b)| Series::Pair(a, b)));
+    let rows = rows.as_slice();
+    let value = |series: Series| {
+        move |k: usize| match series {
+            Series::One => Complex64::new(1.0, 0.0),
+            Series::Curve(c) => -curves[c][k],
+            Series::Pair(a, b) => rows.iter().map(|row| row[a][k].conj() * row[b][k]).sum(),
+        }
+    };
+    let mut all: Vec<Vec<f64>> = series
+        .par_chunks(2)
+        .map_init(FftBuffers::default, |buffers, two| {
+            let first = value(two[0]);
+            let second = two.get(1).map(|&s| value(s));
+            let second = second.as_ref().map(|f| f as &dyn Fn(usize) -> Complex64);
+            let (a, b) = how.sums(&first, second, n_max, buffers);
+            std::iter::once(a).chain(b).collect::<Vec<_>>()
+        })
+        .flatten_iter()
+        .collect();
+    let pair_sums = all.split_off(1 + curves.len());
+    let s = all.split_off(1);
+    let r = all.swap_remove(0)[n_max..].to_vec();
     let mut t = vec![Vec::new(); refs * refs];
-    for ((a, b), tab) in reference_pairs(refs).zip(pair_sums) {
+    for ((a, b), tab) in pairs.into_iter().zip(pair_sums) {
         // t_ba(m) = t_ab(−m).
         t[b * refs + a] = tab.iter().rev().copied().collect();
         t[a * refs + b] = tab;
@@ -235,31 +267,20 @@ fn lag_sums(curves: &[&[Complex64]], refs: usize, how: &LagSums, n_max: usize) -
     }
 }
 
+/// A sequence over the band's lines whose lag sums [`lag_sums`] takes.
+#[derive(Debug, Clone, Copy)]
+enum Series {
+    /// 1 at every line (r).
+    One,
+    /// Curve c negated (s).
+    Curve(usize),
+    /// Σ_o H̄_oa,k H_ob,k over the outputs (t_ab).
+    Pair(usize, usize),
+}
+
 /// The pairs (a, b), a ≤ b, of `refs` references, a-major.
 fn reference_pairs(refs: usize) -> impl Iterator<Item = (usize, usize)> {
     (0..refs).flat_map(move |a| (a..refs).map(move |b| (a, b)))
-}
-
-/// t_ab(m) for each pair of [`reference_pairs`]: the lag sums of Σ_o H̄_oa,k H_ob,k.
-fn pair_lag_sums(
-    curves: &[&[Complex64]],
-    refs: usize,
-    how: &LagSums,
-    n_max: usize,
-) -> Vec<Vec<f64>> {
-    let rows: Vec<&[&[Complex64]]> = curves.chunks(refs).collect();
-    let pairs: Vec<(usize, usize)> = reference_pairs(refs).collect();
-    pairs
-        .par_iter()
-        .map_init(FftBuffers::default, |buffers, &(a, b)| {
-            let y = (0..curves[0].len()).map(|k| {
-                rows.iter()
-                    .map(|row| row[a][k].conj() * row[b][k])
-                    .sum::<Complex64>()
-            });
-            how.sums(&mut y.into_iter(), n_max, buffers)
-        })
-        .collect()
 }
 
 /// The curves' values on the band's `lines`: in place where the lines follow one another
@@ -756,11 +777,6 @@ mod tests {
                 .flat_map(|w| (0..=12).map(move |m| Complex64::from_polar(1.0, -w * m as f64)))
                 .collect(),
         };
-        let curves = [h0.as_slice(), h1.as_slice()];
-        let (a, b) = (
-            lag_sums(&curves, 2, &direct, 12),
-            lag_sums(&curves, 2, &fft, 12),
-        );
         let flat = |x: &Sums| -> Vec<f64> {
             x.r.iter()
                 .chain(x.t.iter().flatten())
@@ -768,8 +784,18 @@ mod tests {
                 .copied()
                 .collect()
         };
-        for (x, y) in flat(&a).iter().zip(&flat(&b)) {
-            assert!((x - y).abs() < 1e-9 * (1.0 + x.abs()), "{x} vs {y}");
+        // Two references: six sequences, three transforms; one curve: three sequences, the
+        // last transformed alone.
+        let two = [h0.as_slice(), h1.as_slice()];
+        for (curves, refs) in [(&two[..], 2), (&two[..1], 1)] {
+            let (a, b) = (
+                lag_sums(curves, refs, &direct, 12),
+                lag_sums(curves, refs, &fft, 12),
+            );
+            assert_eq!(flat(&a).len(), flat(&b).len());
+            for (x, y) in flat(&a).iter().zip(&flat(&b)) {
+                assert!((x - y).abs() < 1e-9 * (1.0 + x.abs()), "{x} vs {y}");
+            }
         }
     }
 

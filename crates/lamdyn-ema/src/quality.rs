@@ -450,7 +450,7 @@ pub struct Contributions {
 const PRODUCT_BLOCK: usize = 2048;
 
 /// The [`Contributions`] of `fit`'s modes on `data`: every FRAC sum, with and without each mode,
-/// is a quadratic form in a curve's coefficients over the products [`ModelProducts`] of the
+/// is a quadratic form in a curve's coefficients over the products (`ModelProducts`) of the
 /// model's columns, accumulated in one pass over the lines.
 pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
     use rayon::prelude::*;
