@@ -893,7 +893,8 @@ pub(crate) type Participation = Vec<Vec<Complex64>>;
 
 /// Each mode's participation factors from the free residues at `poles` on the curves
 /// ([`participation`] of its responses × references residue matrix); None where the residue
-/// problem fails.
+/// problem fails. With one reference every mode's factor is 1 whatever its residues, and no
+/// residue problem is solved (the rank-one fit's own fails where it is singular).
 ///
 /// # Errors
 /// [`EmaError::Invalid`] for a value that is not finite.
@@ -905,6 +906,9 @@ pub(crate) fn start_participation(
     lines: &[usize],
     poles: &[Complex64],
 ) -> Result<Option<Vec<Vec<Complex64>>>, EmaError> {
+    if references == 1 {
+        return Ok(Some(vec![vec![Complex64::new(1.0, 0.0)]; poles.len()]));
+    }
     let Some(x) = solve_by_blocks(freqs_hz, curves, quantity, lines, poles)? else {
         return Ok(None);
     };
@@ -1094,6 +1098,29 @@ mod tests {
         (0..6)
             .map(|o| accelerance(freqs, modes, |r| SHAPES[r][o] * SHAPES[r][0]))
             .collect()
+    }
+
+    /// With one reference the participation factor that a mode's free residues give is 1,
+    /// whatever the residues (here a noisy weak neighbour's), as `start_participation` takes
+    /// it without solving them.
+    #[test]
+    fn one_reference_participation_is_one_whatever_the_residues() {
+        let freqs: Vec<f64> = (0..=800).map(|k| 40.0 + 0.1 * k as f64).collect();
+        let curves = weak_neighbour(&freqs, 1);
+        let refs: Vec<&[Complex64]> = curves.iter().map(Vec::as_slice).collect();
+        let lines: Vec<usize> = (0..freqs.len()).collect();
+        let poles: Vec<Complex64> = WEAK_NEIGHBOUR.iter().map(|&(f, z)| pole(f, z)).collect();
+        let x = solve_by_blocks(&freqs, &refs, Quantity::Accelerance, &lines, &poles)
+            .unwrap()
+            .unwrap();
+        for r in 0..poles.len() {
+            let residues: Vec<Complex64> = (0..refs.len())
+                .map(|c| Complex64::new(x[(2 * r, c)], x[(2 * r + 1, c)]))
+                .collect();
+            assert_eq!(participation(&residues, refs.len(), 1), [Complex64::ONE]);
+        }
+        let shortcut = start_participation(&freqs, &refs, 1, Quantity::Accelerance, &lines, &poles);
+        assert_eq!(shortcut.unwrap().unwrap(), vec![vec![Complex64::ONE]; 3]);
     }
 
     /// The one-reference fit of `curves` from `picked`, no candidates.
