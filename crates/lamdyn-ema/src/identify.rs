@@ -314,17 +314,20 @@ impl EmaTimings {
 /// # Errors
 /// [`EmaError::Invalid`] when every curve is zero over the band.
 fn unit_scale(curves: &[&[Complex64]], lines: &[usize], band: [f64; 2]) -> Result<f64, EmaError> {
-    let values = || curves.iter().flat_map(|c| lines.iter().map(|&k| c[k]));
+    // The largest of `value` over each curve's band lines, the curves in parallel.
+    let largest_of = |value: &(dyn Fn(Complex64) -> f64 + Sync)| {
+        curves
+            .par_iter()
+            .map(|c| lines.iter().map(|&k| value(c[k])).fold(0.0, f64::max))
+            .reduce(|| 0.0, f64::max)
+    };
     // |z| ≥ max(|Re z|, |Im z|) ≥ |z|/√2: only values whose larger component is within √2 of
     // the largest component can hold the largest modulus (its hypot is slow on every line).
     // The bound is taken 1e-9 under m/√2, so its rounding cannot leave that value out.
     let component = |v: Complex64| v.re.abs().max(v.im.abs());
-    let largest_component = values().map(component).fold(0.0, f64::max);
+    let largest_component = largest_of(&component);
     let bound = largest_component * std::f64::consts::FRAC_1_SQRT_2 * (1.0 - 1e-9);
-    let largest = values()
-        .filter(|&v| component(v) >= bound)
-        .map(|v| v.norm())
-        .fold(0.0, f64::max);
+    let largest = largest_of(&|v| if component(v) >= bound { v.norm() } else { 0.0 });
     if largest == 0.0 {
         return Err(invalid(
             "FRFs",
@@ -347,7 +350,7 @@ fn zero_curves(
     band: [f64; 2],
 ) -> Vec<String> {
     curves
-        .iter()
+        .par_iter()
         .zip(names)
         .filter(|(c, _)| lines.iter().all(|&k| c[k] == Complex64::new(0.0, 0.0)))
         .map(|(_, name)| {
@@ -1261,7 +1264,7 @@ fn curve_names(set: &FrfSet) -> Vec<String> {
 fn at_scale(curves: &[&[Complex64]], scale: f64) -> Option<Vec<Vec<Complex64>>> {
     (scale != 1.0).then(|| {
         curves
-            .iter()
+            .par_iter()
             .map(|c| c.iter().map(|v| v * scale).collect())
             .collect()
     })
@@ -1397,15 +1400,20 @@ impl FitEvidence {
     /// The evidence of `fit` (in the data's units) on `measured` (its curves in the data's
     /// units times `scale`), whose curves' noise levels are `noise`.
     fn of(fit: &ModalFit, measured: Measured, noise: &CurveNoise, scale: f64) -> Self {
-        let (second_shapes, contributions) = rayon::join(
+        let (second_shapes, (contributions, local_residues)) = rayon::join(
             || second_shapes(&fit.poles, measured, noise),
-            || contributions(fit, measured),
+            || {
+                rayon::join(
+                    || contributions(fit, measured),
+                    || residues_near_each_pole(fit, measured, scale),
+                )
+            },
         );
         Self {
             contributions,
             calibrated: second_shape_calibrated(&second_shapes),
             second_shapes,
-            local_residues: residues_near_each_pole(fit, measured, scale),
+            local_residues,
         }
     }
 }
