@@ -425,9 +425,18 @@ impl LineBasis {
         self.factor = quantity_factor(w, quantity);
         self.lower = if w > 0.0 { -1.0 / (w * w) } else { 0.0 };
         self.fractions.clear();
-        self.fractions
-            .extend(poles.iter().map(|p| (1.0 / (s - p), 1.0 / (s - p.conj()))));
+        self.fractions.extend(
+            poles
+                .iter()
+                .map(|p| (reciprocal(s - p), reciprocal(s - p.conj()))),
+        );
     }
+}
+
+/// 1/z by one division: z*/|z|².
+fn reciprocal(z: Complex64) -> Complex64 {
+    let r = 1.0 / z.norm_sqr();
+    Complex64::new(z.re * r, -z.im * r)
 }
 
 /// (iω)^k of the quantity: receptance 1, mobility iω, accelerance (iω)².
