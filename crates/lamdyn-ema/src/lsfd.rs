@@ -168,6 +168,34 @@ impl ModalFit {
         self.residuals_before_factor(basis, o) * basis.factor
     }
 
+    /// The model's columns on a line's basis, written into `out` (2 modes + 2 values): per
+    /// mode (iω)^k/(iω − λ_r) and (iω)^k/(iω − λ_r*), then (iω)^k·(−1/ω²) and (iω)^k. Curve
+    /// `o`'s value there is their sum weighted by [`Self::coefficients`].
+    pub(crate) fn columns_on(&self, basis: &LineBasis, out: &mut [Complex64]) {
+        let f = basis.factor;
+        for (r, &(t, tc)) in basis.fractions.iter().enumerate() {
+            out[2 * r] = f * t;
+            out[2 * r + 1] = f * tc;
+        }
+        let n = out.len();
+        out[n - 2] = f * basis.lower;
+        out[n - 1] = f;
+    }
+
+    /// Curve `o`'s weights of [`Self::columns_on`]: each mode's residue A_r and its conjugate,
+    /// then the lower and upper residuals.
+    pub(crate) fn coefficients(&self, o: usize) -> Vec<Complex64> {
+        let mut c: Vec<Complex64> = self.residues[o]
+            .iter()
+            .flat_map(|a| [*a, a.conj()])
+            .collect();
+        c.extend([
+            Complex64::new(self.lower[o], 0.0),
+            Complex64::new(self.upper[o], 0.0),
+        ]);
+        c
+    }
+
     /// The lower and upper residuals of curve `o` before the quantity's (iω)^k.
     fn residuals_before_factor(&self, basis: &LineBasis, o: usize) -> Complex64 {
         Complex64::new(basis.lower * self.lower[o] + self.upper[o], 0.0)

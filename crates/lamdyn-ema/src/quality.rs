@@ -466,7 +466,7 @@ pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
     let mut frac = Vec::with_capacity(curves);
     let mut lost = vec![0.0; modes];
     for o in 0..curves {
-        let mut c = model_coefficients(fit, o);
+        let mut c = fit.coefficients(o);
         let with = products.frac_sums(o, &c).frac();
         for (r, lost) in lost.iter_mut().enumerate() {
             let kept = [c[2 * r], c[2 * r + 1]];
@@ -481,22 +481,10 @@ pub fn contributions(fit: &ModalFit, data: Measured) -> Contributions {
     Contributions { frac, frac_drop }
 }
 
-/// The coefficients c of curve `o` on [`ModelProducts`]' columns: each mode's residue A_r and
-/// its conjugate, then the lower and upper residuals.
-fn model_coefficients(fit: &ModalFit, o: usize) -> Vec<c64> {
-    let mut c: Vec<c64> = fit.residues[o]
-        .iter()
-        .flat_map(|a| [*a, a.conj()])
-        .collect();
-    c.extend([c64::new(fit.lower[o], 0.0), c64::new(fit.upper[o], 0.0)]);
-    c
-}
-
 /// Over some lines, the products of the modal model's columns B with themselves and with the
 /// curves H: G = BᴴB and E = BᴴH, side by side in one matrix, and each curve's Σ|H|². B holds
-/// per line the model's terms before their coefficients ([`crate::lsfd`]): per mode
-/// (iω)^k/(iω − λ_r) and (iω)^k/(iω − λ_r*), then (iω)^k·(−1/ω²) and (iω)^k. A curve's model
-/// is Bc ([`model_coefficients`]), so its FRAC sums are Σ H (Bc)* = cᴴE_o and Σ|Bc|² = cᴴGc,
+/// per line the model's columns ([`ModalFit::columns_on`]). A curve's model is Bc
+/// ([`ModalFit::coefficients`]), so its FRAC sums are Σ H (Bc)* = cᴴE_o and Σ|Bc|² = cᴴGc,
 /// for any c: with a mode's two coefficients zeroed, those without it.
 struct ModelProducts {
     /// [G | E]: 2m + 2 rows, 2m + 2 + curves columns.
@@ -520,15 +508,13 @@ impl ModelProducts {
         let columns = 2 * fit.poles.len() + 2;
         let mut side_by_side = Mat::<c64>::zeros(lines.len(), columns + data.curves.len());
         let mut basis = fit.line_basis(0.0);
+        let mut line = vec![c64::default(); columns];
         for (i, &k) in lines.iter().enumerate() {
             fit.set_line_basis(&mut basis, data.freqs_hz[k]);
-            let f = basis.factor;
-            for (r, &(t, tc)) in basis.fractions.iter().enumerate() {
-                side_by_side[(i, 2 * r)] = f * t;
-                side_by_side[(i, 2 * r + 1)] = f * tc;
+            fit.columns_on(&basis, &mut line);
+            for (j, v) in line.iter().enumerate() {
+                side_by_side[(i, j)] = *v;
             }
-            side_by_side[(i, columns - 2)] = f * basis.lower;
-            side_by_side[(i, columns - 1)] = f;
             for (o, curve) in data.curves.iter().enumerate() {
                 side_by_side[(i, columns + o)] = curve[k];
             }

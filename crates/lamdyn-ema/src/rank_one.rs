@@ -905,7 +905,7 @@ pub(crate) fn start_participation(
     quantity: Quantity,
     lines: &[usize],
     poles: &[Complex64],
-) -> Result<Option<Vec<Vec<Complex64>>>, EmaError> {
+) -> Result<Option<Participation>, EmaError> {
     if references == 1 {
         return Ok(Some(vec![vec![Complex64::new(1.0, 0.0)]; poles.len()]));
     }
